@@ -1,0 +1,29 @@
+#pragma once
+// Plain mesh containers handed between meshing/, core/ and the readers.
+// Connectivity is kept apart from positions' meaning: indices are 0-based.
+#include <string>
+#include <vector>
+
+#include "core/util/vec.h"
+
+namespace organsim {
+
+// A closed triangle surface, as read from OFF/OBJ/STL/PLY.
+struct TriangleMesh {
+  std::vector<Vec3> points;  // vertex positions, m (npoint)
+  std::vector<Tri> faces;    // vertex ids, counter-clockwise seen from outside (nface x 3)
+};
+
+// A tetrahedral volume mesh. Tets are positively oriented:
+// dot(p1 - p0, cross(p2 - p0, p3 - p0)) > 0.
+struct TetMesh {
+  std::vector<Vec3> points;  // vertex positions, m (npoint)
+  std::vector<Tet> tets;     // vertex ids (ntet x 4)
+};
+
+// Signed volume of the tet (a, b, c, d); positive for the orientation above.
+inline double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).dot((c - a).cross(d - a)) / 6.0;
+}
+
+}  // namespace organsim

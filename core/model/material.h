@@ -1,0 +1,38 @@
+#pragma once
+// Material and scene parameters, SI units. Parsed from the scenario's
+// `material` section; defaults are validated in validate_material().
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/util/vec.h"
+
+namespace organsim {
+
+struct Material {
+  double density = 1060.0;  // kg/m^3 (soft tissue ~1000-1100)
+  // Spring stiffness: from Young's modulus (default) or an explicit constant.
+  // k_e = E * (sum of rest volumes of the tets sharing edge e) / r_e^2: under a
+  // uniform volumetric strain this stores exactly the energy of a linear
+  // elastic solid with Poisson ratio 1/4 (the ratio a tet spring lattice has),
+  // so results depend far less on resolution than a constant k.
+  double young_modulus = 3000.0;                // Pa (liver: a few kPa)
+  std::optional<double> spring_stiffness;       // N/m; overrides young_modulus when set
+  double spring_damping_time = 0.002;           // s; damper d_e = spring_damping_time * k_e (N s/m)
+  double viscous_damping = 1.0;                 // 1/s; mass-proportional drag F = -alpha m v
+  // Volume conservation: energy K/2 (V - V_r)^2 / V_r per tet, i.e. per-tet
+  // k_v = K / V_r (N/m^5). 0 switches the volume pass off.
+  double volume_modulus = 0.0;                  // Pa
+};
+
+// One fixed-point selector; a point is fixed when any selector matches it.
+struct FixedSelector {
+  enum class Kind { Box, Plane, Sphere, Indices } kind = Kind::Indices;
+  Vec3 min{0, 0, 0}, max{0, 0, 0};        // Box, m
+  Vec3 point{0, 0, 0}, normal{0, 0, 1};   // Plane: points with dot(x - point, normal) >= 0, m
+  Vec3 center{0, 0, 0};                   // Sphere centre, m
+  double radius = 0;                      // Sphere radius, m
+  std::vector<int32_t> indices;           // Indices: input point numbering
+};
+
+}  // namespace organsim

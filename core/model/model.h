@@ -1,0 +1,72 @@
+#pragma once
+// The immutable Model: topology, rest state, parameters and the gather layout.
+// Everything a backend needs to step, sized once at build time. Points are
+// stored in the *internal* numbering (locality order, then valence-sorted
+// within windows, see layout.h); `input_of_internal` maps back so every output
+// is reported in the user's numbering.
+#include <vector>
+
+#include "core/mesh/tet_mesh.h"
+#include "core/model/layout.h"
+#include "core/model/material.h"
+#include "core/util/vec.h"
+
+namespace organsim {
+
+struct Model {
+  // Points (internal numbering).
+  std::vector<Vec3> rest_position;   // m (npoint)
+  std::vector<double> mass;          // lumped mass, kg (npoint)
+  std::vector<double> inv_mass;      // 1/mass, 0 for fixed points, 1/kg (npoint)
+  std::vector<uint8_t> fixed;        // 1 if the point never moves (npoint)
+  std::vector<int32_t> input_of_internal;  // user's point id of internal point i (npoint)
+  std::vector<int32_t> internal_of_input;  // internal id of user's point i (npoint)
+
+  // Springs: one per unique tet edge, ends in internal numbering.
+  std::vector<Edge> spring_ends;     // (nspring x 2), ends[0] < ends[1]
+  std::vector<double> spring_rest;   // rest length, m (nspring)
+  std::vector<double> spring_k;      // stiffness, N/m (nspring)
+  std::vector<double> spring_d;      // damper, N s/m (nspring)
+
+  // Tetrahedra, positively oriented, internal numbering.
+  std::vector<Tet> tet_points;       // (ntet x 4)
+  std::vector<double> tet_rest_volume;  // m^3 (ntet)
+  std::vector<double> tet_k;         // volume stiffness K / V_r, N/m^5 (ntet); empty if volume off
+
+  // Scene parameters.
+  Vec3 gravity{0, 0, 0};             // m/s^2
+  double viscous_damping = 0;        // alpha, 1/s
+  Material material;                 // as given, for reporting
+
+  // Per-point gather layout (springs and tets gathered per point, no atomics).
+  GatherLayout layout;
+
+  int32_t npoint() const { return static_cast<int32_t>(rest_position.size()); }
+  int32_t nspring() const { return static_cast<int32_t>(spring_ends.size()); }
+  int32_t ntet() const { return static_cast<int32_t>(tet_points.size()); }
+  bool has_volume() const { return !tet_k.empty(); }
+  bool has_gravity() const { return gravity.squaredNorm() > 0; }
+  double total_mass() const;
+  double rest_volume() const;
+};
+
+struct ModelOptions {
+  Vec3 gravity{0, 0, 0};                    // m/s^2
+  std::vector<FixedSelector> fixed;         // fixed-point selectors
+  int32_t chunk_size = kDefaultChunkSize;   // C of SELL-C-sigma
+  int32_t sort_window = kDefaultSortWindow; // sigma of SELL-C-sigma
+  bool reorder_for_locality = true;         // reverse Cuthill-McKee before the valence sort
+};
+
+// Builds the Model. Throws Error(Input) naming the element for tets with
+// non-positive or tiny volume, out-of-range indices, non-finite points, and
+// Error(Scenario) for non-positive density or stiffness. `source` names the
+// mesh in error messages.
+Model build_model(const TetMesh& mesh, const Material& material, const ModelOptions& options,
+                  const std::string& source = "mesh");
+
+// Validates a tet mesh alone (indices in range, finite points, positive
+// volumes); throws Error(Input) naming `source` and the first bad element.
+void validate_tet_mesh(const TetMesh& mesh, const std::string& source);
+
+}  // namespace organsim

@@ -1,0 +1,73 @@
+#pragma once
+// What every simulator backend (cpu, gl) offers the run loop. A backend owns
+// its State (x_t, x_{t-1}) in whatever precision and memory it likes; the
+// Model it was built from is immutable and outlives it.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/model/model.h"
+#include "core/sim/tool.h"
+
+namespace organsim {
+
+// One haptic tick: `substeps` Verlet steps of `dt`; the tool centre moves
+// linearly from tool_from (start of tick) to tool_to (end of tick).
+struct TickRequest {
+  double dt = 1e-4;  // s
+  int32_t substeps = 10;
+  bool tool_active = false;
+  Vec3 tool_from{0, 0, 0}, tool_to{0, 0, 0};  // m
+};
+
+// The step is assembled from the passes the scene needs; `--plan` prints them.
+struct PassInfo {
+  std::string name;    // e.g. "springs", "volume", "gravity", "tool-contact", "integrate"
+  std::string detail;  // what it touches, sizes
+};
+struct BufferInfo {
+  std::string name;
+  size_t bytes = 0;
+};
+struct Plan {
+  std::vector<PassInfo> passes;
+  std::vector<BufferInfo> buffers;
+  int32_t dispatches_per_step = 0;   // GL: compute dispatches; CPU: fused loops
+  int32_t syncs_per_step = 0;        // CPU-GPU synchronisations per step
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual std::string name() const = 0;    // "cpu", "gl"
+  virtual std::string device() const = 0;  // CPU model or GL_RENDERER
+  virtual std::string precision() const = 0;  // "double" or "float"
+  virtual Plan plan() const = 0;
+
+  // Ticks between a tick and the tick() call that returns its reaction:
+  // 0 on the CPU, 1 for the GL backend's non-blocking readback.
+  virtual int32_t reaction_latency_ticks() const = 0;
+
+  // Runs one tick and returns the tool reaction at the end of the tick that
+  // is reaction_latency_ticks() old (zero reaction until the first one).
+  virtual Reaction tick(const TickRequest& request) = 0;
+
+  // Pull tool: attach / release points (internal ids).
+  virtual void attach(const Attachment& attachment) = 0;
+  virtual void release() = 0;
+
+  // Current positions x_t, in internal numbering (may synchronise a GPU).
+  virtual void positions(std::vector<Vec3>& out) const = 0;
+  // Simulated time at the end of the last tick, s.
+  virtual double time() const = 0;
+};
+
+// The tool parameters a backend needs besides its per-tick pose.
+struct BackendTool {
+  bool present = false;
+  ToolMode mode = ToolMode::Push;
+  double radius = 0;             // m
+  double contact_stiffness = 0;  // N/m
+};
+
+}  // namespace organsim

@@ -1,0 +1,28 @@
+#pragma once
+// Naive per-spring / per-tet scatter of the forces of DESIGN.md section 2, in
+// double precision. The test oracle for every gather kernel (CPU and GL):
+// simple enough to check by eye.
+#include <vector>
+
+#include "core/model/model.h"
+#include "core/sim/tool.h"
+
+namespace organsim {
+
+// Forces on every point (internal numbering) for positions x and velocities v:
+// springs + dampers, volume conservation (if the model has it), gravity.
+// Fixed points get their force too (integration ignores it).
+void reference_internal_forces(const Model& model, const std::vector<Vec3>& x,
+                               const std::vector<Vec3>& v, std::vector<Vec3>& force);
+
+// Push contact of a sphere tool (center c, radius R, stiffness k): for points
+// with |x - c| < R, f_i = k (R - |x - c|) (x - c)/|x - c|. Adds into force and
+// returns the reaction on the tool.
+Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius,
+                               double stiffness, std::vector<Vec3>& force);
+
+// Pull attachments: f_i = k (c + o_i - x_i). Adds into force, returns reaction.
+Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment,
+                               const Vec3& center, double stiffness, std::vector<Vec3>& force);
+
+}  // namespace organsim

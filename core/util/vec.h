@@ -1,0 +1,15 @@
+#pragma once
+// Small vector aliases shared by every organsim module (SI units throughout).
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+namespace organsim {
+
+using Vec3 = Eigen::Vector3d;
+using Vec3f = Eigen::Vector3f;
+using Tet = std::array<int32_t, 4>;
+using Tri = std::array<int32_t, 3>;
+using Edge = std::array<int32_t, 2>;
+
+}  // namespace organsim

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Configures and builds organsim into ${ORGANSIM_BUILD_DIR:-build} (Release,
+# Ninja, ccache when present). Extra arguments go to cmake's configure step.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${ORGANSIM_BUILD_DIR:-$root/build}
+export CCACHE_BASEDIR=$root
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=${ORGANSIM_BUILD_TYPE:-Release} "$@" >/dev/null
+# CGAL's Mesh_3 translation unit needs ~4 GB: two jobs fit in 24 GB.
+cmake --build "$build" -j "${ORGANSIM_JOBS:-2}"
