@@ -14,8 +14,11 @@ namespace {
 fs::path temporary_name(const fs::path& path) {
   // Same directory (so rename stays on one filesystem), same extension.
   fs::path tmp = path;
-  tmp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                       path.extension().string());
+  // Built with append: gcc 12 warns falsely (-Wrestrict) on "." + string.
+  std::string name(".");
+  name.append(path.stem().string()).append(".tmp").append(std::to_string(::getpid()));
+  name.append(path.extension().string());
+  tmp.replace_filename(name);
   return tmp;
 }
 }  // namespace
