@@ -1,0 +1,27 @@
+#pragma once
+// Things that watch a run tick by tick (frame recorder, stability checks, ...)
+// without the run loop knowing what they are. Observers that need positions
+// ask the backend for them only on the ticks they want, so a scene without
+// frames never reads positions back.
+#include "core/sim/backend.h"
+
+namespace organsim {
+
+struct TickInfo {
+  int64_t tick = 0;       // 0-based tick index
+  double t = 0;           // simulated time at the end of the tick, s
+  Vec3 tool_center{0, 0, 0};  // m
+  bool tool_active = false;
+  Reaction reaction;      // as returned by Backend::tick (latency applies)
+};
+
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  virtual void on_start(const Model& /*model*/, Backend& /*backend*/) {}
+  virtual void on_tick(const Model& model, Backend& backend, const TickInfo& info) = 0;
+  // Called once after the last tick, or after an error stopped the run.
+  virtual void on_finish(const Model& /*model*/, Backend& /*backend*/) {}
+};
+
+}  // namespace organsim
