@@ -26,4 +26,13 @@ inline double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const V
   return (b - a).dot((c - a).cross(d - a)) / 6.0;
 }
 
+// Validates a tet mesh (indices in range, finite points, no unused-index
+// gaps that matter, positive and non-tiny volumes); throws Error(Input)
+// naming `source` and the first bad element. Implemented in tet_validate.cpp.
+void validate_tet_mesh(const TetMesh& mesh, const std::string& source);
+
+// A box [min, max] split into nx x ny x nz cubes of 6 positively oriented tets
+// each (conforming, Kuhn subdivision). For tests and benchmarks without CGAL.
+TetMesh make_box_tet_mesh(const Vec3& min, const Vec3& max, int nx, int ny, int nz);
+
 }  // namespace organsim

@@ -65,8 +65,4 @@ struct ModelOptions {
 Model build_model(const TetMesh& mesh, const Material& material, const ModelOptions& options,
                   const std::string& source = "mesh");
 
-// Validates a tet mesh alone (indices in range, finite points, positive
-// volumes); throws Error(Input) naming `source` and the first bad element.
-void validate_tet_mesh(const TetMesh& mesh, const std::string& source);
-
 }  // namespace organsim
