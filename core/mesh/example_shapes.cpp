@@ -86,25 +86,34 @@ double exit_distance(const Ellipsoid& e, const Vec3& d) {
 
 TriangleMesh make_liver_surface(int subdivisions) {
   // Lobes chosen by eye for a liver-like silhouette of realistic size; each
-  // contains the origin (checked by the example tests), so every ray leaves it once.
+  // contains the origin, so every ray from it leaves each lobe exactly once.
   const Ellipsoid lobes[] = {
-      {Vec3(0.030, 0.000, 0.000), Vec3(0.075, 0.068, 0.050), 0.0},         // right lobe
-      {Vec3(-0.050, 0.005, 0.004), Vec3(0.062, 0.040, 0.024), 0.15},      // left lobe, tapering
-      {Vec3(0.020, -0.028, -0.012), Vec3(0.050, 0.040, 0.030), -0.3},     // caudal bulge
+      {Vec3(0.025, 0.000, 0.000), Vec3(0.075, 0.072, 0.060), 0.0},    // right lobe
+      {Vec3(-0.045, 0.010, 0.000), Vec3(0.065, 0.050, 0.040), 0.15},  // left lobe
+      {Vec3(0.010, -0.030, -0.010), Vec3(0.045, 0.035, 0.030), 0.0},  // caudate bulge
   };
-  // Smooth maximum of the lobes' radii (a p-norm): the union, with blended
+  // Smooth maximum of the lobes' radii (a p-norm): their union, with blended
   // creases instead of sharp ones.
-  constexpr double kSharpness = 8;
+  constexpr double kSharpness = 6;
   TriangleMesh mesh = make_icosphere(subdivisions);
+  const Vec3 fossa = Vec3(0.35, -0.35, -0.87).normalized();
   for (Vec3& p : mesh.points) {
     const Vec3 d = p.normalized();
     double sum = 0;
     for (const Ellipsoid& e : lobes) sum += std::pow(exit_distance(e, d), kSharpness);
     double r = std::pow(sum, 1.0 / kSharpness);
     // A shallow dent on the underside (the gallbladder fossa), below the right lobe.
-    const Vec3 fossa = Vec3(0.35, -0.35, -0.87).normalized();
     r *= 1.0 - 0.10 * std::exp(-(d - fossa).squaredNorm() / 0.05);
     p = r * d;
+  }
+  // Wedge: thick on the right, thin on the left, with a flatter underside.
+  // (x, y, z) -> (x, y, f(x, z)) with f increasing in z is one-to-one, so the
+  // surface stays closed and free of self-intersections.
+  for (Vec3& p : mesh.points) {
+    const double t = std::clamp((p.x() + 0.11) / 0.17, 0.0, 1.0);
+    const double thick = 0.45 + 0.55 * t * t * (3 - 2 * t);  // smoothstep from left to right
+    const double z = p.z() < 0 ? 0.7 * p.z() : p.z();
+    p.z() = z * thick + 0.012 * (1 - thick);  // the thin left lobe sits a little higher
   }
   return mesh;
 }

@@ -16,7 +16,7 @@ TriangleMesh make_sphere_surface(double radius, int subdivisions);
 // Axis-aligned box [min, max] as 12 outward triangles.
 TriangleMesh make_box_surface(const Vec3& min, const Vec3& max);
 
-// A liver-like solid about 0.21 x 0.14 x 0.10 m: a large right lobe and a
+// A liver-like solid about 0.21 x 0.15 x 0.10 m: a large right lobe and a
 // flatter, tapering left lobe, blended smoothly. Star-shaped about the origin,
 // so sampling its radius on an icosphere gives a closed, non-self-intersecting,
 // outward-oriented surface.

@@ -4,8 +4,6 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>  // cross() in signed_volume
-
 #include "core/util/vec.h"
 
 namespace organsim {

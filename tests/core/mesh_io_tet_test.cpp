@@ -32,7 +32,7 @@ std::string gmsh22(const TetMesh& mesh) {
   s += "1 2 2 0 1 101 102 103\n";
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     s += std::to_string(t + 2) + " 4 2 1 1";
-    for (int32_t v : mesh.tets[t]) s += " " + std::to_string(101 + v);
+    for (int32_t v : mesh.tets[t]) s.append(" ").append(std::to_string(101 + v));
     s += "\n";
   }
   return s + "$EndElements\n";
@@ -49,7 +49,7 @@ std::string gmsh41(const TetMesh& mesh) {
   s.append("$EndNodes\n$Elements\n1 ").append(m).append(" 1 ").append(m).append("\n3 1 4 ").append(m).append("\n");
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     s += std::to_string(t + 1);
-    for (int32_t v : mesh.tets[t]) s += " " + std::to_string(v + 1);
+    for (int32_t v : mesh.tets[t]) s.append(" ").append(std::to_string(v + 1));
     s += "\n";
   }
   return s + "$EndElements\n";
@@ -151,7 +151,7 @@ TEST(TetMeshIo, BadTetsAreErrorsNamingFileAndElement) {
   write_tet_mesh(dir / "mixed.mesh", mixed);
   std::string msg = error_message([&] { read_tet_mesh(dir / "mixed.mesh"); });
   EXPECT_NE(msg.find("mixed.mesh"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("tet 2"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tetrahedron 2"), std::string::npos) << msg;
   EXPECT_NE(msg.find("invert"), std::string::npos) << msg;
 
   // A flat tet (all four corners in the plane z = 0).
@@ -160,7 +160,7 @@ TEST(TetMeshIo, BadTetsAreErrorsNamingFileAndElement) {
   write_tet_mesh(dir / "flat.vtk", flat);
   msg = error_message([&] { read_tet_mesh(dir / "flat.vtk"); });
   EXPECT_NE(msg.find("flat.vtk"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("tet 1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tetrahedron 1"), std::string::npos) << msg;
   EXPECT_NE(msg.find("volume"), std::string::npos) << msg;
 
   // Out-of-range index in medit (counts from 1): named with its line.
@@ -178,7 +178,7 @@ TEST(TetMeshIo, BadTetsAreErrorsNamingFileAndElement) {
                                        "0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n");
   msg = error_message([&] { read_tet_mesh(vtk_range); });
   EXPECT_NE(msg.find("range.vtk"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("tet 0"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tetrahedron 0"), std::string::npos) << msg;
 
   // Gmsh node that does not exist.
   const auto msh = write_fixture(dir / "range.msh",
