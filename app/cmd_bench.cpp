@@ -190,10 +190,12 @@ void run_bench(const BenchArgs& args) {
       try {
         backend = make_backend(sel, model, BackendTool{});
       } catch (const Error& e) {
-        // Asked for by name: fail. Tried by default: report why there is no row.
-        if (explicit_backends || e.kind() != ErrorKind::Backend) throw;
-        if (std::none_of(unavailable.begin(), unavailable.end(), [&](const auto& u) { return u.first == name; })) {
-          unavailable.emplace_back(name, e.what());
+        // Asked for by name: fail. Tried by default (gl, or a precision it
+        // does not offer): report why there is no row.
+        if (explicit_backends) throw;
+        const std::string what = name + " " + precision;
+        if (std::none_of(unavailable.begin(), unavailable.end(), [&](const auto& u) { return u.first == what; })) {
+          unavailable.emplace_back(what, e.what());
         }
         continue;
       }
@@ -323,6 +325,11 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->callback([args, backends, precisions] {
     args->backends = split_list(*backends);
     args->precisions = split_list(*precisions);
+    for (const std::string& p : args->precisions) {
+      if (p != "double" && p != "float") {
+        throw Error(ErrorKind::Usage, "bench: unknown precision \"" + p + "\": expected double or float");
+      }
+    }
     for (const std::string& b : args->backends) {
       if (std::find(backend_names().begin(), backend_names().end(), b) == backend_names().end()) {
         throw Error(ErrorKind::Usage, "bench: unknown backend \"" + b + "\": expected cpu or gl");

@@ -168,6 +168,26 @@ TEST(RunLoop, PullGraspsNearbyPointsDragsThemAndReleases) {
   EXPECT_LT(r.samples.force[lift].z(), 0.0);
 }
 
+TEST(RunLoop, GraspSelectsFreePointsWithinTheRadiusWithTheirOffsets) {
+  const Scenario s = cube_scenario();  // bottom face (z = 0) fixed
+  const Model model = cube_model(s);
+  std::vector<Vec3> x = model.rest_position;
+  // A 2 cm ball about the centre of the bottom face: its free points are the
+  // ones above z = 0, counted here by brute force in input numbering.
+  const Vec3 center(0.05, 0.05, 0.0);
+  const Attachment a = select_grasp(model, x, center, 0.02);
+  int expected = 0;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if ((x[i] - center).norm() <= 0.02 && x[i].z() > 1e-9) ++expected;
+  }
+  ASSERT_GT(expected, 0);
+  EXPECT_EQ(static_cast<int>(a.points.size()), expected);
+  for (size_t k = 0; k < a.points.size(); ++k) {
+    EXPECT_FALSE(model.fixed[a.points[k]]) << "a fixed point cannot be grasped";
+    EXPECT_NEAR((a.offsets[k] - (x[a.points[k]] - center)).norm(), 0.0, 1e-15);
+  }
+}
+
 // Counts the calls it gets; optionally throws at one tick.
 class CountingObserver : public RunObserver {
  public:
