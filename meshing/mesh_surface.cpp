@@ -89,8 +89,6 @@ double search_cell_size(const Mesh3Domain& domain, double volume, int32_t target
 TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, const std::string& source,
                      MeshReport* report) {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> notes;
-  const TriangleMesh checked = check_surface(surface, source, notes);
   if (options.target_points && options.cell_size) {
     throw Error(ErrorKind::Usage, "give either a target point count or a cell size, not both");
   }
@@ -104,6 +102,8 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
     throw Error(ErrorKind::Usage, "facet distance must be positive (metres), got " + format_number(*options.facet_distance));
   }
 
+  std::vector<std::string> notes;
+  const TriangleMesh checked = check_surface(surface, source, notes);
   const Mesh3Domain domain(checked);
   double h = 0;
   if (options.cell_size) {
