@@ -1,6 +1,8 @@
 // `organsim mesh INPUT -o OUTPUT`: tetrahedralise a closed surface with CGAL
 // Mesh_3 (or read a tet mesh), report counts, quality and the springs-per-point
 // histogram, and write .mesh or .vtk. Sizes in metres.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -22,7 +24,8 @@ struct MeshArgs {
 };
 
 void run_mesh(const MeshArgs& args) {
-  const std::string ext = std::filesystem::path(args.output).extension().string();
+  std::string ext = std::filesystem::path(args.output).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext != ".mesh" && ext != ".vtk") {
     throw Error(ErrorKind::Usage, args.output + ": output must end in .mesh (medit) or .vtk (VTK legacy)");
   }
