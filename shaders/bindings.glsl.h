@@ -24,6 +24,7 @@
 #define ORGANSIM_GL_B_ATTACH 7    // vec4 {offset from tool centre (m), attached 0/1} (npad)
 #define ORGANSIM_GL_B_PARTIALS 8  // vec4 pairs {F.xyz, contacts}, {T.xyz, 0} per workgroup (nchunk x 2)
 #define ORGANSIM_GL_B_REACTION 9  // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
+#define ORGANSIM_GL_B_FORCE 10    // vec4 total force per point, N (npad); RECORD_FORCE variant (tests) only
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
