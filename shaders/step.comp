@@ -20,9 +20,10 @@ struct TetEntry {
   float v_r;    // rest volume, m^3
 };
 
-layout(std430, binding = ORGANSIM_GL_B_X_PREV) readonly buffer XPrev { vec4 x_prev[]; };
 layout(std430, binding = ORGANSIM_GL_B_X_CUR) readonly buffer XCur { vec4 x_cur[]; };
+layout(std430, binding = ORGANSIM_GL_B_D_CUR) readonly buffer DCur { vec4 d_cur[]; };
 layout(std430, binding = ORGANSIM_GL_B_X_NEXT) writeonly buffer XNext { vec4 x_next[]; };
+layout(std430, binding = ORGANSIM_GL_B_D_NEXT) writeonly buffer DNext { vec4 d_next[]; };
 layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec2 mass[]; };
 layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
 layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
@@ -63,8 +64,8 @@ void main() {
   const float inv_dt = 1.0 / u_dt;
 
   const vec3 xi = x_cur[p].xyz;
-  const vec3 xi_prev = x_prev[p].xyz;
-  const vec3 vi = (xi - xi_prev) * inv_dt;
+  const vec3 di = d_cur[p].xyz;  // x_t - x_{t-1}
+  const vec3 vi = di * inv_dt;
   vec3 f = vec3(0.0);
 
   // Springs + dampers: f = [k (L - r) + d ((v_q - v_p) . u)] u.
@@ -75,7 +76,7 @@ void main() {
     const float len = length(l);
     if (len > 0.0) {  // coincident points (and padding): no direction, no force
       const vec3 u = l / len;
-      const vec3 dv = (xq - x_prev[e.other].xyz) * inv_dt - vi;
+      const vec3 dv = d_cur[e.other].xyz * inv_dt - vi;
       f += (e.k * (len - e.rest) + e.d * dot(dv, u)) * u;
     }
   }
@@ -152,7 +153,12 @@ void main() {
 #ifdef RECORD_FORCE
   force_out[p] = vec4(f, 0.0);
 #endif
-  // Position Verlet with mass-proportional drag; fixed points and padding
-  // lanes have 1/m = 0 and stay put.
-  x_next[p] = m.x > 0.0 ? vec4(xi + u_drag * (xi - xi_prev) + (u_dt * u_dt * m.x) * f, 1.0) : vec4(xi, 1.0);
+  // Position Verlet with mass-proportional drag, in difference form:
+  // d_{t+1} = (1 - alpha dt) d_t + dt^2 f/m, x_{t+1} = x_t + d_{t+1}; the same
+  // x_{t+1} = x_t + (1 - alpha dt)(x_t - x_{t-1}) + dt^2 f/m as the CPU, but
+  // the velocity never passes through the rounding of absolute positions.
+  // Fixed points and padding lanes have 1/m = 0 and stay put.
+  const vec3 d_new = m.x > 0.0 ? u_drag * di + (u_dt * u_dt * m.x) * f : vec3(0.0);
+  x_next[p] = vec4(xi + d_new, 1.0);
+  d_next[p] = vec4(d_new, 0.0);
 }

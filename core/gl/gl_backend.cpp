@@ -59,7 +59,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
 
-  // Positions x_{t-1} = x_t = rest, three buffers rotated by index.
+  // x_t = rest, d_t = 0; two pairs of buffers swapped after each substep.
   std::vector<float> x4(static_cast<size_t>(npad_) * 4, 0.0f);
   for (int32_t i = 0; i < npad_; ++i) {
     const Vec3& r = model.rest_position[static_cast<size_t>(i < npoint_ ? i : npoint_ - 1)];
@@ -67,8 +67,11 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
     x4[4 * i + 3] = 1.0f;
   }
   const size_t xbytes = x4.size() * sizeof(float);
-  for (int k = 0; k < 3; ++k) x_[k] = create_buffer(k == 0 ? "x_{t-1}" : k == 1 ? "x_t" : "x_{t+1}", xbytes, x4.data(),
-                                                    GL_DYNAMIC_STORAGE_BIT);
+  const std::vector<float> zero(x4.size(), 0.0f);
+  x_[0] = create_buffer("x_t", xbytes, x4.data(), GL_DYNAMIC_STORAGE_BIT);
+  x_[1] = create_buffer("x_{t+1}", xbytes, x4.data(), GL_DYNAMIC_STORAGE_BIT);
+  d_[0] = create_buffer("x_t - x_{t-1}", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
+  d_[1] = create_buffer("x_{t+1} - x_t", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
 
   std::vector<float> mass(static_cast<size_t>(npad_) * 2, 0.0f);  // padding: 1/m = 0, never moves
   for (int32_t i = 0; i < npoint_; ++i) {
@@ -175,7 +178,7 @@ GlBackend::~GlBackend() {
     if (s.fence) glDeleteSync(s.fence);
   }
   if (reaction_map_) glUnmapNamedBuffer(reaction_);
-  const GLuint buffers[] = {x_[0], x_[1], x_[2], mass_, chunks_, springs_, tets_, attach_, partials_, reaction_, force_};
+  const GLuint buffers[] = {x_[0], x_[1], d_[0], d_[1], mass_, chunks_, springs_, tets_, attach_, partials_, reaction_, force_};
   for (GLuint b : buffers) {
     if (b) glDeleteBuffers(1, &b);
   }
@@ -233,16 +236,17 @@ void GlBackend::set_positions(const std::vector<Vec3>& x_t, const std::vector<Ve
     throw Error(ErrorKind::Backend, "GL backend: set_positions needs " + std::to_string(npoint_) + " points");
   }
   make_current();
-  auto upload = [&](GLuint buffer, const std::vector<Vec3>& x) {
+  auto upload = [&](GLuint buffer, auto&& value_of, float w) {
     for (int32_t i = 0; i < npad_; ++i) {
-      const Vec3& r = x[static_cast<size_t>(i < npoint_ ? i : npoint_ - 1)];
+      const Vec3 r = value_of(static_cast<size_t>(i < npoint_ ? i : npoint_ - 1));
       for (int k = 0; k < 3; ++k) readback_[4 * i + k] = static_cast<float>(r[k]);
-      readback_[4 * i + 3] = 1.0f;
+      readback_[4 * i + 3] = w;
     }
     glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(readback_.size() * sizeof(float)), readback_.data());
   };
-  upload(x_[cur_], x_t);
-  upload(x_[prev_], x_prev);
+  upload(x_[cur_], [&](size_t i) { return x_t[i]; }, 1.0f);
+  // The difference in double, then rounded: as precise as float allows.
+  upload(d_[cur_], [&](size_t i) { return Vec3(x_t[i] - x_prev[i]); }, 0.0f);
   context_->check_errors("GL backend set_positions");
 }
 
@@ -289,17 +293,14 @@ Reaction GlBackend::tick(const TickRequest& request) {
                          static_cast<float>(c.z()));
       glProgramUniform1i(program, ORGANSIM_GL_U_REDUCE, tool_acts && s == request.substeps - 1 ? 1 : 0);
     }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_PREV, x_[prev_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_[cur_]);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[next_]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_[cur_]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[1 - cur_]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[1 - cur_]);
     glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     ++dispatches_;
-    // x_{t-1} <- x_t <- x_{t+1}; the old x_{t-1} becomes the next target.
-    const int old_prev = prev_;
-    prev_ = cur_;
-    cur_ = next_;
-    next_ = old_prev;
+    cur_ = 1 - cur_;  // x_{t+1} becomes x_t
     time_ += request.dt;
   }
 

@@ -1,7 +1,7 @@
 #pragma once
 // The GL backend: the whole Verlet step as one fused GLSL compute dispatch per
 // substep over the Model's SELL-C gather layout (C = workgroup size), float
-// state in storage buffers, and the tool reaction reduced on the GPU and read
+// state in storage buffers (x_t and x_t - x_{t-1}, ping-pong), and the tool reaction reduced on the GPU and read
 // back one tick late through a fence and a persistently mapped buffer, so the
 // step never waits for the GPU. See docs/gl.md.
 #include <array>
@@ -74,8 +74,10 @@ class GlBackend final : public Backend {
   bool volume_ = false, gravity_ = false, push_ = false, pull_ = false;
 
   gl::ComputeProgram step_, reduce_;
-  std::array<GLuint, 3> x_{};  // ping-pong: x_{t-1}, x_t, x_{t+1} rotate by index
-  int prev_ = 0, cur_ = 1, next_ = 2;
+  // Ping-pong pairs: x_[cur_], d_[cur_] hold x_t and d_t = x_t - x_{t-1};
+  // the step writes x_[1 - cur_], d_[1 - cur_].
+  std::array<GLuint, 2> x_{}, d_{};
+  int cur_ = 0;
   GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0;
   const float* reaction_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS x 8 floats)
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;

@@ -177,9 +177,10 @@ TEST(GlKernel, BindingsAndWorkgroupSizeAgreeBetweenCppAndGlsl) {
   gl::ComputeProgram step("step.comp", {"HAS_VOLUME", "HAS_GRAVITY", "TOOL_PULL", "RECORD_FORCE"});
   EXPECT_EQ(step.workgroup_size()[0], ORGANSIM_GL_CHUNK);
   EXPECT_EQ(step.workgroup_size()[0], model.layout.chunk_size);
-  EXPECT_EQ(step.storage_block_binding("XPrev"), ORGANSIM_GL_B_X_PREV);
   EXPECT_EQ(step.storage_block_binding("XCur"), ORGANSIM_GL_B_X_CUR);
+  EXPECT_EQ(step.storage_block_binding("DCur"), ORGANSIM_GL_B_D_CUR);
   EXPECT_EQ(step.storage_block_binding("XNext"), ORGANSIM_GL_B_X_NEXT);
+  EXPECT_EQ(step.storage_block_binding("DNext"), ORGANSIM_GL_B_D_NEXT);
   EXPECT_EQ(step.storage_block_binding("Mass"), ORGANSIM_GL_B_MASS);
   EXPECT_EQ(step.storage_block_binding("Chunks"), ORGANSIM_GL_B_CHUNKS);
   EXPECT_EQ(step.storage_block_binding("Springs"), ORGANSIM_GL_B_SPRINGS);
