@@ -28,6 +28,7 @@
 #define ORGANSIM_GL_B_PARTIALS 9  // vec4 pairs {F.xyz, contacts}, {T.xyz, 0} per workgroup (nchunk x 2)
 #define ORGANSIM_GL_B_REACTION 10 // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
 #define ORGANSIM_GL_B_FORCE 11    // vec4 total force per point, N (npad); RECORD_FORCE variant (tests) only
+#define ORGANSIM_GL_B_STATUS 12   // uint per ring slot: lowest point whose x_{t+1} is not finite, or ~0u; mapped
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
@@ -39,6 +40,6 @@
 #define ORGANSIM_GL_U_TOOL_K 6        // float contact / attachment stiffness, N/m
 #define ORGANSIM_GL_U_REDUCE 7        // int: 1 when this step writes reaction partials
 #define ORGANSIM_GL_U_NPARTIAL 8      // int: partials to sum (reduce kernel)
-#define ORGANSIM_GL_U_SLOT 9          // int: reaction ring slot to write (reduce kernel)
+#define ORGANSIM_GL_U_SLOT 9          // int: ring slot of this tick (reduce: reaction; step: status)
 
 #endif

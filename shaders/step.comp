@@ -36,6 +36,11 @@ layout(std430, binding = ORGANSIM_GL_B_ATTACH) readonly buffer Attach { vec4 att
 #if defined(TOOL_PUSH) || defined(TOOL_PULL)
 layout(std430, binding = ORGANSIM_GL_B_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
 #endif
+// Fail fast on blow-up without a readback per step: the lowest point whose new
+// position is not finite, per tick (ring slot), read back with the reaction.
+layout(std430, binding = ORGANSIM_GL_B_STATUS) buffer Status { uint first_non_finite[]; };
+layout(location = ORGANSIM_GL_U_SLOT) uniform int u_slot;
+
 #ifdef RECORD_FORCE
 layout(std430, binding = ORGANSIM_GL_B_FORCE) writeonly buffer Force { vec4 force_out[]; };
 #endif
@@ -159,6 +164,11 @@ void main() {
   // the velocity never passes through the rounding of absolute positions.
   // Fixed points and padding lanes have 1/m = 0 and stay put.
   const vec3 d_new = m.x > 0.0 ? u_drag * di + (u_dt * u_dt * m.x) * f : vec3(0.0);
-  x_next[p] = vec4(xi + d_new, 1.0);
+  const vec3 x_new = xi + d_new;
+  x_next[p] = vec4(x_new, 1.0);
   d_next[p] = vec4(d_new, 0.0);
+  // Exponent bits all ones = inf or NaN; bit tests survive any fast-math
+  // assumption a compiler might make about isnan(). Rare: one atomic per bad point.
+  const uvec3 exponent = floatBitsToUint(x_new) & 0x7f800000u;
+  if (any(equal(exponent, uvec3(0x7f800000u)))) atomicMin(first_non_finite[u_slot], uint(p));
 }

@@ -24,6 +24,7 @@ struct TetEntry {
 static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has stride 20
 
 constexpr int kSlots = ORGANSIM_GL_READBACK_SLOTS;
+constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // status slot value: every position finite
 constexpr GLuint64 kReadbackTimeoutNs = 10'000'000'000ull;  // a tick taking 10 s is a hung device
 
 }  // namespace
@@ -145,6 +146,18 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
       throw Error(ErrorKind::Backend, "GL backend: glMapNamedBufferRange(reaction ring, persistent coherent) failed");
     }
   }
+  {
+    // Blow-up flag per ring slot, read with the reaction; cleared on the GPU
+    // (glClearNamedBufferSubData) before the tick that writes it.
+    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    const std::vector<uint32_t> none(kSlots, kNoPoint);
+    status_ = create_buffer("non-finite flag ring (mapped)", none.size() * sizeof(uint32_t), none.data(), map);
+    status_map_ = static_cast<const uint32_t*>(
+        glMapNamedBufferRange(status_, 0, static_cast<GLsizeiptr>(none.size() * sizeof(uint32_t)), map));
+    if (!status_map_) {
+      throw Error(ErrorKind::Backend, "GL backend: glMapNamedBufferRange(status ring, persistent coherent) failed");
+    }
+  }
   if (options.record_forces) {
     force_ = create_buffer("recorded forces", static_cast<size_t>(npad_) * 4 * sizeof(float), nullptr, 0);
   }
@@ -160,6 +173,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (reaction_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REACTION, reaction_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_STATUS, status_);
   if (gravity_) {
     glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
                        static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
@@ -178,7 +192,9 @@ GlBackend::~GlBackend() {
     if (s.fence) glDeleteSync(s.fence);
   }
   if (reaction_map_) glUnmapNamedBuffer(reaction_);
-  const GLuint buffers[] = {x_[0], x_[1], d_[0], d_[1], mass_, chunks_, springs_, tets_, attach_, partials_, reaction_, force_};
+  if (status_map_) glUnmapNamedBuffer(status_);
+  const GLuint buffers[] = {x_[0], x_[1], d_[0], d_[1], mass_,     chunks_, springs_,
+                            tets_, attach_, partials_, reaction_, force_, status_};
   for (GLuint b : buffers) {
     if (b) glDeleteBuffers(1, &b);
   }
@@ -283,6 +299,13 @@ Reaction GlBackend::tick(const TickRequest& request) {
   glProgramUniform1f(program, ORGANSIM_GL_U_DAMPING, static_cast<float>(1.0 - model_.viscous_damping * request.dt));
   const bool tool_acts = tool_.present && request.tool_active;
   if (tool_.present) glProgramUniform1i(program, ORGANSIM_GL_U_TOOL_ACTIVE, tool_acts ? 1 : 0);
+  const int slot = static_cast<int>(ticks_ % kSlots);
+  Slot& current = slots_[static_cast<size_t>(slot)];
+  // Its previous fence was consumed by read_slot() three ticks ago, so the CPU
+  // is done with this slot; the clear is ordered before this tick's dispatches.
+  glProgramUniform1i(program, ORGANSIM_GL_U_SLOT, slot);
+  glClearNamedBufferSubData(status_, GL_R32UI, static_cast<GLintptr>(slot * sizeof(uint32_t)), sizeof(uint32_t),
+                            GL_RED_INTEGER, GL_UNSIGNED_INT, &kNoPoint);
 
   for (int32_t s = 0; s < request.substeps; ++s) {
     if (tool_.present) {
@@ -304,17 +327,17 @@ Reaction GlBackend::tick(const TickRequest& request) {
     time_ += request.dt;
   }
 
-  const int slot = static_cast<int>(ticks_ % kSlots);
-  Slot& current = slots_[static_cast<size_t>(slot)];
   current.has_reaction = tool_acts;
+  current.t_end = time_;
   if (tool_acts) {
     glUseProgram(reduce_.id());
     glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_SLOT, slot);
     glDispatchCompute(1, 1, 1);
     ++dispatches_;
-    // Make the shader's writes visible to the CPU through the mapping.
-    glMemoryBarrier(GL_CLIENT_MAPPED_BUFFER_BARRIER_BIT);
   }
+  // Make this tick's reaction and status writes visible to the CPU through
+  // the mappings, and to the status clear that reuses the slot later.
+  glMemoryBarrier(GL_CLIENT_MAPPED_BUFFER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   if (current.fence) glDeleteSync(current.fence);
   current.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   glFlush();  // start the work now; the fence is polled next tick
@@ -343,6 +366,16 @@ Reaction GlBackend::read_slot(int slot) {
   }
   glDeleteSync(s.fence);
   s.fence = nullptr;
+  const uint32_t bad = status_map_[slot];
+  if (bad != kNoPoint) {
+    const int32_t p = static_cast<int32_t>(bad);
+    const double t0 = s.t_end;
+    throw Error(ErrorKind::Numerical,
+                "GL backend: non-finite position of point " + std::to_string(model_.input_of_internal[p]) +
+                    " (input numbering) in the tick ending at t = " + std::to_string(t0) +
+                    " s: the simulation blew up (dt above the critical step, a sliver tet or an extreme tool "
+                    "stiffness); positions are no longer valid");
+  }
   if (!s.has_reaction) return reaction;
   const float* r = reaction_map_ + 8 * slot;
   reaction.force = Vec3(r[0], r[1], r[2]);

@@ -3,7 +3,8 @@
 // substep over the Model's SELL-C gather layout (C = workgroup size), float
 // state in storage buffers (x_t and x_t - x_{t-1}, ping-pong), and the tool reaction reduced on the GPU and read
 // back one tick late through a fence and a persistently mapped buffer, so the
-// step never waits for the GPU. See docs/gl.md.
+// step never waits for the GPU. A non-finite position is flagged on the GPU
+// and read back the same way: tick() then throws Error(Numerical). See docs/gl.md.
 #include <array>
 #include <memory>
 #include <vector>
@@ -77,14 +78,17 @@ class GlBackend final : public Backend {
   // the step writes x_[1 - cur_], d_[1 - cur_].
   std::array<GLuint, 2> x_{}, d_{};
   int cur_ = 0;
-  GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0;
-  const float* reaction_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS x 8 floats)
+  GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0,
+         status_ = 0;
+  const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
+  const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;
 
   // Readback ring: the fence and whether the slot holds a reaction.
   struct Slot {
     GLsync fence = nullptr;
     bool has_reaction = false;
+    double t_end = 0;  // simulated time at the end of that tick, s
   };
   std::vector<Slot> slots_;
   int64_t ticks_ = 0;

@@ -188,6 +188,7 @@ TEST(GlKernel, BindingsAndWorkgroupSizeAgreeBetweenCppAndGlsl) {
   EXPECT_EQ(step.storage_block_binding("Attach"), ORGANSIM_GL_B_ATTACH);
   EXPECT_EQ(step.storage_block_binding("Partials"), ORGANSIM_GL_B_PARTIALS);
   EXPECT_EQ(step.storage_block_binding("Force"), ORGANSIM_GL_B_FORCE);
+  EXPECT_EQ(step.storage_block_binding("Status"), ORGANSIM_GL_B_STATUS);
   // std430 strides of the entry structs equal the C++ packing (16 and 20 bytes).
   const GLenum stride = GL_TOP_LEVEL_ARRAY_STRIDE;
   GLint spring_stride = 0, tet_stride = 0;
