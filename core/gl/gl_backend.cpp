@@ -5,23 +5,12 @@
 #include <cstring>
 #include <string>
 
+#include "core/gl/gl_model_pack.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
 
 namespace organsim {
 namespace {
-
-// std430 element types, mirrored by the structs in shaders/step.comp.
-struct SpringEntry {
-  int32_t other;
-  float rest, k, d;
-};
-static_assert(sizeof(SpringEntry) == 16);
-struct TetEntry {
-  int32_t a, b, c;
-  float k_v, v_r;
-};
-static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has stride 20
 
 constexpr int kSlots = ORGANSIM_GL_READBACK_SLOTS;
 constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // status slot value: every position finite
@@ -35,16 +24,10 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   context_options.debug = options.debug;
   context_ = std::make_unique<gl::EglContext>(context_options);
 
-  const auto& L = model.layout;
-  if (L.chunk_size != ORGANSIM_GL_CHUNK) {
-    throw Error(ErrorKind::Backend, "GL backend: the model's layout chunk size is " + std::to_string(L.chunk_size) +
-                                        " but the step kernel's workgroup is " + std::to_string(ORGANSIM_GL_CHUNK) +
-                                        " (shaders/bindings.glsl.h); build the model with chunk_size " +
-                                        std::to_string(ORGANSIM_GL_CHUNK));
-  }
-  npoint_ = model.npoint();
-  nchunk_ = L.nchunk;
-  npad_ = nchunk_ * ORGANSIM_GL_CHUNK;
+  const gl::PackedModel packed = gl::pack_model(model);
+  npoint_ = packed.npoint;
+  nchunk_ = packed.nchunk;
+  npad_ = packed.npad;
   volume_ = model.has_volume();
   gravity_ = model.has_gravity();
   push_ = tool.present && tool.mode == ToolMode::Push;
@@ -61,73 +44,19 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
 
   // x_t = rest, d_t = 0; two pairs of buffers swapped after each substep.
-  std::vector<float> x4(static_cast<size_t>(npad_) * 4, 0.0f);
-  for (int32_t i = 0; i < npad_; ++i) {
-    const Vec3& r = model.rest_position[static_cast<size_t>(i < npoint_ ? i : npoint_ - 1)];
-    for (int k = 0; k < 3; ++k) x4[4 * i + k] = static_cast<float>(r[k]);
-    x4[4 * i + 3] = 1.0f;
-  }
-  const size_t xbytes = x4.size() * sizeof(float);
-  const std::vector<float> zero(x4.size(), 0.0f);
-  x_[0] = create_buffer("x_t", xbytes, x4.data(), GL_DYNAMIC_STORAGE_BIT);
-  x_[1] = create_buffer("x_{t+1}", xbytes, x4.data(), GL_DYNAMIC_STORAGE_BIT);
+  const size_t xbytes = packed.rest.size() * sizeof(float);
+  const std::vector<float> zero(packed.rest.size(), 0.0f);
+  x_[0] = create_buffer("x_t", xbytes, packed.rest.data(), GL_DYNAMIC_STORAGE_BIT);
+  x_[1] = create_buffer("x_{t+1}", xbytes, packed.rest.data(), GL_DYNAMIC_STORAGE_BIT);
   d_[0] = create_buffer("x_t - x_{t-1}", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
   d_[1] = create_buffer("x_{t+1} - x_t", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
-
-  std::vector<float> mass(static_cast<size_t>(npad_) * 2, 0.0f);  // padding: 1/m = 0, never moves
-  for (int32_t i = 0; i < npoint_; ++i) {
-    mass[2 * i] = static_cast<float>(model.inv_mass[i]);
-    mass[2 * i + 1] = static_cast<float>(model.mass[i]);
-  }
-  mass_ = create_buffer("mass {1/m, m}", mass.size() * sizeof(float), mass.data(), 0);
-
-  std::vector<int32_t> chunks(static_cast<size_t>(nchunk_) * 4, 0);
-  for (int32_t c = 0; c < nchunk_; ++c) {
-    chunks[4 * c + 0] = L.springs.chunk_offset[c];
-    chunks[4 * c + 1] = L.springs.chunk_width[c];
-    chunks[4 * c + 2] = volume_ ? L.tets.chunk_offset[c] : 0;
-    chunks[4 * c + 3] = volume_ ? L.tets.chunk_width[c] : 0;
-  }
-  chunks_ = create_buffer("chunks", chunks.size() * sizeof(int32_t), chunks.data(), 0);
-
-  // Padding entries point at the point itself with zero parameters: a zero
-  // length spring and a zero-volume tet with k_v = 0 add no force, so every
-  // lane of a chunk runs the same number of slots (uniform control flow).
-  auto self_of_entry = [&](int32_t offset0, int32_t c, size_t e) {
-    return c * ORGANSIM_GL_CHUNK + static_cast<int32_t>((static_cast<int32_t>(e) - offset0) % ORGANSIM_GL_CHUNK);
-  };
-  std::vector<SpringEntry> springs(L.springs.item.size());
-  for (int32_t c = 0; c < nchunk_; ++c) {
-    for (int32_t e = L.springs.chunk_offset[c]; e < L.springs.chunk_offset[c + 1]; ++e) {
-      const int32_t s = L.springs.item[e];
-      if (s < 0) {
-        springs[e] = {self_of_entry(L.springs.chunk_offset[c], c, e), 0, 0, 0};
-      } else {
-        springs[e] = {L.spring_other[e], static_cast<float>(model.spring_rest[s]), static_cast<float>(model.spring_k[s]),
-                      static_cast<float>(model.spring_d[s])};
-      }
-    }
-  }
-  springs_ = create_buffer("spring entries {other, rest, k, d}", springs.size() * sizeof(SpringEntry),
-                           springs.empty() ? nullptr : springs.data(), 0);
-
+  mass_ = create_buffer("mass {1/m, m}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
+  chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
+  springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
+                           packed.springs.data(), 0);
   if (volume_) {
-    std::vector<TetEntry> tets(L.tets.item.size());
-    for (int32_t c = 0; c < nchunk_; ++c) {
-      for (int32_t e = L.tets.chunk_offset[c]; e < L.tets.chunk_offset[c + 1]; ++e) {
-        const int32_t t = L.tets.item[e];
-        if (t < 0) {
-          const int32_t self = self_of_entry(L.tets.chunk_offset[c], c, e);
-          tets[e] = {self, self, self, 0, 0};
-        } else {
-          const auto& o = L.tet_others[e];
-          tets[e] = {o[0], o[1], o[2], static_cast<float>(model.tet_k[t]),
-                     static_cast<float>(model.tet_rest_volume[t])};
-        }
-      }
-    }
-    tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", tets.size() * sizeof(TetEntry),
-                          tets.empty() ? nullptr : tets.data(), 0);
+    tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
+                          packed.tets.data(), 0);
   }
   if (pull_) {
     attach_upload_.assign(static_cast<size_t>(npad_) * 4, 0.0f);
