@@ -1,0 +1,12 @@
+# Writes OUTPUT: a C++ source defining organsim::render_shader_source(name)
+# for each file in INPUTS (name = file name, e.g. "surface.vert").
+set(body "// Generated from shaders/render by embed_shaders.cmake. Do not edit.\n#include <cstring>\n#include <stdexcept>\n#include <string>\nnamespace organsim {\nconst char* render_shader_source(const std::string& name) {\n")
+string(REPLACE "|" ";" INPUTS "${INPUTS}")
+foreach(input ${INPUTS})
+  get_filename_component(name ${input} NAME)
+  file(READ ${input} text)
+  string(APPEND body "  if (name == \"${name}\") return R\"organsim_glsl(${text})organsim_glsl\";\n")
+endforeach()
+string(APPEND body "  throw std::logic_error(\"no embedded render shader named \" + name);\n}\n}  // namespace organsim\n")
+file(WRITE ${OUTPUT}.tmp "${body}")
+file(RENAME ${OUTPUT}.tmp ${OUTPUT})
