@@ -1,0 +1,205 @@
+#include "core/model/model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "core/model/layout_build.h"
+#include "core/model/ordering.h"
+#include "core/util/error.h"
+
+namespace organsim {
+
+namespace {
+
+void validate_material(const Material& m) {
+  auto positive = [](double v, const char* path, const char* unit) {
+    if (!(v > 0) || !std::isfinite(v))
+      throw Error(ErrorKind::Scenario, std::string(path) + ": expected a positive number (" + unit + "), got " +
+                                           std::to_string(v));
+  };
+  auto non_negative = [](double v, const char* path, const char* unit) {
+    if (!(v >= 0) || !std::isfinite(v))
+      throw Error(ErrorKind::Scenario, std::string(path) + ": expected a number >= 0 (" + unit + "), got " +
+                                           std::to_string(v));
+  };
+  positive(m.density, "material.density", "kg/m^3");
+  if (m.spring_stiffness)
+    positive(*m.spring_stiffness, "material.spring_stiffness", "N/m");
+  else
+    positive(m.young_modulus, "material.young_modulus", "Pa");
+  non_negative(m.spring_damping_time, "material.spring_damping_time", "s");
+  non_negative(m.viscous_damping, "material.viscous_damping", "1/s");
+  non_negative(m.volume_modulus, "material.volume_modulus", "Pa");
+}
+
+bool selector_matches(const FixedSelector& s, const Vec3& x) {
+  switch (s.kind) {
+    case FixedSelector::Kind::Box:
+      return (x.array() >= s.min.array()).all() && (x.array() <= s.max.array()).all();
+    case FixedSelector::Kind::Plane:
+      return (x - s.point).dot(s.normal) >= 0;
+    case FixedSelector::Kind::Sphere:
+      return (x - s.center).norm() <= s.radius;
+    case FixedSelector::Kind::Indices:
+      return false;  // handled by id
+  }
+  return false;
+}
+
+std::vector<uint8_t> select_fixed(const TetMesh& mesh, const std::vector<FixedSelector>& selectors) {
+  const int32_t n = static_cast<int32_t>(mesh.points.size());
+  std::vector<uint8_t> fixed(n, 0);
+  for (size_t k = 0; k < selectors.size(); ++k) {
+    const FixedSelector& s = selectors[k];
+    if (s.kind == FixedSelector::Kind::Indices) {
+      for (size_t j = 0; j < s.indices.size(); ++j) {
+        const int32_t id = s.indices[j];
+        if (id < 0 || id >= n)
+          throw Error(ErrorKind::Scenario, "fixed[" + std::to_string(k) + "].indices[" + std::to_string(j) +
+                                               "]: point " + std::to_string(id) + " out of range 0.." +
+                                               std::to_string(n - 1));
+        fixed[id] = 1;
+      }
+      continue;
+    }
+    for (int32_t i = 0; i < n; ++i)
+      if (selector_matches(s, mesh.points[i])) fixed[i] = 1;
+  }
+  return fixed;
+}
+
+std::vector<Edge> unique_edges(const std::vector<Tet>& tets) {
+  std::vector<Edge> edges;
+  edges.reserve(tets.size() * 6);
+  for (const Tet& t : tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) edges.push_back({std::min(t[i], t[j]), std::max(t[i], t[j])});
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
+}  // namespace
+
+double Model::total_mass() const { return std::accumulate(mass.begin(), mass.end(), 0.0); }
+
+double Model::rest_volume() const { return std::accumulate(tet_rest_volume.begin(), tet_rest_volume.end(), 0.0); }
+
+Model build_model(const TetMesh& mesh, const Material& material, const ModelOptions& options,
+                  const std::string& source) {
+  validate_tet_mesh(mesh, source);
+  validate_material(material);
+  if (!options.gravity.allFinite()) throw Error(ErrorKind::Scenario, "gravity: expected finite numbers (m/s^2)");
+  const int32_t npoint = static_cast<int32_t>(mesh.points.size());
+
+  // Internal order: locality first (RCM), then valence within windows.
+  const std::vector<Edge> input_edges = unique_edges(mesh.tets);
+  std::vector<int32_t> order(npoint);
+  if (options.reorder_for_locality)
+    order = reverse_cuthill_mckee(npoint, input_edges);
+  else
+    std::iota(order.begin(), order.end(), 0);
+  std::vector<int32_t> valence(npoint, 0);
+  for (const Edge& e : input_edges) {
+    ++valence[e[0]];
+    ++valence[e[1]];
+  }
+  sort_by_valence_in_windows(order, valence, options.sort_window);
+
+  Model model;
+  model.input_of_internal = order;
+  model.internal_of_input.assign(npoint, -1);
+  for (int32_t i = 0; i < npoint; ++i) model.internal_of_input[order[i]] = i;
+  const auto& to_internal = model.internal_of_input;
+
+  model.rest_position.resize(npoint);
+  for (int32_t i = 0; i < npoint; ++i) model.rest_position[i] = mesh.points[order[i]];
+
+  // Tets (orientation unchanged by renumbering), rest volumes, lumped masses.
+  model.tet_points.resize(mesh.tets.size());
+  model.tet_rest_volume.resize(mesh.tets.size());
+  model.mass.assign(npoint, 0.0);
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    Tet tet;
+    for (int k = 0; k < 4; ++k) tet[k] = to_internal[mesh.tets[t][k]];
+    model.tet_points[t] = tet;
+    const auto& x = model.rest_position;
+    const double v = signed_volume(x[tet[0]], x[tet[1]], x[tet[2]], x[tet[3]]);
+    model.tet_rest_volume[t] = v;
+    for (int32_t p : tet) model.mass[p] += material.density * v / 4.0;
+  }
+  // Tets sorted by their smallest vertex: neighbouring points share cache lines.
+  {
+    std::vector<size_t> perm(model.tet_points.size());
+    std::iota(perm.begin(), perm.end(), 0);
+    auto key = [&](size_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
+    std::stable_sort(perm.begin(), perm.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
+    std::vector<Tet> tets(perm.size());
+    std::vector<double> volumes(perm.size());
+    for (size_t i = 0; i < perm.size(); ++i) {
+      tets[i] = model.tet_points[perm[i]];
+      volumes[i] = model.tet_rest_volume[perm[i]];
+    }
+    model.tet_points = std::move(tets);
+    model.tet_rest_volume = std::move(volumes);
+  }
+
+  // Fixed points; points used by no tet have no mass and are held fixed.
+  const std::vector<uint8_t> fixed_input = select_fixed(mesh, options.fixed);
+  model.fixed.resize(npoint);
+  model.inv_mass.resize(npoint);
+  for (int32_t i = 0; i < npoint; ++i) {
+    model.fixed[i] = fixed_input[order[i]] || model.mass[i] <= 0;
+    model.inv_mass[i] = model.fixed[i] ? 0.0 : 1.0 / model.mass[i];
+  }
+
+  // Springs: one per unique edge, in internal numbering, sorted.
+  model.spring_ends.reserve(input_edges.size());
+  for (const Edge& e : input_edges) {
+    const int32_t a = to_internal[e[0]], b = to_internal[e[1]];
+    model.spring_ends.push_back({std::min(a, b), std::max(a, b)});
+  }
+  std::sort(model.spring_ends.begin(), model.spring_ends.end());
+  const int32_t nspring = model.nspring();
+  model.spring_rest.resize(nspring);
+  model.spring_k.resize(nspring);
+  model.spring_d.resize(nspring);
+  std::vector<double> edge_volume;  // sum of rest volumes of the tets sharing each spring
+  if (!material.spring_stiffness) {
+    edge_volume.assign(nspring, 0.0);
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& tet = model.tet_points[t];
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          const Edge e{std::min(tet[i], tet[j]), std::max(tet[i], tet[j])};
+          const auto it = std::lower_bound(model.spring_ends.begin(), model.spring_ends.end(), e);
+          edge_volume[it - model.spring_ends.begin()] += model.tet_rest_volume[t];
+        }
+    }
+  }
+  for (int32_t s = 0; s < nspring; ++s) {
+    const auto [a, b] = model.spring_ends[s];
+    const double r = (model.rest_position[b] - model.rest_position[a]).norm();
+    model.spring_rest[s] = r;
+    // See Material: k_e = E * V_e / r^2 matches a linear solid (nu = 1/4)
+    // under volumetric strain.
+    model.spring_k[s] = material.spring_stiffness ? *material.spring_stiffness
+                                                  : material.young_modulus * edge_volume[s] / (r * r);
+    model.spring_d[s] = material.spring_damping_time * model.spring_k[s];
+  }
+
+  if (material.volume_modulus > 0) {
+    model.tet_k.resize(model.ntet());
+    for (int32_t t = 0; t < model.ntet(); ++t) model.tet_k[t] = material.volume_modulus / model.tet_rest_volume[t];
+  }
+
+  model.gravity = options.gravity;
+  model.viscous_damping = material.viscous_damping;
+  model.material = material;
+  model.layout = build_gather_layout(model, options.chunk_size, options.sort_window);
+  return model;
+}
+
+}  // namespace organsim
