@@ -1,24 +1,23 @@
 #include "core/render/surface_renderer.h"
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/glcorearb.h>
 
 #include <cmath>
 #include <numbers>
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "core/gl/gl_api.h"
+#include "core/gl/shader_sources.h"
 #include "core/util/error.h"
 
 namespace organsim {
 
-// Generated from shaders/render/* at build time (embed_shaders.cmake).
-const char* render_shader_source(const std::string& name);
-
 namespace {
 
 GLuint compile(GLenum type, const std::string& name) {
-  const char* source = render_shader_source(name);
+  // The render shaders carry their own #version line: no compute bindings.
+  const std::string text(gl::shader_source(name));
+  const char* source = text.c_str();
   const GLuint shader = glCreateShader(type);
   glShaderSource(shader, 1, &source, nullptr);
   glCompileShader(shader);
@@ -30,7 +29,7 @@ GLuint compile(GLenum type, const std::string& name) {
     std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
     glGetShaderInfoLog(shader, length, nullptr, log.data());
     glDeleteShader(shader);
-    throw Error(ErrorKind::Backend, "shaders/render/" + name + ": does not compile: " + log);
+    throw Error(ErrorKind::Backend, "shaders/" + name + ": does not compile: " + log);
   }
   return shader;
 }
@@ -52,7 +51,7 @@ GLuint link(const std::string& vert, const std::string& frag) {
     std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
     glGetProgramInfoLog(program, length, nullptr, log.data());
     glDeleteProgram(program);
-    throw Error(ErrorKind::Backend, "shaders/render/" + vert + " + " + frag + ": do not link: " + log);
+    throw Error(ErrorKind::Backend, "shaders/" + vert + " + " + frag + ": do not link: " + log);
   }
   return program;
 }
@@ -137,8 +136,8 @@ SurfaceRenderer::SurfaceRenderer(int width, int height) : impl_(std::make_unique
     throw Error(ErrorKind::Backend, std::string("render framebuffer incomplete: glCheckNamedFramebufferStatus = ") + hex);
   }
 
-  s.surface_program = link("surface.vert", "shade.frag");
-  s.tool_program = link("tool.vert", "shade.frag");
+  s.surface_program = link("render_surface.vert", "render_shade.frag");
+  s.tool_program = link("render_tool.vert", "render_shade.frag");
 
   GLuint buffers[5];
   glCreateBuffers(5, buffers);
