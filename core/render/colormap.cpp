@@ -84,15 +84,15 @@ void draw_colormap_legend(cv::Mat& bgr, const std::string& title, double min_val
   cv::putText(bgr, title, {x0 - 10, y0 - 8}, cv::FONT_HERSHEY_SIMPLEX, font, ink, 1, cv::LINE_AA);
 }
 
-std::string colormap_title(ColorMap map) {
+std::string colormap_title(Colormap map) {
   switch (map) {
-    case ColorMap::Strain: return "strain";
-    case ColorMap::Displacement: return "displacement";
-    case ColorMap::None: break;
+    case Colormap::Strain: return "strain";
+    case Colormap::Displacement: return "displacement";
+    case Colormap::None: break;
   }
   return "";
 }
 
-std::string colormap_unit(ColorMap map) { return map == ColorMap::Displacement ? "m" : ""; }
+std::string colormap_unit(Colormap map) { return map == Colormap::Displacement ? "m" : ""; }
 
 }  // namespace organsim

@@ -31,7 +31,7 @@ void draw_colormap_legend(cv::Mat& bgr, const std::string& title, double min_val
                           double max_value, const std::string& unit);
 
 // Name and unit used by the legend for a colour map.
-std::string colormap_title(ColorMap map);
-std::string colormap_unit(ColorMap map);
+std::string colormap_title(Colormap map);
+std::string colormap_unit(Colormap map);
 
 }  // namespace organsim

@@ -1,12 +1,13 @@
 #pragma once
-// What to render and where to write it: the scenario's `outputs.frames`,
-// `outputs.video` and `outputs.contact_sheet`, as plain structs with
-// defaults. The scenario parser fills them; `organsim render` fills
-// CameraOptions and StyleOptions from its flags.
+// What to render and where to write it. The scenario's `outputs` (OutputsDef,
+// core/scenario/outputs.h) convert into these with to_frame_outputs();
+// `organsim render` fills CameraOptions and StyleOptions from its flags. They
+// add what the renderer needs beyond the scenario (colours, tile size).
 #include <filesystem>
 #include <optional>
 #include <string>
 
+#include "core/scenario/outputs.h"
 #include "core/util/vec.h"
 
 namespace organsim {
@@ -22,11 +23,9 @@ struct CameraOptions {
   Vec3 auto_direction{1.0, -1.6, 0.9};  // from target towards the eye when auto_fit
 };
 
-enum class ColorMap { None, Strain, Displacement };
-
 struct StyleOptions {
   bool wireframe = false;                 // dark edges over the shaded surface
-  ColorMap colormap = ColorMap::None;     // per-vertex colour with a legend
+  Colormap colormap = Colormap::None;     // per-vertex colour with a legend
   Vec3 background{1.0, 1.0, 1.0};         // RGB in [0, 1]
   Vec3 surface_color{0.80, 0.45, 0.40};   // RGB in [0, 1], when colormap is None
   Vec3 tool_color{0.55, 0.60, 0.70};      // RGB in [0, 1]
@@ -66,5 +65,8 @@ struct FrameOutputs {
   std::optional<ContactSheetOptions> contact_sheet;
   bool any() const { return frames.has_value() || video.has_value() || contact_sheet.has_value(); }
 };
+
+FrameOutputs to_frame_outputs(const OutputsDef& outputs);
+CameraOptions to_camera_options(const CameraDef& camera);
 
 }  // namespace organsim

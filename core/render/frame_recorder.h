@@ -3,13 +3,14 @@
 // tool at `frames.rate` frames per simulated second and hands the images to a
 // FrameWriter (PNG sequence, video, contact sheet). It owns its own headless
 // EGL context; when another context is current on the thread (the GL
-// backend's), it shares objects with nothing and restores that context after
-// each frame.
+// backend's), it makes its own current for each frame and restores the other
+// one afterwards. The EGL context is created in on_start, not before.
 #include <filesystem>
 #include <memory>
 #include <optional>
 
 #include "core/render/frame_options.h"
+#include "core/scenario/scenario.h"
 #include "core/sim/run_observer.h"
 #include "core/sim/tool.h"
 
@@ -46,9 +47,9 @@ class FrameRecorder : public RunObserver {
 };
 
 // nullptr when `outputs` asks for nothing (no renderer, no GL context).
-// Throws Error(Scenario) when video or contact_sheet is asked for without
-// frames settings.
 std::unique_ptr<FrameRecorder> make_frame_recorder(const FrameOutputs& outputs, const std::filesystem::path& outdir,
                                                    double duration, std::optional<ToolSpec> tool);
+// The same from a parsed scenario: outputs, time.duration and tool.
+std::unique_ptr<FrameRecorder> make_frame_recorder(const Scenario& scenario, const std::filesystem::path& outdir);
 
 }  // namespace organsim
