@@ -7,6 +7,7 @@
 // The valence sort happens only within windows of sigma points so that the
 // locality order (reverse Cuthill-McKee) survives; sigma = npoint gives the
 // paper's global sort (jagged diagonal storage).
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -22,6 +23,13 @@ struct GatherTable {
   std::vector<int32_t> count;         // entries of each point (npoint)
   std::vector<int32_t> item;          // spring or tet id, -1 for padding (nentry)
 };
+
+// The point whose slot holds `entry` (padding entries included).
+inline int32_t point_of_entry(const GatherTable& table, int32_t chunk_size, int32_t entry) {
+  const auto next = std::upper_bound(table.chunk_offset.begin(), table.chunk_offset.end(), entry);
+  const int32_t chunk = static_cast<int32_t>(next - table.chunk_offset.begin()) - 1;
+  return chunk * chunk_size + (entry - table.chunk_offset[chunk]) % chunk_size;
+}
 
 struct GatherLayout {
   int32_t chunk_size = kDefaultChunkSize;  // C

@@ -59,13 +59,12 @@ GatherLayout build_gather_layout(const Model& model, int32_t chunk_size, int32_t
   }
   layout.springs = make_table(springs_of, chunk_size);
   layout.spring_other.assign(layout.springs.item.size(), -1);
-  for (int32_t c = 0; c < layout.nchunk; ++c)
-    for (int32_t e = layout.springs.chunk_offset[c]; e < layout.springs.chunk_offset[c + 1]; ++e) {
-      const int32_t s = layout.springs.item[e];
-      if (s < 0) continue;
-      const int32_t p = c * chunk_size + (e - layout.springs.chunk_offset[c]) % chunk_size;
-      layout.spring_other[e] = model.spring_ends[s][0] + model.spring_ends[s][1] - p;
-    }
+  for (int32_t e = 0; e < static_cast<int32_t>(layout.springs.item.size()); ++e) {
+    const int32_t s = layout.springs.item[e];
+    if (s < 0) continue;
+    const int32_t p = point_of_entry(layout.springs, chunk_size, e);
+    layout.spring_other[e] = model.spring_ends[s][0] + model.spring_ends[s][1] - p;
+  }
 
   // Tets of each point; the other three vertices in an order that keeps the
   // tet's orientation with p first: (p0,p1,p2,p3), (p1,p0,p3,p2),
@@ -76,15 +75,14 @@ GatherLayout build_gather_layout(const Model& model, int32_t chunk_size, int32_t
     for (int32_t v : model.tet_points[t]) tets_of[v].push_back(t);
   layout.tets = make_table(tets_of, chunk_size);
   layout.tet_others.assign(layout.tets.item.size(), {-1, -1, -1});
-  for (int32_t c = 0; c < layout.nchunk; ++c)
-    for (int32_t e = layout.tets.chunk_offset[c]; e < layout.tets.chunk_offset[c + 1]; ++e) {
-      const int32_t t = layout.tets.item[e];
-      if (t < 0) continue;
-      const int32_t p = c * chunk_size + (e - layout.tets.chunk_offset[c]) % chunk_size;
-      const Tet& tet = model.tet_points[t];
-      const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), p) - tet.begin());
-      for (int k = 0; k < 3; ++k) layout.tet_others[e][k] = tet[kOthers[corner][k]];
-    }
+  for (int32_t e = 0; e < static_cast<int32_t>(layout.tets.item.size()); ++e) {
+    const int32_t t = layout.tets.item[e];
+    if (t < 0) continue;
+    const int32_t p = point_of_entry(layout.tets, chunk_size, e);
+    const Tet& tet = model.tet_points[t];
+    const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), p) - tet.begin());
+    for (int k = 0; k < 3; ++k) layout.tet_others[e][k] = tet[kOthers[corner][k]];
+  }
   return layout;
 }
 

@@ -58,6 +58,9 @@ class Backend {
 
   // Current positions x_t, in internal numbering (may synchronise a GPU).
   virtual void positions(std::vector<Vec3>& out) const = 0;
+  // Replaces x_t and x_{t-1} (internal numbering), e.g. to start from a
+  // deformed or moving state in tests. Not for use inside a run.
+  virtual void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) = 0;
   // Simulated time at the end of the last tick, s.
   virtual double time() const = 0;
 };

@@ -22,6 +22,14 @@ std::string cpu_model_name() {
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 
+// Threads pay off only when each has a few thousand points: below that the
+// per-step fork/join costs more than it saves (and thrashes a loaded machine).
+int choose_threads(const Model& model, const CpuBackendOptions& options) {
+  if (options.threads > 0) return options.threads;
+  return model.npoint() >= 4096 ? omp_get_max_threads() : 1;
+}
+
+
 // Step-invariant inputs of one substep.
 template <class Real>
 struct StepContext {
@@ -36,22 +44,29 @@ class CpuBackend final : public Backend {
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options)
-      : model_(model), tool_(tool), threads_(options.threads > 0 ? options.threads : omp_get_max_threads()) {
+      : model_(model), tool_(tool), threads_(choose_threads(model, options)) {
     const int32_t n = model.npoint();
     const auto& layout = model.layout;
-    x_.resize(n);
-    for (int32_t i = 0; i < n; ++i) x_[i] = model.rest_position[i].cast<Real>();
-    x_prev_ = x_;
-    x_next_ = x_;
+    // State is the displacement u = x - X from rest: in float, x itself
+    // would round away the per-step increment dt^2 F/m (~1e-9 m against a
+    // 4e-9 m spacing of floats near 5 cm); u starts at 0 where floats are fine.
+    rest_.resize(n);
+    for (int32_t i = 0; i < n; ++i) rest_[i] = model.rest_position[i].cast<Real>();
+    u_.assign(n, V3::Zero());
+    u_prev_ = u_;
+    u_next_ = u_;
     // Per-entry copies of the spring and tet parameters in the backend's
-    // precision, so the gather reads one contiguous stream per slot.
+    // precision, so the gather reads one contiguous stream per slot. Rest
+    // lengths and volumes are recomputed from the rounded rest positions
+    // exactly as the gather computes them, so the rest state is force-free.
     spring_rest_.resize(layout.springs.item.size(), 0);
     spring_k_.resize(layout.springs.item.size(), 0);
     spring_d_.resize(layout.springs.item.size(), 0);
     for (size_t e = 0; e < layout.springs.item.size(); ++e) {
       const int32_t s = layout.springs.item[e];
       if (s < 0) continue;
-      spring_rest_[e] = static_cast<Real>(model.spring_rest[s]);
+      const int32_t p = point_of_entry(layout.springs, layout.chunk_size, static_cast<int32_t>(e));
+      spring_rest_[e] = (rest_[layout.spring_other[e]] - rest_[p]).norm();
       spring_k_[e] = static_cast<Real>(model.spring_k[s]);
       spring_d_[e] = static_cast<Real>(model.spring_d[s]);
     }
@@ -61,7 +76,10 @@ class CpuBackend final : public Backend {
       for (size_t e = 0; e < layout.tets.item.size(); ++e) {
         const int32_t t = layout.tets.item[e];
         if (t < 0) continue;
-        tet_rest_[e] = static_cast<Real>(model.tet_rest_volume[t]);
+        const int32_t p = point_of_entry(layout.tets, layout.chunk_size, static_cast<int32_t>(e));
+        const auto& o = layout.tet_others[e];
+        const V3 a = rest_[o[0]] - rest_[p], b = rest_[o[1]] - rest_[p], c = rest_[o[2]] - rest_[p];
+        tet_rest_[e] = a.dot(b.cross(c)) / Real(6);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
       }
     }
@@ -126,8 +144,17 @@ class CpuBackend final : public Backend {
   }
 
   void positions(std::vector<Vec3>& out) const override {
-    out.resize(x_.size());
-    for (size_t i = 0; i < x_.size(); ++i) out[i] = x_[i].template cast<double>();
+    out.resize(u_.size());
+    for (size_t i = 0; i < u_.size(); ++i) out[i] = model_.rest_position[i] + u_[i].template cast<double>();
+  }
+
+  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override {
+    if (x.size() != u_.size() || x_prev.size() != u_.size())
+      throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.size()) + " positions");
+    for (size_t i = 0; i < u_.size(); ++i) {
+      u_[i] = (x[i] - model_.rest_position[i]).cast<Real>();
+      u_prev_[i] = (x_prev[i] - model_.rest_position[i]).cast<Real>();
+    }
   }
 
   Reaction tick(const TickRequest& request) override {
@@ -185,8 +212,8 @@ class CpuBackend final : public Backend {
     const int32_t nchunk = model_.layout.nchunk;
 #pragma omp parallel for schedule(static) num_threads(threads_)
     for (int32_t c = 0; c < nchunk; ++c) chunk<Volume, Gravity, Tool>(ctx, c);
-    std::swap(x_prev_, x_);  // x_prev <- x_t
-    std::swap(x_, x_next_);  // x_t <- x_{t+1}
+    std::swap(u_prev_, u_);  // u_{t-1} <- u_t
+    std::swap(u_, u_next_);  // u_t <- u_{t+1}
     Reaction reaction;
     if constexpr (Tool != kNoTool) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
@@ -210,8 +237,8 @@ class CpuBackend final : public Backend {
     Partial partial{V3::Zero(), V3::Zero(), 0};
     for (int32_t p = begin; p < end; ++p) {
       const int32_t lane = p - begin;
-      const V3 xi = x_[p];
-      const V3 vi = (xi - x_prev_[p]) * ctx.inv_dt;
+      const V3 Xi = rest_[p], ui = u_[p];
+      const V3 vi = (ui - u_prev_[p]) * ctx.inv_dt;
       V3 f = V3::Zero();
 
       const int32_t* other = L.spring_other.data() + L.springs.chunk_offset[c] + lane;
@@ -220,12 +247,12 @@ class CpuBackend final : public Backend {
       for (int32_t j = 0; j < nspring; ++j) {
         const int32_t e = base + j * C;
         const int32_t q = other[j * C];
-        const V3 l = x_[q] - xi;
+        const V3 l = (rest_[q] - Xi) + (u_[q] - ui);
         const Real length = l.norm();
         if (length <= Real(0)) continue;  // coincident points: no direction, no force
-        const V3 u = l / length;
-        const V3 dv = (x_[q] - x_prev_[q]) * ctx.inv_dt - vi;
-        f += (spring_k_[e] * (length - spring_rest_[e]) + spring_d_[e] * dv.dot(u)) * u;
+        const V3 dir = l / length;
+        const V3 dv = (u_[q] - u_prev_[q]) * ctx.inv_dt - vi;
+        f += (spring_k_[e] * (length - spring_rest_[e]) + spring_d_[e] * dv.dot(dir)) * dir;
       }
 
       if constexpr (Volume) {
@@ -233,7 +260,9 @@ class CpuBackend final : public Backend {
         for (int32_t j = 0; j < L.tets.count[p]; ++j) {
           const int32_t e = tbase + j * C;
           const auto& o = L.tet_others[e];
-          const V3 a = x_[o[0]] - xi, b = x_[o[1]] - xi, cc = x_[o[2]] - xi;
+          const V3 a = (rest_[o[0]] - Xi) + (u_[o[0]] - ui);
+          const V3 b = (rest_[o[1]] - Xi) + (u_[o[1]] - ui);
+          const V3 cc = (rest_[o[2]] - Xi) + (u_[o[2]] - ui);
           const Real v = a.dot(b.cross(cc)) / Real(6);
           // dV/dx_p for V = (a-p).((b-p)x(c-p))/6 is (c-a)x(b-a)/6.
           const V3 grad = (cc - a).cross(b - a) / Real(6);
@@ -242,6 +271,7 @@ class CpuBackend final : public Backend {
       }
       if constexpr (Gravity) f += mass_[p] * ctx.gravity;
 
+      [[maybe_unused]] const V3 xi = Xi + ui;
       if constexpr (Tool == kPush) {
         const V3 d = xi - ctx.tool_center;
         const Real dist = d.norm();
@@ -266,7 +296,7 @@ class CpuBackend final : public Backend {
 
       // Position Verlet with mass-proportional drag; fixed points have 1/m = 0
       // and no velocity, so they stay put.
-      x_next_[p] = inv_mass_[p] > Real(0) ? V3(xi + ctx.drag * (xi - x_prev_[p]) + ctx.dt2 * inv_mass_[p] * f) : xi;
+      u_next_[p] = inv_mass_[p] > Real(0) ? V3(ui + ctx.drag * (ui - u_prev_[p]) + ctx.dt2 * inv_mass_[p] * f) : ui;
     }
     if constexpr (Tool != kNoTool) partial_[c] = partial;
   }
@@ -276,7 +306,8 @@ class CpuBackend final : public Backend {
   int threads_;
   std::string device_;
   double time_ = 0;
-  std::vector<V3> x_, x_prev_, x_next_;
+  std::vector<V3> rest_;                // X, rest positions (npoint)
+  std::vector<V3> u_, u_prev_, u_next_;  // displacements at t, t-1, t+1 (npoint)
   std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry)
   std::vector<Real> tet_rest_, tet_k_;                   // per slot (nentry), empty without volume
   std::vector<Real> mass_, inv_mass_;

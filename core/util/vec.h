@@ -1,6 +1,7 @@
 #pragma once
 // Small vector aliases shared by every organsim module (SI units throughout).
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross()
 #include <array>
 #include <cstdint>
 

@@ -1,0 +1,59 @@
+#pragma once
+// Small hand-built models for physics tests (no meshing needed).
+#include <random>
+
+#include "core/mesh/tet_mesh.h"
+#include "core/model/layout_build.h"
+#include "core/model/model.h"
+#include "core/sim/backend.h"
+
+namespace organsim::testing {
+
+// Points joined by explicit springs (no tets): masses in kg, k in N/m, d in N s/m.
+inline Model make_spring_model(const std::vector<Vec3>& points, const std::vector<double>& masses,
+                               const std::vector<Edge>& springs, double k, double d,
+                               const std::vector<int32_t>& fixed_points, const Vec3& gravity = Vec3::Zero()) {
+  Model m;
+  const int32_t n = static_cast<int32_t>(points.size());
+  m.rest_position = points;
+  m.mass = masses;
+  m.fixed.assign(n, 0);
+  for (int32_t p : fixed_points) m.fixed[p] = 1;
+  m.inv_mass.resize(n);
+  for (int32_t i = 0; i < n; ++i) m.inv_mass[i] = m.fixed[i] ? 0 : 1 / masses[i];
+  for (int32_t i = 0; i < n; ++i) {
+    m.input_of_internal.push_back(i);
+    m.internal_of_input.push_back(i);
+  }
+  for (const Edge& e : springs) {
+    m.spring_ends.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
+    m.spring_rest.push_back((points[e[1]] - points[e[0]]).norm());
+    m.spring_k.push_back(k);
+    m.spring_d.push_back(d);
+  }
+  m.gravity = gravity;
+  m.layout = build_gather_layout(m, 4, 4);
+  return m;
+}
+
+// A box tet mesh with its interior points jittered by up to `jitter` of a cell.
+inline TetMesh jittered_box(int n, double size, double jitter, unsigned seed) {
+  TetMesh mesh = make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(size), n, n, n);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double h = size / n;
+  for (Vec3& p : mesh.points) {
+    const bool interior = (p.array() > 1e-12).all() && (p.array() < size - 1e-12).all();
+    if (interior) p += jitter * h * Vec3(u(rng), u(rng), u(rng));
+  }
+  return mesh;
+}
+
+inline void run_ticks(Backend& backend, int ticks, double dt, int substeps) {
+  TickRequest request;
+  request.dt = dt;
+  request.substeps = substeps;
+  for (int i = 0; i < ticks; ++i) backend.tick(request);
+}
+
+}  // namespace organsim::testing
