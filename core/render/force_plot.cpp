@@ -107,10 +107,10 @@ cv::Mat draw_force_plot(const std::vector<double>& t, const std::vector<Vec3>& f
   cv::rectangle(img, area, ink, 1);
 
   // Curves, clipped to the plot area.
-  const Series series[4] = {{"|F|", cv::Scalar(20, 20, 20), 2},
-                            {"Fx", cv::Scalar(40, 40, 220), 1},
-                            {"Fy", cv::Scalar(40, 160, 40), 1},
-                            {"Fz", cv::Scalar(220, 90, 30), 1}};
+  const Series series[4] = {{"|F|", cv::Scalar(20, 20, 20), 3},
+                            {"Fx", cv::Scalar(40, 40, 220), 2},
+                            {"Fy", cv::Scalar(40, 160, 40), 2},
+                            {"Fz", cv::Scalar(220, 90, 30), 2}};
   cv::Mat plot = img(area);
   for (int c = 0; c < 4; ++c) {
     std::vector<cv::Point> pts;
@@ -152,7 +152,7 @@ cv::Mat draw_force_plot(const std::vector<double>& t, const std::vector<Vec3>& f
   const int lx = area.x + area.width + 15;
   for (int c = 0; c < 4; ++c) {
     const int y = area.y + 15 + c * 22;
-    cv::line(img, {lx, y}, {lx + 28, y}, series[c].color, series[c].thickness + 1, cv::LINE_AA);
+    cv::line(img, {lx, y}, {lx + 28, y}, series[c].color, series[c].thickness, cv::LINE_AA);
     cv::putText(img, std::string(series[c].name) + " (N)", {lx + 34, y + 5}, font, 0.45, ink, 1, cv::LINE_AA);
   }
   return img;
