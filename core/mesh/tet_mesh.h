@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>  // cross() in signed_volume
+
 #include "core/util/vec.h"
 
 namespace organsim {
