@@ -69,7 +69,7 @@ Camera make_camera(const CameraOptions& options, const std::vector<Vec3>& points
     cam.position = center + options.auto_direction.normalized() * distance;
   } else {
     cam.position = options.position;
-    cam.target = options.target;
+    cam.target = options.target_at_center ? center : options.target;
   }
   const Vec3 view = cam.target - cam.position;
   if (view.norm() <= 0) throw Error(ErrorKind::Scenario, "camera: position equals target");
