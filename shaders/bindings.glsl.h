@@ -14,16 +14,20 @@
 #define ORGANSIM_GL_READBACK_SLOTS 4
 
 // Shader storage buffer bindings (std430). Sizes: npad = nchunk * C points.
-#define ORGANSIM_GL_B_X_PREV 0    // vec4 x_{t-1}, m (npad); w = 1
-#define ORGANSIM_GL_B_X_CUR 1     // vec4 x_t, m (npad); w = 1
+// State: x_t and d_t = x_t - x_{t-1} (equivalent to storing x_{t-1}, but in
+// float the difference of two nearby positions loses the velocity; see docs/gl.md).
+#define ORGANSIM_GL_B_X_CUR 0     // vec4 x_t, m (npad); w = 1
+#define ORGANSIM_GL_B_D_CUR 1     // vec4 d_t = x_t - x_{t-1}, m (npad)
 #define ORGANSIM_GL_B_X_NEXT 2    // vec4 x_{t+1}, m (npad); written by the step
-#define ORGANSIM_GL_B_MASS 3      // vec2 {1/m (0 = fixed or padding), m}, kg (npad)
-#define ORGANSIM_GL_B_CHUNKS 4    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk)
-#define ORGANSIM_GL_B_SPRINGS 5   // {int other; float rest, k, d} per (chunk, slot, lane) (nspring_entry)
-#define ORGANSIM_GL_B_TETS 6      // {int a, b, c; float k_v, V_r} per (chunk, slot, lane) (ntet_entry)
-#define ORGANSIM_GL_B_ATTACH 7    // vec4 {offset from tool centre (m), attached 0/1} (npad)
-#define ORGANSIM_GL_B_PARTIALS 8  // vec4 pairs {F.xyz, contacts}, {T.xyz, 0} per workgroup (nchunk x 2)
-#define ORGANSIM_GL_B_REACTION 9  // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
+#define ORGANSIM_GL_B_D_NEXT 3    // vec4 d_{t+1}, m (npad); written by the step
+#define ORGANSIM_GL_B_MASS 4      // vec2 {1/m (0 = fixed or padding), m}, kg (npad)
+#define ORGANSIM_GL_B_CHUNKS 5    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk)
+#define ORGANSIM_GL_B_SPRINGS 6   // {int other; float rest, k, d} per (chunk, slot, lane) (nspring_entry)
+#define ORGANSIM_GL_B_TETS 7      // {int a, b, c; float k_v, V_r} per (chunk, slot, lane) (ntet_entry)
+#define ORGANSIM_GL_B_ATTACH 8    // vec4 {offset from tool centre (m), attached 0/1} (npad)
+#define ORGANSIM_GL_B_PARTIALS 9  // vec4 pairs {F.xyz, contacts}, {T.xyz, 0} per workgroup (nchunk x 2)
+#define ORGANSIM_GL_B_REACTION 10 // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
+#define ORGANSIM_GL_B_FORCE 11    // vec4 total force per point, N (npad); RECORD_FORCE variant (tests) only
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
