@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/gl/egl_context.h"
+#include "core/gl/gl_backend.h"
 #include "core/gl/gl_api.h"
 #include "core/mesh/boundary.h"
 #include "core/render/colormap.h"
@@ -22,28 +23,39 @@ double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// Makes the recorder's context current for a scope and puts back whatever
-// was current before (the GL backend's context, or none), so the simulation
-// never sees its context switched under it.
-class ContextScope {
+// Remembers the thread's current EGL context and puts it back at the end of
+// the scope (the GL backend's, or none), so the simulation never sees its
+// context switched under it.
+class SavedContext {
  public:
-  explicit ContextScope(const gl::EglContext& context)
+  SavedContext()
       : display_(eglGetCurrentDisplay()),
         context_(eglGetCurrentContext()),
         draw_(eglGetCurrentSurface(EGL_DRAW)),
-        read_(eglGetCurrentSurface(EGL_READ)) {
-    context.make_current();
+        read_(eglGetCurrentSurface(EGL_READ)) {}
+  ~SavedContext() {
+    if (context_ != EGL_NO_CONTEXT) {
+      eglMakeCurrent(display_, draw_, read_, context_);
+    } else if (eglGetCurrentContext() != EGL_NO_CONTEXT) {
+      eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    }
   }
-  ~ContextScope() {
-    if (context_ != EGL_NO_CONTEXT) eglMakeCurrent(display_, draw_, read_, context_);
-  }
-  ContextScope(const ContextScope&) = delete;
-  ContextScope& operator=(const ContextScope&) = delete;
+  SavedContext(const SavedContext&) = delete;
+  SavedContext& operator=(const SavedContext&) = delete;
 
  private:
   EGLDisplay display_;
   EGLContext context_;
   EGLSurface draw_, read_;
+};
+
+// The recorder's context, current for a scope.
+class ContextScope {
+ public:
+  explicit ContextScope(const gl::EglContext& context) { context.make_current(); }
+
+ private:
+  SavedContext saved_;  // constructed before the body runs: saves the previous context
 };
 
 }  // namespace
@@ -56,6 +68,7 @@ struct FrameRecorder::Impl {
   std::optional<ToolSpec> tool;
 
   std::unique_ptr<gl::EglContext> context;
+  const GlBackend* gl_backend = nullptr;  // set when drawing straight from its storage buffer
   std::unique_ptr<SurfaceRenderer> renderer;
   std::unique_ptr<FrameWriter> writer;
   Camera camera;
@@ -67,12 +80,32 @@ struct FrameRecorder::Impl {
   FrameRecorderTiming timing;
 
   void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center) {
+    const bool colormap = frames.style.colormap != Colormap::None;
+    GLsync sim_done = nullptr;
+    if (gl_backend) {
+      gl_backend->context().make_current();
+      // In the simulation's context: make its compute writes
+      // to x_t visible to our vertex shader and fence them, so our context
+      // waits on the GPU for them (no CPU stall, no copy).
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      sim_done = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+      glFlush();
+    }
     ContextScope scope(*context);
     auto start = Clock::now();
-    backend.positions(positions);
-    renderer->set_positions(positions);
+    if (gl_backend) {
+      glWaitSync(sim_done, 0, GL_TIMEOUT_IGNORED);
+      glDeleteSync(sim_done);
+      renderer->use_position_buffer(gl_backend->position_buffer(), 4, 0);
+      // The colour map's scalars are computed on the CPU: only then are the
+      // positions read back.
+      if (colormap) backend.positions(positions);
+    } else {
+      backend.positions(positions);
+      renderer->set_positions(positions);
+    }
     double colormap_max = 0;
-    if (frames.style.colormap != Colormap::None) {
+    if (colormap) {
       if (frames.style.colormap == Colormap::Strain) {
         point_strain(model, positions, scalars);
       } else {
@@ -140,7 +173,12 @@ void FrameRecorder::on_start(const Model& model, Backend& backend) {
   // Created here, not in the constructor, so `--plan` and scenes that fail
   // before the run never open a GL context.
   {
+    SavedContext saved;  // creating a context makes it current
     gl::EglContextOptions options;
+    // With the GL backend, share its objects so the renderer reads the
+    // simulation's position buffer directly.
+    s.gl_backend = dynamic_cast<const GlBackend*>(&backend);
+    if (s.gl_backend) options.share = &s.gl_backend->context();
     s.context = std::make_unique<gl::EglContext>(options);
   }
   {
