@@ -231,9 +231,9 @@ Plan GlBackend::plan() const {
   return plan;
 }
 
-void GlBackend::set_positions(const std::vector<Vec3>& x_t, const std::vector<Vec3>& x_prev) {
+void GlBackend::set_state(const std::vector<Vec3>& x_t, const std::vector<Vec3>& x_prev) {
   if (static_cast<int32_t>(x_t.size()) != npoint_ || static_cast<int32_t>(x_prev.size()) != npoint_) {
-    throw Error(ErrorKind::Backend, "GL backend: set_positions needs " + std::to_string(npoint_) + " points");
+    throw Error(ErrorKind::Backend, "GL backend: set_state needs " + std::to_string(npoint_) + " points");
   }
   make_current();
   auto upload = [&](GLuint buffer, auto&& value_of, float w) {
@@ -247,7 +247,7 @@ void GlBackend::set_positions(const std::vector<Vec3>& x_t, const std::vector<Ve
   upload(x_[cur_], [&](size_t i) { return x_t[i]; }, 1.0f);
   // The difference in double, then rounded: as precise as float allows.
   upload(d_[cur_], [&](size_t i) { return Vec3(x_t[i] - x_prev[i]); }, 0.0f);
-  context_->check_errors("GL backend set_positions");
+  context_->check_errors("GL backend set_state");
 }
 
 void GlBackend::attach(const Attachment& attachment) {

@@ -50,9 +50,8 @@ class GlBackend final : public Backend {
   int32_t point_count() const { return npoint_; }
   const gl::EglContext& context() const { return *context_; }
 
-  // Sets x_t and x_{t-1} (internal numbering), e.g. to start from a given
-  // deformation. Synchronous upload; not for use inside a run loop.
-  void set_positions(const std::vector<Vec3>& x_t, const std::vector<Vec3>& x_prev);
+  // x_{t-1} is kept as d = x_t - x_{t-1}, computed here in double.
+  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override;
   // Total force on each point during the last substep, N (record_forces only).
   void forces(std::vector<Vec3>& out) const;
 

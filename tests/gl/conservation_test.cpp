@@ -54,7 +54,7 @@ TEST(GlConservation, FreeModelKeepsItsMomentum) {
   const std::vector<Vec3> x = gl_test::perturbed(model, 2e-3, 3);  // 2 mm noise: strong internal forces
   std::vector<Vec3> x_prev(x.size());
   for (size_t i = 0; i < x.size(); ++i) x_prev[i] = x[i] - v0 * kDt;
-  gl.set_positions(x, x_prev);
+  gl.set_state(x, x_prev);
   const Vec3 c0 = centre_of_mass(model, x);
 
   TickRequest request;

@@ -58,7 +58,7 @@ TEST(GlKernel, SpringsVolumeAndGravityMatchTheReferenceScatter) {
   options.record_forces = true;
   GlBackend gl(model, BackendTool{}, options);
   const OneStep s = deformed_state(model);
-  gl.set_positions(s.x, s.x_prev);
+  gl.set_state(s.x, s.x_prev);
   TickRequest request;
   request.dt = kDt;
   request.substeps = 1;
@@ -95,7 +95,7 @@ TEST(GlKernel, PushContactAndReactionMatchTheReference) {
   options.record_forces = true;
   GlBackend gl(model, tool, options);
   const OneStep s = deformed_state(model);
-  gl.set_positions(s.x, s.x_prev);
+  gl.set_state(s.x, s.x_prev);
   // Tool centre 1.2 cm above the top face's centre: the top points nearest the
   // centre are inside the 2 cm sphere.
   const Vec3 center(0.05, 0.05, 0.062);
@@ -130,7 +130,7 @@ TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   options.record_forces = true;
   GlBackend gl(model, tool, options);
   const OneStep s = deformed_state(model);
-  gl.set_positions(s.x, s.x_prev);
+  gl.set_state(s.x, s.x_prev);
   const Vec3 grasp(0.05, 0.05, 0.05);
   Attachment attachment;
   for (int32_t i = 0; i < model.npoint(); ++i) {
