@@ -81,27 +81,27 @@ struct FrameRecorder::Impl {
 
   void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center) {
     const bool colormap = frames.style.colormap != Colormap::None;
+    auto start = Clock::now();
+    // Positions first, while the simulation's context (if any) is current:
+    // a GL backend makes its own context current to read them back.
+    // Drawing straight from the GL buffer needs them only for the colour map.
+    if (!gl_backend || colormap) backend.positions(positions);
     GLsync sim_done = nullptr;
     if (gl_backend) {
       gl_backend->context().make_current();
-      // In the simulation's context: make its compute writes
-      // to x_t visible to our vertex shader and fence them, so our context
-      // waits on the GPU for them (no CPU stall, no copy).
+      // In the simulation's context: make its compute writes to x_t visible
+      // to our vertex shader and fence them, so our context waits on the GPU
+      // for them (no CPU stall, no copy).
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       sim_done = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
       glFlush();
     }
     ContextScope scope(*context);
-    auto start = Clock::now();
     if (gl_backend) {
       glWaitSync(sim_done, 0, GL_TIMEOUT_IGNORED);
       glDeleteSync(sim_done);
       renderer->use_position_buffer(gl_backend->position_buffer(), 4, 0);
-      // The colour map's scalars are computed on the CPU: only then are the
-      // positions read back.
-      if (colormap) backend.positions(positions);
     } else {
-      backend.positions(positions);
       renderer->set_positions(positions);
     }
     double colormap_max = 0;
