@@ -26,7 +26,7 @@ struct RenderArgs {
   std::string mesh, output;
   int width = 640, height = 480;
   std::string position, target, up, background;
-  double fov = 35.0;
+  double fov = 40.0;
   bool wireframe = false;
 };
 
@@ -69,7 +69,7 @@ const bool registered = register_command("render", 60, [](CLI::App& root) {
   cmd->add_option("--camera-position", args->position, "eye x,y,z in m (default: auto-fit to the bounding box)");
   cmd->add_option("--camera-target", args->target, "looked-at x,y,z in m (default: bounding box centre)");
   cmd->add_option("--camera-up", args->up, "up direction x,y,z (default 0,0,1)");
-  cmd->add_option("--fov", args->fov, "vertical field of view, degrees (default 35)")->check(CLI::Range(1.0, 179.0));
+  cmd->add_option("--fov", args->fov, "vertical field of view, degrees (default 40)")->check(CLI::Range(1.0, 179.0));
   cmd->add_option("--background", args->background, "background r,g,b in 0..1 (default 1,1,1)");
   cmd->add_flag("--wireframe", args->wireframe, "draw triangle edges over the surface");
   cmd->callback([args] { run(*args); });

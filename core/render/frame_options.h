@@ -20,7 +20,7 @@ struct CameraOptions {
   Vec3 target{0, 0, 0};     // looked-at point, m
   bool target_at_center = false;  // without auto_fit: look at the bounding box centre instead of target
   Vec3 up{0, 0, 1};         // world up; need not be orthogonal to the view
-  double fov_deg = 35.0;    // vertical field of view, degrees (0, 180)
+  double fov_deg = 40.0;    // vertical field of view, degrees (0, 180); the scenario default
   Vec3 auto_direction{1.0, -1.6, 0.9};  // from target towards the eye when auto_fit
 };
 
