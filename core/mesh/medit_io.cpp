@@ -80,11 +80,13 @@ TetMesh read_medit(std::string_view text, const std::string& source) {
 }
 
 void write_medit(std::ostream& out, const TetMesh& mesh) {
-  out.precision(17);
   out << "MeshVersionFormatted 2\nDimension 3\n";
   out << "# organsim tet mesh, metres; indices count from 1\n";
   out << "Vertices\n" << mesh.points.size() << '\n';
-  for (const Vec3& p : mesh.points) out << p.x() << ' ' << p.y() << ' ' << p.z() << " 0\n";
+  for (const Vec3& p : mesh.points) {
+    write_point(out, p);
+    out << " 0\n";
+  }
   // The boundary triangles too, so viewers (medit, gmsh, meshlab) show the surface.
   const std::vector<Tri> boundary = boundary_triangles(mesh);
   out << "Triangles\n" << boundary.size() << '\n';

@@ -3,6 +3,7 @@
 // knows its line number (so every error can name it) and the per-format
 // entry points that mesh_io.cpp dispatches to by extension.
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <string_view>
 
@@ -43,6 +44,9 @@ class TokenReader {
 // Number parsing that accepts exactly the token (no trailing garbage).
 bool parse_double(std::string_view token, double& value);
 bool parse_int(std::string_view token, int64_t& value);
+
+// Writes "x y z" with the shortest text that reads back to the same doubles.
+void write_point(std::ostream& out, const Vec3& p);
 
 // Lower-case extension including the dot (".off").
 std::string lower_extension(const std::string& path);

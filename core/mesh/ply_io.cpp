@@ -206,11 +206,13 @@ TriangleMesh read_ply(std::string_view bytes, const std::string& source) {
 }
 
 void write_ply_ascii(std::ostream& out, const TriangleMesh& mesh) {
-  out.precision(17);
   out << "ply\nformat ascii 1.0\ncomment organsim surface, metres\n";
   out << "element vertex " << mesh.points.size() << "\nproperty double x\nproperty double y\nproperty double z\n";
   out << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
-  for (const Vec3& p : mesh.points) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const Vec3& p : mesh.points) {
+    write_point(out, p);
+    out << '\n';
+  }
   for (const Tri& f : mesh.faces) out << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
 }
 

@@ -118,16 +118,21 @@ TriangleMesh read_obj(std::string_view text, const std::string& source) {
 }
 
 void write_off(std::ostream& out, const TriangleMesh& mesh) {
-  out.precision(17);
   out << "OFF\n" << mesh.points.size() << ' ' << mesh.faces.size() << " 0\n";
-  for (const Vec3& p : mesh.points) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const Vec3& p : mesh.points) {
+    write_point(out, p);
+    out << '\n';
+  }
   for (const Tri& f : mesh.faces) out << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
 }
 
 void write_obj(std::ostream& out, const TriangleMesh& mesh) {
-  out.precision(17);
   out << "# organsim surface, metres\n";
-  for (const Vec3& p : mesh.points) out << "v " << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const Vec3& p : mesh.points) {
+    out << "v ";
+    write_point(out, p);
+    out << '\n';
+  }
   for (const Tri& f : mesh.faces) out << "f " << f[0] + 1 << ' ' << f[1] + 1 << ' ' << f[2] + 1 << '\n';
 }
 

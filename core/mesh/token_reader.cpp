@@ -3,6 +3,7 @@
 #include <cctype>
 #include <charconv>
 #include <filesystem>
+#include <ostream>
 
 #include "core/mesh/mesh_io_detail.h"
 
@@ -94,6 +95,16 @@ bool parse_int(std::string_view token, int64_t& value) {
   if (token.front() == '+') token.remove_prefix(1);
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
   return ec == std::errc() && end == token.data() + token.size();
+}
+
+void write_point(std::ostream& out, const Vec3& p) {
+  char buffer[3 * 32];
+  char* end = buffer;
+  for (int c = 0; c < 3; ++c) {
+    if (c > 0) *end++ = ' ';
+    end = std::to_chars(end, buffer + sizeof buffer, p[c]).ptr;
+  }
+  out.write(buffer, end - buffer);
 }
 
 std::string lower_extension(const std::string& path) {

@@ -162,10 +162,12 @@ TetMesh read_vtk(std::string_view bytes, const std::string& source) {
 }
 
 void write_vtk(std::ostream& out, const TetMesh& mesh) {
-  out.precision(17);
   out << "# vtk DataFile Version 3.0\norgansim tet mesh, metres\nASCII\nDATASET UNSTRUCTURED_GRID\n";
   out << "POINTS " << mesh.points.size() << " double\n";
-  for (const Vec3& p : mesh.points) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const Vec3& p : mesh.points) {
+    write_point(out, p);
+    out << '\n';
+  }
   out << "CELLS " << mesh.tets.size() << ' ' << 5 * mesh.tets.size() << '\n';
   for (const Tet& t : mesh.tets) out << "4 " << t[0] << ' ' << t[1] << ' ' << t[2] << ' ' << t[3] << '\n';
   out << "CELL_TYPES " << mesh.tets.size() << '\n';

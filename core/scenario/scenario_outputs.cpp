@@ -1,5 +1,4 @@
 // The scenario's `outputs` section (force log, frames, video, contact sheet).
-#include <Eigen/Geometry>  // cross()
 #include <nlohmann/json.hpp>
 
 #include "core/scenario/scenario_sections.h"
