@@ -1,9 +1,14 @@
-// organsim render MESH -o IMAGE.png: a still of a surface or tet mesh.
+// organsim render MESH -o IMAGE.png: a still of a surface or tet mesh. This
+// file also hands `organsim run` its rendering observers: the frame recorder
+// (outputs.frames, video, contact_sheet) and forces.png.
 #include <cstdio>
 #include <iostream>
 #include <sstream>
 
 #include "app/command.h"
+#include "app/run_observers.h"
+#include "core/render/force_plot_recorder.h"
+#include "core/render/frame_recorder.h"
 #include "core/render/image_io.h"
 #include "core/render/still.h"
 #include "core/util/error.h"
@@ -74,6 +79,19 @@ const bool registered = register_command("render", 60, [](CLI::App& root) {
   cmd->add_flag("--wireframe", args->wireframe, "draw triangle edges over the surface");
   cmd->callback([args] { run(*args); });
 });
+
+// `organsim run`: frames/video/contact sheet when outputs.frames is present
+// (no renderer and no GL context otherwise), forces.png with the force log.
+const bool frames_registered = register_run_observer(
+    {"frames", "frames", [](const RunObserverContext& c) -> std::unique_ptr<RunObserver> {
+       return make_frame_recorder(c.scenario, c.outdir);
+     }});
+const bool forces_plot_registered = register_run_observer(
+    {"forces.png", "forces_png", [](const RunObserverContext& c) -> std::unique_ptr<RunObserver> {
+       if (!c.scenario.outputs.forces) return nullptr;
+       return std::make_unique<ForcePlotRecorder>(c.outdir / "forces.png", c.scenario.time.tick(),
+                                                  c.scenario.time.ticks());
+     }});
 
 }  // namespace
 }  // namespace organsim::app

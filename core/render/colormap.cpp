@@ -61,14 +61,20 @@ std::string format_value(double v, const std::string& unit) {
 
 void draw_colormap_legend(cv::Mat& bgr, const std::string& title, double min_value,
                           double max_value, const std::string& unit) {
-  // Bar geometry relative to the image so small frames stay readable.
+  // Sizes relative to the image so small frames stay readable.
+  const double font = std::clamp(bgr.rows / 900.0, 0.3, 0.7);
+  const auto face = cv::FONT_HERSHEY_SIMPLEX;
+  const std::string top = format_value(max_value, unit), bottom = format_value(min_value, unit);
+  int base = 0;
+  const cv::Size top_size = cv::getTextSize(top, face, font, 1, &base);
+  const cv::Size bottom_size = cv::getTextSize(bottom, face, font, 1, &base);
+  const cv::Size title_size = cv::getTextSize(title, face, font, 1, &base);
   const int bar_w = std::max(8, bgr.cols / 40);
   const int bar_h = std::max(40, bgr.rows / 2);
   const int margin = std::max(6, bgr.cols / 60);
-  const int label_w = 80;
+  const int label_w = std::max(top_size.width, bottom_size.width) + 4;
   const int x0 = bgr.cols - margin - label_w - bar_w;
   const int y0 = (bgr.rows - bar_h) / 2;
-  const double font = std::clamp(bgr.rows / 900.0, 0.35, 0.7);
   for (int y = 0; y < bar_h; ++y) {
     const float s = 1.0f - static_cast<float>(y) / static_cast<float>(bar_h - 1);  // max at the top
     const Vec3f c = colormap_rgb(s) * 255.0f;
@@ -77,11 +83,11 @@ void draw_colormap_legend(cv::Mat& bgr, const std::string& title, double min_val
   const cv::Scalar ink(20, 20, 20);
   cv::rectangle(bgr, {x0 - 1, y0 - 1}, {x0 + bar_w, y0 + bar_h}, ink, 1);
   const int tx = x0 + bar_w + 4;
-  cv::putText(bgr, format_value(max_value, unit), {tx, y0 + 10}, cv::FONT_HERSHEY_SIMPLEX, font, ink, 1,
-              cv::LINE_AA);
-  cv::putText(bgr, format_value(min_value, unit), {tx, y0 + bar_h}, cv::FONT_HERSHEY_SIMPLEX, font, ink, 1,
-              cv::LINE_AA);
-  cv::putText(bgr, title, {x0 - 10, y0 - 8}, cv::FONT_HERSHEY_SIMPLEX, font, ink, 1, cv::LINE_AA);
+  cv::putText(bgr, top, {tx, y0 + top_size.height}, face, font, ink, 1, cv::LINE_AA);
+  cv::putText(bgr, bottom, {tx, y0 + bar_h}, face, font, ink, 1, cv::LINE_AA);
+  // Title above the bar, kept inside the image on the right.
+  const int title_x = std::min(x0, bgr.cols - margin - title_size.width);
+  cv::putText(bgr, title, {title_x, y0 - title_size.height}, face, font, ink, 1, cv::LINE_AA);
 }
 
 std::string colormap_title(Colormap map) {

@@ -106,8 +106,9 @@ cv::Mat draw_force_plot(const std::vector<double>& t, const std::vector<Vec3>& f
   }
   cv::rectangle(img, area, ink, 1);
 
-  // Curves, clipped to the plot area.
-  const Series series[4] = {{"|F|", cv::Scalar(20, 20, 20), 3},
+  // Curves, clipped to the plot area. |F| is wide and grey underneath, so a
+  // component on top of it (often Fz) still shows both.
+  const Series series[4] = {{"|F|", cv::Scalar(150, 150, 150), 5},
                             {"Fx", cv::Scalar(40, 40, 220), 2},
                             {"Fy", cv::Scalar(40, 160, 40), 2},
                             {"Fz", cv::Scalar(220, 90, 30), 2}};

@@ -77,6 +77,7 @@ struct FrameRecorder::Impl {
   std::vector<Vec3> positions;  // internal numbering, reused between frames
   std::vector<float> scalars;
   std::vector<Vec3f> colors;
+  double colormap_running_max = 0;
   FrameRecorderTiming timing;
 
   void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center) {
@@ -111,7 +112,10 @@ struct FrameRecorder::Impl {
       } else {
         point_displacement(model, positions, scalars);
       }
-      colormap_max = colormap_range_max(scalars, frames.style.colormap_max);
+      // The range only grows during a run (largest value so far), so a colour
+      // means the same value in every later frame of the sequence.
+      colormap_max = std::max(colormap_range_max(scalars, frames.style.colormap_max), colormap_running_max);
+      colormap_running_max = colormap_max;
       colors.resize(scalars.size());
       for (size_t i = 0; i < scalars.size(); ++i) {
         colors[i] = colormap_rgb(static_cast<float>(scalars[i] / colormap_max));
