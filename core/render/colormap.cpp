@@ -48,7 +48,7 @@ double colormap_range_max(const std::vector<float>& values, double fixed_max) {
   if (fixed_max > 0) return fixed_max;
   double m = 0;
   for (float v : values) m = std::max(m, static_cast<double>(v));
-  return m > 0 ? m : 1e-12;
+  return m;
 }
 
 namespace {

@@ -21,7 +21,7 @@ void point_displacement(const Model& model, const std::vector<Vec3>& x, std::vec
 // low and high values stay apart in greyscale prints too.
 Vec3f colormap_rgb(float s);
 
-// Largest value, or `fixed_max` when it is > 0; never 0 (so the scale is defined).
+// Largest value (0 when all are 0), or `fixed_max` when it is > 0.
 double colormap_range_max(const std::vector<float>& values, double fixed_max);
 
 // Draws a vertical colour bar at the right edge of a BGR image, labelled with

@@ -118,7 +118,8 @@ struct FrameRecorder::Impl {
       colormap_running_max = colormap_max;
       colors.resize(scalars.size());
       for (size_t i = 0; i < scalars.size(); ++i) {
-        colors[i] = colormap_rgb(static_cast<float>(scalars[i] / colormap_max));
+        // An all-zero field (the rest state) is the bottom of the scale.
+        colors[i] = colormap_rgb(colormap_max > 0 ? static_cast<float>(scalars[i] / colormap_max) : 0.0f);
       }
       renderer->set_point_colors(colors);
     }

@@ -7,6 +7,7 @@
 
 #include "core/render/contact_sheet.h"
 #include "core/render/force_plot.h"
+#include "core/render/force_plot_recorder.h"
 #include "tests/render/render_test_util.h"
 #include "core/util/error.h"
 
@@ -105,6 +106,65 @@ TEST(ContactSheet, GridOfTilesWithBordersAndTimestamps) {
   }
   // Different timestamps render differently.
   EXPECT_GT(cv::norm(sheet(cv::Rect(4, 4, 70, 16)), sheet(cv::Rect(164, 4, 70, 16)), cv::NORM_L1), 0.0);
+}
+
+}  // namespace
+}  // namespace organsim
+
+namespace organsim {
+namespace {
+
+// A backend whose reaction comes one tick late, like the GL backend's.
+class LateBackend : public Backend {
+ public:
+  std::string name() const override { return "late"; }
+  std::string device() const override { return "test"; }
+  std::string precision() const override { return "double"; }
+  Plan plan() const override { return {}; }
+  int32_t reaction_latency_ticks() const override { return 1; }
+  Reaction tick(const TickRequest&) override { return {}; }
+  void attach(const Attachment&) override {}
+  void release() override {}
+  void positions(std::vector<Vec3>&) const override {}
+  void set_state(const std::vector<Vec3>&, const std::vector<Vec3>&) override {}
+  double time() const override { return 0; }
+};
+
+TEST(ForcePlotRecorder, ShiftsLateReactionsToTheTickTheyBelongTo) {
+  const fs::path path = fs::path(ORGANSIM_TEST_TMP) / "plots" / "late_forces.png";
+  fs::remove(path);
+  ForcePlotRecorder recorder(path, 1e-3, 100);
+  LateBackend backend;
+  Model model;
+  recorder.on_start(model, backend);
+  // Tick i returns the reaction of tick i - 1: a step from 0 to 2 N that
+  // happened at tick 50 (t = 0.051 s) arrives at tick 51.
+  for (int i = 0; i < 100; ++i) {
+    TickInfo info;
+    info.tick = i;
+    info.t = (i + 1) * 1e-3;
+    info.reaction.force = Vec3(0, 0, i >= 51 ? 2.0 : 0.0);
+    recorder.on_tick(model, backend, info);
+  }
+  recorder.on_finish(model, backend);
+  const cv::Mat img = cv::imread(path.string());
+  ASSERT_FALSE(img.empty());
+  // The rise of Fz (blue) is at t = 0.051 s, not 0.052 s: find the first
+  // column of the plot area with a blue pixel above the zero line.
+  const cv::Rect area = force_plot_area(900, 500);
+  cv::Mat blue;
+  cv::inRange(img(area), cv::Scalar(180, 60, 10), cv::Scalar(255, 120, 60), blue);
+  int first_high = -1;
+  for (int x = 0; x < area.width && first_high < 0; ++x) {
+    // "High": in the upper half of the plot (2 N is the top of the axis).
+    if (cv::countNonZero(blue(cv::Rect(x, 0, 1, area.height / 2))) > 0) first_high = x;
+  }
+  ASSERT_GE(first_high, 0);
+  // Time axis 0.001 .. 0.099 s rounded out to 0 .. 0.1 s. The curve rises
+  // from (0.050 s, 0) to (0.051 s, 2 N): it enters the upper half at
+  // 0.0505 s, 50.5 % of the width (the 2 px line starts ~1 px earlier). A
+  // one-tick error would move it by 1 % = ~6.7 px.
+  EXPECT_NEAR(first_high, 0.505 * area.width, 3.0);
 }
 
 }  // namespace
