@@ -46,7 +46,7 @@ struct FramesOptions {
 };
 
 struct VideoOptions {
-  std::filesystem::path file = "frames.mp4";  // relative to OUTDIR
+  std::filesystem::path file = "video.mp4";   // relative to OUTDIR
   std::string codec = "mp4v";  // FOURCC; mp4v and avc1 write .mp4 here
   double fps = 30.0;           // playback frames per second
 };
