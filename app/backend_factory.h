@@ -1,0 +1,28 @@
+#pragma once
+// The one place that turns a backend name into a Backend. Every caller (run,
+// bench, study) goes through here, so a backend that cannot be created fails
+// the same way everywhere: with an error, never a quiet fallback to the CPU.
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/sim/backend.h"
+
+namespace organsim::app {
+
+struct BackendSelection {
+  std::string name = "cpu";              // "cpu" or "gl"
+  std::optional<std::string> precision;  // "double" | "float"; default: cpu double, gl float
+  int32_t threads = 0;                   // cpu: 0 = all hardware threads
+};
+
+// The backend names organsim knows (whether or not this build can create them).
+const std::vector<std::string>& backend_names();
+
+// Throws Error(Usage) for an unknown name or a precision the backend does not
+// offer, Error(Backend) when the backend cannot be created here.
+std::unique_ptr<Backend> make_backend(const BackendSelection& selection, const Model& model,
+                                      const BackendTool& tool);
+
+}  // namespace organsim::app

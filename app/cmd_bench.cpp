@@ -1,0 +1,336 @@
+// `organsim bench`: median milliseconds per integration step on models of the
+// paper's sizes (liver-like surface meshed to 1617, 6792, 7750, 28292 points),
+// next to the paper's Table 1, with the machine it ran on. Honest numbers:
+// warm-up first, then repetitions, median (min and max shown); each
+// repetition ends with a read-back of the positions so asynchronous backends
+// are timed until their work is done.
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "app/backend_factory.h"
+#include "app/command.h"
+#include "core/mesh/example_shapes.h"
+#include "core/mesh/mesh_io.h"
+#include "core/model/model.h"
+#include "core/util/error.h"
+#include "meshing/mesh_surface.h"
+
+namespace organsim::app {
+namespace {
+
+// The paper's Table 1: ms per step for its models on two GPUs and one CPU.
+struct PaperRow {
+  const char* model;
+  int32_t points, springs;
+  double quadro_fx_3450, geforce_go_7900, xeon_3ghz;  // ms
+};
+constexpr PaperRow kPaper[] = {
+    {"Bunny5", 1617, 8871, 0.179, 0.093, 0.99},
+    {"Bunny6", 6792, 38030, 0.609, 0.406, 4.47},
+    {"Liver", 7750, 48254, 0.689, 0.468, 5.5},
+    {"Bunny7", 28292, 159353, 2.77, 2.06, 28.45},
+};
+
+const PaperRow* paper_row(int32_t target) {
+  for (const PaperRow& r : kPaper) {
+    if (r.points == target) return &r;
+  }
+  return nullptr;
+}
+
+struct BenchArgs {
+  std::vector<int32_t> sizes{1617, 6792, 7750, 28292};
+  std::vector<std::string> backends;    // empty: cpu, and gl when it can be created
+  std::vector<std::string> precisions;  // empty: double and float on cpu, float on gl
+  int32_t threads = 0;
+  int32_t warmup = 200;       // steps
+  int32_t repetitions = 7;
+  int32_t steps = 200;        // steps per repetition
+  double dt = 1e-4;           // s
+  double volume_modulus = 20000;  // Pa; 0 leaves the volume pass out
+  std::string surface;        // default: the built-in liver-like surface (= examples/liver.off)
+  bool exude = true;
+  bool json = false;
+};
+
+struct Machine {
+  std::string cpu = "unknown CPU";
+  int32_t logical_cpus = 0;
+  std::string load_average;  // /proc/loadavg's 1, 5, 15 min figures: a shared machine shows here
+};
+
+Machine read_machine() {
+  Machine m;
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  bool named = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("model name", 0) == 0 && !named) {
+      m.cpu = line.substr(line.find(':') + 2);
+      named = true;
+    }
+    if (line.rfind("processor", 0) == 0) ++m.logical_cpus;
+  }
+  if (m.logical_cpus == 0) m.logical_cpus = static_cast<int32_t>(std::thread::hardware_concurrency());
+  std::ifstream load("/proc/loadavg");
+  std::string a, b, c;
+  if (load >> a >> b >> c) m.load_average = a + " " + b + " " + c;
+  return m;
+}
+
+std::string utc_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  std::ostringstream s;
+  s << std::put_time(&tm, "%Y-%m-%d %H:%M UTC");
+  return s.str();
+}
+
+struct Timing {
+  double median_ms = 0, min_ms = 0, max_ms = 0;  // per step
+};
+
+// Warm-up, then `repetitions` ticks of `steps` substeps each, each closed by
+// a position read-back (a GPU synchronisation); per-step times from each.
+Timing time_backend(Backend& backend, const BenchArgs& args, std::vector<Vec3>& positions) {
+  TickRequest request;
+  request.dt = args.dt;
+  request.tool_active = false;
+  request.substeps = args.warmup;
+  if (args.warmup > 0) backend.tick(request);
+  backend.positions(positions);
+  request.substeps = args.steps;
+  std::vector<double> ms;
+  for (int32_t r = 0; r < args.repetitions; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    backend.tick(request);
+    backend.positions(positions);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ms.push_back(1e3 * seconds / args.steps);
+  }
+  std::sort(ms.begin(), ms.end());
+  Timing t;
+  t.min_ms = ms.front();
+  t.max_ms = ms.back();
+  const size_t n = ms.size();
+  t.median_ms = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+  return t;
+}
+
+struct Row {
+  int32_t target = 0;
+  int32_t points = 0, springs = 0, tets = 0;
+  double mesh_seconds = 0;
+  std::string backend, precision, device;
+  Timing timing;
+  Plan plan;
+};
+
+std::vector<std::pair<std::string, std::string>> configurations(const BenchArgs& args) {
+  const std::vector<std::string> backends = args.backends.empty() ? backend_names() : args.backends;
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const std::string& b : backends) {
+    std::vector<std::string> precisions = args.precisions;
+    if (precisions.empty()) precisions = b == "cpu" ? std::vector<std::string>{"double", "float"} : std::vector<std::string>{"float"};
+    for (const std::string& p : precisions) out.emplace_back(b, p);
+  }
+  return out;
+}
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+void run_bench(const BenchArgs& args) {
+  if (args.repetitions < 1 || args.steps < 1 || args.warmup < 0) {
+    throw Error(ErrorKind::Usage, "bench: --repetitions and --steps must be >= 1, --warmup >= 0");
+  }
+  const Machine machine = read_machine();
+  const std::string date = utc_now();
+  TriangleMesh surface = args.surface.empty() ? make_liver_surface(4) : read_surface(args.surface);
+  const std::string surface_name = args.surface.empty() ? "built-in liver-like surface (examples/liver.off)" : args.surface;
+  const bool explicit_backends = !args.backends.empty();
+
+  std::vector<Row> rows;
+  std::vector<std::pair<std::string, std::string>> unavailable;  // backend, reason
+  std::vector<Vec3> positions;
+  for (const int32_t target : args.sizes) {
+    MeshOptions mo;
+    mo.target_points = target;
+    mo.exude = args.exude;
+    MeshReport report;
+    const TetMesh mesh = mesh_surface(surface, mo, surface_name, &report);
+    Material material;
+    material.young_modulus = 8000;
+    material.volume_modulus = args.volume_modulus;
+    ModelOptions options;
+    options.gravity = Vec3(0, 0, -9.81);  // a moving model, not one at rest
+    const Model model = build_model(mesh, material, options, surface_name);
+    if (!args.json) {
+      std::cerr << "bench: " << target << " points asked, " << model.npoint() << " meshed in "
+                << fixed(report.seconds, 2) << " s\n";
+    }
+    for (const auto& [name, precision] : configurations(args)) {
+      BackendSelection sel;
+      sel.name = name;
+      sel.precision = precision;
+      sel.threads = args.threads;
+      std::unique_ptr<Backend> backend;
+      try {
+        backend = make_backend(sel, model, BackendTool{});
+      } catch (const Error& e) {
+        // Asked for by name: fail. Tried by default: report why there is no row.
+        if (explicit_backends || e.kind() != ErrorKind::Backend) throw;
+        if (std::none_of(unavailable.begin(), unavailable.end(), [&](const auto& u) { return u.first == name; })) {
+          unavailable.emplace_back(name, e.what());
+        }
+        continue;
+      }
+      Row row;
+      row.target = target;
+      row.points = model.npoint();
+      row.springs = model.nspring();
+      row.tets = model.ntet();
+      row.mesh_seconds = report.seconds;
+      row.backend = backend->name();
+      row.precision = backend->precision();
+      row.device = backend->device();
+      row.plan = backend->plan();
+      row.timing = time_backend(*backend, args, positions);
+      rows.push_back(row);
+    }
+  }
+
+  if (args.json) {
+    nlohmann::json j;
+    j["date"] = date;
+    j["organsim_version"] = ORGANSIM_VERSION;
+    j["machine"] = {{"cpu", machine.cpu}, {"logical_cpus", machine.logical_cpus},
+                    {"load_average_at_start", machine.load_average}};
+    j["settings"] = {{"warmup_steps", args.warmup}, {"repetitions", args.repetitions},
+                     {"steps_per_repetition", args.steps}, {"dt", args.dt},
+                     {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
+                     {"gravity", true}, {"tool", false}, {"exude", args.exude}, {"surface", surface_name}};
+    j["rows"] = nlohmann::json::array();
+    for (const Row& r : rows) {
+      nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
+                           {"tets", r.tets}, {"backend", r.backend}, {"precision", r.precision},
+                           {"device", r.device}, {"median_ms", r.timing.median_ms},
+                           {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
+                           {"steps_per_second", 1e3 / r.timing.median_ms},
+                           {"dispatches_per_step", r.plan.dispatches_per_step},
+                           {"syncs_per_step", r.plan.syncs_per_step}};
+      nlohmann::json passes = nlohmann::json::array();
+      for (const PassInfo& p : r.plan.passes) passes.push_back(p.name);
+      jr["passes"] = passes;
+      if (const PaperRow* p = paper_row(r.target)) {
+        jr["paper"] = {{"model", p->model}, {"points", p->points}, {"springs", p->springs},
+                       {"quadro_fx_3450_ms", p->quadro_fx_3450}, {"geforce_go_7900_ms", p->geforce_go_7900},
+                       {"xeon_3ghz_ms", p->xeon_3ghz}};
+      }
+      j["rows"].push_back(jr);
+    }
+    j["unavailable"] = nlohmann::json::array();
+    for (const auto& [b, why] : unavailable) j["unavailable"].push_back({{"backend", b}, {"reason", why}});
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+
+  std::cout << "organsim bench, " << date << "\n";
+  std::cout << "machine: " << machine.cpu << ", " << machine.logical_cpus << " logical CPUs, load average "
+            << machine.load_average << " at start\n";
+  std::cout << "step:    springs + dampers" << (args.volume_modulus > 0 ? " + volume" : "")
+            << " + gravity + Verlet, dt " << args.dt << " s; " << args.warmup << " warm-up steps, then "
+            << args.repetitions << " repetitions of " << args.steps << " steps; median (min..max) ms per step\n";
+  std::cout << "models:  " << surface_name << " meshed to the paper's point counts"
+            << (args.exude ? " (with exudation)" : "") << "\n\n";
+  std::cout << std::left << std::setw(8) << "paper" << std::right << std::setw(7) << "points" << std::setw(8)
+            << "springs" << std::setw(8) << "tets" << "  " << std::left << std::setw(8) << "backend" << std::setw(7)
+            << "prec" << std::right << std::setw(10) << "median ms" << std::setw(18) << "(min..max)"
+            << "  | paper ms: " << "QuadroFX3450 GeForceGo7900 Xeon3GHz\n";
+  for (const Row& r : rows) {
+    const PaperRow* p = paper_row(r.target);
+    std::cout << std::left << std::setw(8) << (p ? p->model : "-") << std::right << std::setw(7) << r.points
+              << std::setw(8) << r.springs << std::setw(8) << r.tets << "  " << std::left << std::setw(8)
+              << r.backend << std::setw(7) << r.precision << std::right << std::setw(10)
+              << fixed(r.timing.median_ms, 4) << std::setw(18)
+              << ("(" + fixed(r.timing.min_ms, 4) + ".." + fixed(r.timing.max_ms, 4) + ")") << "  | ";
+    if (p) {
+      std::cout << std::setw(12) << fixed(p->quadro_fx_3450, 3) << std::setw(14) << fixed(p->geforce_go_7900, 3)
+                << std::setw(9) << fixed(p->xeon_3ghz, 2) << "   (" << p->points << " pts, " << p->springs
+                << " springs)";
+    } else {
+      std::cout << "(no paper figure for this size)";
+    }
+    std::cout << "\n";
+  }
+  std::cout << "\ndevices:\n";
+  std::vector<std::string> seen;
+  for (const Row& r : rows) {
+    const std::string key = r.backend + " " + r.precision + ": " + r.device + ", " +
+                            std::to_string(r.plan.dispatches_per_step) + " dispatch(es) and " +
+                            std::to_string(r.plan.syncs_per_step) + " CPU-GPU sync(s) per step";
+    if (std::find(seen.begin(), seen.end(), key) == seen.end()) {
+      seen.push_back(key);
+      std::cout << "  " << key << " (" << r.points << " points)\n";
+    }
+  }
+  for (const auto& [b, why] : unavailable) std::cout << "  " << b << ": not measured: " << why << "\n";
+}
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+const bool registered = register_command("bench", 60, [](CLI::App& root) {
+  auto args = std::make_shared<BenchArgs>();
+  auto backends = std::make_shared<std::string>();
+  auto precisions = std::make_shared<std::string>();
+  CLI::App* cmd = root.add_subcommand(
+      "bench", "Median ms per integration step on models of the paper's sizes, next to the paper's Table 1");
+  cmd->add_option("--sizes", args->sizes, "Target point counts (default: 1617 6792 7750 28292, the paper's models)")
+      ->delimiter(',')
+      ->check(CLI::Range(10, 10'000'000));
+  cmd->add_option("--backend", *backends, "Comma-separated backends (default: cpu, and gl when it can be created)");
+  cmd->add_option("--precision", *precisions, "Comma-separated precisions (default: double,float on cpu; float on gl)");
+  cmd->add_option("--threads", args->threads, "CPU threads (0: the backend's choice)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--warmup", args->warmup, "Warm-up steps before timing (default 200)");
+  cmd->add_option("--repetitions", args->repetitions, "Timed repetitions; the median is reported (default 7)");
+  cmd->add_option("--steps", args->steps, "Steps per repetition (default 200)");
+  cmd->add_option("--dt", args->dt, "Integration step, s (default 1e-4)")->check(CLI::PositiveNumber);
+  cmd->add_option("--volume-modulus", args->volume_modulus, "Pa; 0 leaves the volume pass out (default 20000)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
+  cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");
+  cmd->add_flag("--json", args->json, "Print the results as JSON");
+  cmd->callback([args, backends, precisions] {
+    args->backends = split_list(*backends);
+    args->precisions = split_list(*precisions);
+    for (const std::string& b : args->backends) {
+      if (std::find(backend_names().begin(), backend_names().end(), b) == backend_names().end()) {
+        throw Error(ErrorKind::Usage, "bench: unknown backend \"" + b + "\": expected cpu or gl");
+      }
+    }
+    run_bench(*args);
+  });
+});
+
+}  // namespace
+}  // namespace organsim::app

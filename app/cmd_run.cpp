@@ -1,0 +1,203 @@
+// `organsim run SCENARIO.json [-o OUTDIR] [--backend cpu|gl] [--plan]`
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "app/backend_factory.h"
+#include "app/command.h"
+#include "app/run_observers.h"
+#include "app/scenario_mesh.h"
+#include "core/sim/run.h"
+#include "core/util/error.h"
+
+namespace organsim::app {
+
+std::vector<RunObserverRegistration>& run_observer_registry() {
+  static std::vector<RunObserverRegistration> registry;
+  return registry;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunArgs {
+  std::string scenario;
+  std::string outdir;
+  std::string backend;
+  std::string precision;
+  int32_t threads = -1;
+  bool plan = false;
+};
+
+std::string human_bytes(size_t bytes) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1);
+  if (bytes >= (1u << 20)) {
+    s << bytes / double(1u << 20) << " MiB";
+  } else if (bytes >= (1u << 10)) {
+    s << bytes / double(1u << 10) << " KiB";
+  } else {
+    s << bytes << " B";
+  }
+  return s.str();
+}
+
+
+// Errors from build_model name the JSON path (fixed[0].indices[3]) but not the file.
+Model build_scenario_model(const Scenario& s, const TetMesh& mesh) {
+  try {
+    return build_model(mesh, s.material, model_options(s), s.mesh.path.string());
+  } catch (const Error& e) {
+    if (e.kind() == ErrorKind::Scenario) throw Error(e.kind(), s.file.string() + ": " + e.what());
+    throw;
+  }
+}
+
+void print_plan(std::ostream& out, const Scenario& s, const Model& model, const Backend& backend,
+                const std::vector<std::string>& observers) {
+  const Plan plan = backend.plan();
+  int32_t nfixed = 0;
+  for (uint8_t f : model.fixed) nfixed += f;
+  out << "model:    " << model.npoint() << " points (" << nfixed << " fixed), " << model.nspring()
+      << " springs, " << model.ntet() << " tets, mass " << model.total_mass() << " kg, volume "
+      << model.rest_volume() << " m^3\n";
+  out << "time:     dt " << s.time.dt << " s x " << s.time.substeps << " substeps = tick " << s.time.tick()
+      << " s, " << s.time.ticks() << " ticks (" << s.time.duration << " s)\n";
+  out << "backend:  " << backend.name() << " (" << backend.precision() << ", " << backend.device()
+      << "), reaction latency " << backend.reaction_latency_ticks() << " ticks\n";
+  out << "passes per step:\n";
+  for (const PassInfo& p : plan.passes) out << "  - " << p.name << ": " << p.detail << "\n";
+  out << "left out of this scene:\n";
+  int32_t left_out = 0;
+  auto note = [&](bool absent, const std::string& text) {
+    if (!absent) return;
+    out << "  - " << text << "\n";
+    ++left_out;
+  };
+  note(!model.has_volume(), "no volume pass (material.volume_modulus = 0)");
+  note(!s.tool, "no tool pass (no tool in the scenario)");
+  note(!model.has_gravity(), "no gravity pass (gravity = [0, 0, 0])");
+  note(!s.outputs.wants_rendering(), "no renderer (no outputs.frames)");
+  if (left_out == 0) out << "  (nothing)\n";
+  out << "buffers:\n";
+  size_t total = 0;
+  for (const BufferInfo& b : plan.buffers) {
+    out << "  - " << b.name << ": " << human_bytes(b.bytes) << "\n";
+    total += b.bytes;
+  }
+  out << "  total: " << human_bytes(total) << "\n";
+  out << "dispatches per step: " << plan.dispatches_per_step << ", CPU-GPU synchronisations per step: "
+      << plan.syncs_per_step << "\n";
+  out << "outputs:  " << (s.outputs.forces ? "forces.json" : "(no force log)");
+  for (const std::string& o : observers) out << ", " << o;
+  out << "\n";
+}
+
+// Observers for this scenario; an asked-for output that no observer produces is an error.
+std::vector<std::unique_ptr<RunObserver>> make_observers(const Scenario& s, const Model& model,
+                                                         const fs::path& outdir, std::vector<std::string>* names) {
+  std::vector<std::unique_ptr<RunObserver>> out;
+  bool frames_produced = false;
+  for (const auto& r : run_observer_registry()) {
+    auto o = r.make(RunObserverContext{s, model, outdir});
+    if (!o) continue;
+    if (r.produces == "frames") frames_produced = true;
+    if (names) names->push_back(r.name);
+    out.push_back(std::move(o));
+  }
+  if (s.outputs.wants_rendering() && !frames_produced) {
+    throw Error(ErrorKind::Scenario, s.file.string() + ": outputs.frames: frame rendering is not available in this build");
+  }
+  return out;
+}
+
+void run_command(const RunArgs& args) {
+  Scenario s = load_scenario(args.scenario);
+  BackendSelection selection;
+  selection.name = args.backend.empty() ? s.backend.name : args.backend;
+  selection.precision = args.precision.empty() ? s.backend.precision : std::optional<std::string>(args.precision);
+  selection.threads = args.threads >= 0 ? args.threads : s.backend.threads;
+  s.backend.name = selection.name;
+
+  MeshReport mesh_report;
+  const TetMesh mesh = load_scenario_mesh(s.mesh, &mesh_report);
+  std::cout << "mesh:     " << s.mesh.path.string() << " -> " << mesh_report.points << " points, "
+            << mesh_report.tets << " tets, min dihedral " << mesh_report.quality.min_dihedral_deg << " deg ("
+            << (s.mesh.kind == MeshDef::Kind::Surface ? "meshed" : "read") << " in " << std::setprecision(3)
+            << mesh_report.seconds << " s)\n"
+            << std::setprecision(6);
+  for (const std::string& n : mesh_report.notes) std::cout << "          note: " << n << "\n";
+
+  const auto model_start = std::chrono::steady_clock::now();
+  const Model model = build_scenario_model(s, mesh);
+  const double model_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - model_start).count();
+  auto backend = make_backend(selection, model, backend_tool(s));
+
+  const fs::path outdir = args.outdir.empty() ? fs::path("out") / fs::path(args.scenario).stem() : fs::path(args.outdir);
+  std::vector<std::string> observer_names;
+  auto observers = make_observers(s, model, outdir, &observer_names);
+
+  if (args.plan) {
+    print_plan(std::cout, s, model, *backend, observer_names);
+    return;
+  }
+
+  RunOptions options;
+  options.outdir = outdir;
+  for (auto& o : observers) options.observers.push_back(o.get());
+  options.meta_extra = {
+      {"mesh", s.mesh.path.string()},
+      {"mesh_kind", s.mesh.kind == MeshDef::Kind::Surface ? "surface" : "tet"},
+      {"mesh_seconds", mesh_report.seconds},
+      {"mesh_min_dihedral_deg", mesh_report.quality.min_dihedral_deg},
+      {"model_seconds", model_seconds},
+      {"tool", s.tool ? (s.tool->spec.mode == ToolMode::Push ? "push" : "pull") : "none"},
+  };
+  std::cout << "run:      " << s.time.ticks() << " ticks of " << s.time.tick() << " s on " << backend->name()
+            << " (" << backend->precision() << ", " << backend->device() << ")\n";
+  std::cout.flush();
+  RunResult result;
+  try {
+    result = run_scenario(s, model, *backend, options);
+  } catch (const Error&) {
+    if (s.outputs.forces) std::cerr << "organsim: the force log up to the failure is in " << (outdir / "forces.json").string() << "\n";
+    throw;
+  }
+  double peak = 0;
+  for (const Vec3& f : result.samples.force) peak = std::max(peak, f.norm());
+  std::cout << "done:     " << result.samples.size() << " ticks in " << std::setprecision(3)
+            << result.meta.wall_seconds << " s wall, " << std::setprecision(4) << result.meta.steps_per_second
+            << " steps/s, peak tool force " << peak << " N\n";
+  if (s.tool && s.tool->spec.mode == ToolMode::Pull) {
+    std::cout << "grasp:    " << result.grasped_points << " points attached"
+              << (result.grasped_points == 0 ? " (none within grasp_radius: the tool pulled nothing)" : "") << "\n";
+  }
+  if (!result.forces_path.empty()) std::cout << "force log: " << result.forces_path.string() << "\n";
+  std::cout << "outputs:  " << outdir.string() << "\n";
+}
+
+const bool registered = register_command("run", 20, [](CLI::App& root) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = root.add_subcommand(
+      "run", "Run a scenario (JSON, SI units) and write OUTDIR/forces.json: tool force [N], torque [N m], "
+             "tool position [m] and contacts at every haptic tick.");
+  cmd->add_option("scenario", args->scenario, "Scenario file (see docs/scenarios.md)")->required();
+  cmd->add_option("-o,--output", args->outdir, "Output folder (default: out/<scenario name>)");
+  cmd->add_option("--backend", args->backend, "cpu or gl; overrides the scenario's backend")
+      ->check(CLI::IsMember({"cpu", "gl"}));
+  cmd->add_option("--precision", args->precision, "double or float; overrides the scenario's precision")
+      ->check(CLI::IsMember({"double", "float"}));
+  cmd->add_option("--threads", args->threads, "CPU threads (0: all); overrides the scenario's backend.threads")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--plan", args->plan,
+                "Print the model counts, the passes and buffers the step would use, without running");
+  cmd->callback([args] { run_command(*args); });
+});
+
+}  // namespace
+}  // namespace organsim::app

@@ -1,0 +1,38 @@
+#pragma once
+// Observers that `organsim run` attaches to a run (frame recorder, checks)
+// register here, like subcommands, so cmd_run.cpp needs no knowledge of them.
+// A factory returns nullptr when the scenario does not ask for its output.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/model/model.h"
+#include "core/scenario/scenario.h"
+#include "core/sim/run_observer.h"
+
+namespace organsim::app {
+
+struct RunObserverContext {
+  const Scenario& scenario;
+  const Model& model;
+  std::filesystem::path outdir;
+};
+
+struct RunObserverRegistration {
+  std::string name;
+  // Which scenario output this observer produces ("frames" for the renderer),
+  // so that a scenario asking for an output nobody produces is an error.
+  std::string produces;
+  std::function<std::unique_ptr<RunObserver>(const RunObserverContext&)> make;
+};
+
+std::vector<RunObserverRegistration>& run_observer_registry();
+
+inline bool register_run_observer(RunObserverRegistration registration) {
+  run_observer_registry().push_back(std::move(registration));
+  return true;
+}
+
+}  // namespace organsim::app

@@ -1,0 +1,34 @@
+#include "app/scenario_mesh.h"
+
+#include <chrono>
+
+#include "core/mesh/mesh_io.h"
+
+namespace organsim::app {
+
+TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  TetMesh mesh;
+  if (def.kind == MeshDef::Kind::Surface) {
+    // Scale first so that cell_size and facet_distance are in metres of the
+    // scaled surface, like every other length in the scenario.
+    TriangleMesh surface = read_surface(def.path);
+    for (Vec3& p : surface.points) p *= def.scale;
+    MeshOptions options;
+    options.target_points = def.target_points;
+    options.cell_size = def.cell_size;
+    options.facet_distance = def.facet_distance;
+    options.exude = def.exude;
+    mesh = mesh_surface(surface, options, def.path.string(), report);
+  } else {
+    mesh = read_tet_mesh(def.path);
+    for (Vec3& p : mesh.points) p *= def.scale;
+    if (report) *report = describe_tet_mesh(mesh);
+  }
+  if (report) {
+    report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return mesh;
+}
+
+}  // namespace organsim::app

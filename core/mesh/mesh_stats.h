@@ -1,0 +1,50 @@
+#pragma once
+// Counts and quality of tet meshes, without CGAL, so meshes read from file
+// are described exactly like meshes made by `organsim mesh`.
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "core/mesh/tet_mesh.h"
+
+namespace organsim {
+
+struct MeshQuality {
+  double min_dihedral_deg = 0, max_dihedral_deg = 0;
+  double max_radius_edge_ratio = 0;  // circumradius / shortest edge (regular tet: 0.612)
+  double min_tet_volume = 0;         // m^3
+};
+
+struct MeshReport {
+  int32_t points = 0, springs = 0, tets = 0, boundary_triangles = 0;
+  MeshQuality quality;
+  std::vector<int32_t> valence_histogram;  // [k] = points with k springs
+  double seconds = 0;                      // wall time of the meshing (0 when read from file)
+  std::vector<std::string> notes;          // e.g. "surface was inward oriented: reversed"
+};
+
+// Counts (springs = unique tet edges; boundary triangles = faces of exactly
+// one tet), quality and the springs-per-point histogram.
+MeshReport describe_tet_mesh(const TetMesh& mesh);
+
+// Unique tet edges (a < b), sorted.
+std::vector<Edge> unique_edges(const TetMesh& mesh);
+
+// Faces owned by exactly one tet, oriented outward (counter-clockwise seen
+// from outside) for positively oriented tets.
+std::vector<Tri> boundary_triangles(const TetMesh& mesh);
+
+// Sum of the tets' signed volumes, m^3.
+double tet_mesh_volume(const TetMesh& mesh);
+
+// Volume enclosed by a closed surface (divergence theorem), m^3; negative
+// when the faces are oriented inward.
+double surface_volume(const TriangleMesh& surface);
+
+// Human-readable report: counts, quality, the histogram as text bars, time.
+std::string format_mesh_report(const MeshReport& report);
+// The same as JSON (keys: points, springs, tets, boundary_triangles, quality{...},
+// springs_per_point{mean, max, histogram}, seconds, notes).
+nlohmann::json mesh_report_json(const MeshReport& report);
+
+}  // namespace organsim

@@ -1,0 +1,205 @@
+#include "core/scenario/scenario.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+#include "core/scenario/scenario_sections.h"
+#include "core/util/atomic_file.h"
+
+namespace organsim {
+
+using scenario_detail::parse_outputs;
+using scenario_detail::parse_tool;
+
+int64_t TimeDef::ticks() const {
+  // The last tick may end after `duration`; the 1e-9 keeps 1.0 / 0.001 at 1000.
+  return static_cast<int64_t>(std::ceil(duration / tick() - 1e-9));
+}
+
+namespace {
+
+std::filesystem::path resolve(const std::string& path, const std::filesystem::path& base_dir) {
+  std::filesystem::path p(path);
+  if (p.is_relative()) p = base_dir / p;
+  return p.lexically_normal();
+}
+
+MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::filesystem::path& base_dir) {
+  ObjectReader r(j, at);
+  MeshDef mesh;
+  const auto surface = r.string("surface");
+  const auto tet = r.string("tet");
+  if (surface && tet) throw at.error("give either \"surface\" or \"tet\", not both");
+  if (!surface && !tet) throw at.error("missing \"surface\" (a closed triangle surface to mesh) or \"tet\" (a tet mesh)");
+  if (surface) {
+    mesh.kind = MeshDef::Kind::Surface;
+    if (surface->empty()) throw r.at("surface").error("expected a file name");
+    mesh.path = resolve(*surface, base_dir);
+  } else {
+    mesh.kind = MeshDef::Kind::Tet;
+    if (tet->empty()) throw r.at("tet").error("expected a file name");
+    mesh.path = resolve(*tet, base_dir);
+  }
+  if (auto s = r.number("scale")) mesh.scale = require_positive(*s, r.at("scale"));
+  if (const nlohmann::json* o = r.get("options")) {
+    const JsonPath oat = r.at("options");
+    if (mesh.kind != MeshDef::Kind::Surface) throw oat.error("meshing options apply only to a \"surface\" mesh");
+    ObjectReader opt(*o, oat);
+    if (auto n = opt.integer("target_points")) {
+      if (*n < 10 || *n > 10'000'000) throw opt.at("target_points").error("expected an integer in 10..10000000 (got " + std::to_string(*n) + ")");
+      mesh.target_points = static_cast<int32_t>(*n);
+    }
+    if (auto h = opt.number("cell_size")) mesh.cell_size = require_positive(*h, opt.at("cell_size"));
+    if (mesh.target_points && mesh.cell_size) throw oat.error("give target_points or cell_size, not both");
+    if (auto d = opt.number("facet_distance")) mesh.facet_distance = require_positive(*d, opt.at("facet_distance"));
+    if (auto e = opt.boolean("exude")) mesh.exude = *e;
+    opt.finish();
+  }
+  r.finish();
+  return mesh;
+}
+
+Material parse_material(const nlohmann::json& j, const JsonPath& at) {
+  ObjectReader r(j, at);
+  Material m;
+  if (auto v = r.number("density")) m.density = require_positive(*v, r.at("density"));
+  const bool has_e = r.has("young_modulus");
+  const bool has_k = r.has("spring_stiffness");
+  if (has_e && has_k) throw at.error("give young_modulus or spring_stiffness, not both");
+  if (auto v = r.number("young_modulus")) m.young_modulus = require_positive(*v, r.at("young_modulus"));
+  if (auto v = r.number("spring_stiffness")) m.spring_stiffness = require_positive(*v, r.at("spring_stiffness"));
+  if (auto v = r.number("spring_damping_time")) m.spring_damping_time = require_non_negative(*v, r.at("spring_damping_time"));
+  if (auto v = r.number("viscous_damping")) m.viscous_damping = require_non_negative(*v, r.at("viscous_damping"));
+  if (auto v = r.number("volume_modulus")) m.volume_modulus = require_non_negative(*v, r.at("volume_modulus"));
+  r.finish();
+  return m;
+}
+
+FixedSelector parse_selector(const nlohmann::json& j, const JsonPath& at) {
+  ObjectReader r(j, at);
+  if (j.size() != 1) throw at.error("expected exactly one of \"box\", \"plane\", \"sphere\" or \"indices\"");
+  FixedSelector s;
+  if (const nlohmann::json* b = r.get("box")) {
+    ObjectReader box(*b, r.at("box"));
+    s.kind = FixedSelector::Kind::Box;
+    s.min = read_vec3(box.require("min"), box.at("min"));
+    s.max = read_vec3(box.require("max"), box.at("max"));
+    for (int c = 0; c < 3; ++c) {
+      if (s.min[c] > s.max[c]) throw box.at("max").error("expected max >= min in every coordinate");
+    }
+    box.finish();
+  } else if (const nlohmann::json* p = r.get("plane")) {
+    ObjectReader plane(*p, r.at("plane"));
+    s.kind = FixedSelector::Kind::Plane;
+    s.point = read_vec3(plane.require("point"), plane.at("point"));
+    const Vec3 n = read_vec3(plane.require("normal"), plane.at("normal"));
+    if (!(n.norm() > 0)) throw plane.at("normal").error("expected a non-zero vector");
+    s.normal = n.normalized();
+    plane.finish();
+  } else if (const nlohmann::json* sp = r.get("sphere")) {
+    ObjectReader sphere(*sp, r.at("sphere"));
+    s.kind = FixedSelector::Kind::Sphere;
+    s.center = read_vec3(sphere.require("center"), sphere.at("center"));
+    s.radius = require_positive(read_number(sphere.require("radius"), sphere.at("radius")), sphere.at("radius"));
+    sphere.finish();
+  } else if (const nlohmann::json* ids = r.get("indices")) {
+    const JsonPath iat = r.at("indices");
+    if (!ids->is_array()) throw iat.error("expected an array of point indices");
+    s.kind = FixedSelector::Kind::Indices;
+    for (size_t i = 0; i < ids->size(); ++i) {
+      const int64_t v = read_integer((*ids)[i], iat.index(i));
+      if (v < 0 || v > INT32_MAX) throw iat.index(i).error("expected a point index >= 0 (got " + std::to_string(v) + ")");
+      s.indices.push_back(static_cast<int32_t>(v));
+    }
+  }
+  r.finish();  // names the unknown selector kind
+  return s;
+}
+
+std::vector<FixedSelector> parse_fixed(const nlohmann::json& j, const JsonPath& at) {
+  if (!j.is_array()) throw at.error("expected an array of selectors ({\"box\"|\"plane\"|\"sphere\"|\"indices\": ...})");
+  std::vector<FixedSelector> out;
+  for (size_t i = 0; i < j.size(); ++i) out.push_back(parse_selector(j[i], at.index(i)));
+  return out;
+}
+
+TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
+  ObjectReader r(j, at);
+  TimeDef t;
+  if (auto v = r.number("duration")) t.duration = require_positive(*v, r.at("duration"));
+  if (auto v = r.number("dt")) t.dt = require_positive(*v, r.at("dt"));
+  if (auto v = r.integer("substeps")) {
+    if (*v < 1 || *v > 1'000'000) throw r.at("substeps").error("expected an integer >= 1 (got " + std::to_string(*v) + ")");
+    t.substeps = static_cast<int32_t>(*v);
+  }
+  r.finish();
+  if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");
+  return t;
+}
+
+BackendDef parse_backend(const nlohmann::json& j, const JsonPath& at) {
+  BackendDef b;
+  auto check_name = [&](const std::string& name, const JsonPath& p) {
+    if (name != "cpu" && name != "gl") throw p.error("expected " + one_of({"cpu", "gl"}) + " (got \"" + name + "\")");
+    return name;
+  };
+  if (j.is_string()) {
+    b.name = check_name(j.get<std::string>(), at);
+    return b;
+  }
+  if (!j.is_object()) throw at.error("expected \"cpu\", \"gl\" or an object {name, precision, threads}");
+  ObjectReader r(j, at);
+  if (auto n = r.string("name")) b.name = check_name(*n, r.at("name"));
+  if (auto p = r.string("precision")) {
+    if (*p != "double" && *p != "float") throw r.at("precision").error("expected " + one_of({"double", "float"}) + " (got \"" + *p + "\")");
+    b.precision = *p;
+  }
+  if (auto t = r.integer("threads")) {
+    if (*t < 0 || *t > 4096) throw r.at("threads").error("expected an integer >= 0, 0 meaning all hardware threads");
+    b.threads = static_cast<int32_t>(*t);
+  }
+  r.finish();
+  return b;
+}
+
+}  // namespace
+
+Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& base_dir,
+                        const std::string& source) {
+  const JsonPath root{source, ""};
+  ObjectReader r(j, root);
+  Scenario s;
+  s.file = source;
+  r.string("description");  // free text for people; not used
+  s.mesh = parse_mesh(r.require("mesh"), r.at("mesh"), base_dir);
+  if (const auto* m = r.get("material")) s.material = parse_material(*m, r.at("material"));
+  if (const auto* f = r.get("fixed")) s.fixed = parse_fixed(*f, r.at("fixed"));
+  if (auto g = r.vec3("gravity")) s.gravity = *g;
+  if (const auto* t = r.get("time")) s.time = parse_time(*t, r.at("time"));
+  if (const auto* t = r.get("tool")) s.tool = parse_tool(*t, r.at("tool"));
+  if (const auto* b = r.get("backend")) s.backend = parse_backend(*b, r.at("backend"));
+  if (const auto* o = r.get("outputs")) s.outputs = parse_outputs(*o, r.at("outputs"));
+  r.finish();
+  return s;
+}
+
+Scenario load_scenario(const std::filesystem::path& path) {
+  const std::string text = read_text_file(path);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // e.byte is the offset of the error; turn it into line:column.
+    size_t line = 1, col = 1;
+    for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+      if (text[i] == '\n') { ++line; col = 1; } else { ++col; }
+    }
+    throw input_error(path.string(), "invalid JSON at line " + std::to_string(line) + ", column " +
+                                         std::to_string(col));
+  }
+  return parse_scenario(j, path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path(),
+                        path.string());
+}
+
+}  // namespace organsim

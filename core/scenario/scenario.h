@@ -1,0 +1,77 @@
+#pragma once
+// A scenario: which mesh, which material, what is fixed, how long and how
+// finely to integrate, what the tool does and what to write. Parsed from JSON
+// into definition structs with validated defaults; every error names the file
+// and the JSON path. Field by field in docs/scenarios.md. SI units.
+#include <nlohmann/json_fwd.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/model/material.h"
+#include "core/scenario/outputs.h"
+#include "core/sim/tool.h"
+#include "core/util/vec.h"
+
+namespace organsim {
+
+// `mesh`: a closed surface meshed on the fly, or a tetrahedral mesh file.
+struct MeshDef {
+  enum class Kind { Surface, Tet } kind = Kind::Tet;
+  std::filesystem::path path;  // resolved against the scenario file's folder
+  double scale = 1.0;          // coordinates are multiplied by this (e.g. 0.001 for mm input)
+  // Surface meshing options (Kind::Surface only), in metres after scaling.
+  std::optional<int32_t> target_points;
+  std::optional<double> cell_size;       // m
+  std::optional<double> facet_distance;  // m
+  bool exude = true;
+};
+
+// `time`: the run lasts `duration`; one haptic tick is dt * substeps.
+struct TimeDef {
+  double duration = 1.0;   // s
+  double dt = 1e-4;        // s, integration step
+  int32_t substeps = 10;   // steps per tick
+
+  double tick() const { return dt * substeps; }   // s
+  int64_t ticks() const;                         // ceil(duration / tick)
+};
+
+// `tool`: absent means no tool pass at all.
+struct ToolDef {
+  ToolSpec spec;  // sphere radius, stiffness, mode, grasp/release, keyframes
+};
+
+struct BackendDef {
+  std::string name = "cpu";              // "cpu" or "gl"
+  std::optional<std::string> precision;  // "double" or "float"; default per backend
+  int32_t threads = 0;                   // cpu: 0 = all hardware threads
+};
+
+inline constexpr double kDefaultGravityZ = -9.81;  // m/s^2, along -z
+
+struct Scenario {
+  std::filesystem::path file;  // the scenario file as given (for messages and the log)
+  MeshDef mesh;
+  Material material;
+  std::vector<FixedSelector> fixed;
+  Vec3 gravity{0, 0, kDefaultGravityZ};  // m/s^2; [0,0,0] switches the gravity pass off
+  TimeDef time;
+  std::optional<ToolDef> tool;
+  BackendDef backend;
+  OutputsDef outputs;
+};
+
+// Parses `j`; relative paths are resolved against `base_dir`; `source` names
+// the file in messages. Throws Error(Scenario) naming the JSON path.
+Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& base_dir,
+                        const std::string& source);
+
+// Reads and parses a scenario file. Throws Error(Input) for an unreadable file
+// or invalid JSON (with line and column), Error(Scenario) for bad fields.
+Scenario load_scenario(const std::filesystem::path& path);
+
+}  // namespace organsim

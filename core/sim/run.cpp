@@ -1,0 +1,174 @@
+#include "core/sim/run.h"
+
+#include <chrono>
+#include <cmath>
+#include <exception>
+
+#include "core/util/error.h"
+
+namespace organsim {
+
+ModelOptions model_options(const Scenario& scenario) {
+  ModelOptions o;
+  o.gravity = scenario.gravity;
+  o.fixed = scenario.fixed;
+  return o;
+}
+
+BackendTool backend_tool(const Scenario& scenario) {
+  BackendTool t;
+  if (!scenario.tool) return t;
+  t.present = true;
+  t.mode = scenario.tool->spec.mode;
+  t.radius = scenario.tool->spec.radius;
+  t.contact_stiffness = scenario.tool->spec.contact_stiffness;
+  return t;
+}
+
+Attachment select_grasp(const Model& model, const std::vector<Vec3>& positions, const Vec3& center,
+                        double radius) {
+  Attachment a;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if (model.fixed[i]) continue;  // a fixed point cannot follow the tool
+    const Vec3 offset = positions[i] - center;
+    if (offset.norm() <= radius) {
+      a.points.push_back(i);
+      a.offsets.push_back(offset);
+    }
+  }
+  return a;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+ForceLogMeta initial_meta(const Scenario& s, const Model& model, const Backend& backend) {
+  ForceLogMeta m;
+  m.scenario = s.file.string();
+  m.backend = backend.name();
+  m.device = backend.device();
+  m.precision = backend.precision();
+  m.reaction_latency_ticks = backend.reaction_latency_ticks();
+  m.points = model.npoint();
+  m.springs = model.nspring();
+  m.tets = model.ntet();
+  for (uint8_t f : model.fixed) m.fixed_points += f;
+  m.dt = s.time.dt;
+  m.substeps = s.time.substeps;
+  m.duration = s.time.duration;
+  return m;
+}
+
+// A tick event (grasp, release) happens at the first tick that starts at or
+// after its time; half a step of slack absorbs rounding in i * tick.
+bool starts_at_or_after(double tick_start, double event_time, double dt) {
+  return tick_start >= event_time - 0.5 * dt;
+}
+
+}  // namespace
+
+RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& backend,
+                       const RunOptions& options) {
+  RunResult result;
+  result.meta = initial_meta(scenario, model, backend);
+  result.meta.extra = options.meta_extra;
+  if (scenario.outputs.forces) result.forces_path = options.outdir / "forces.json";
+
+  const TimeDef& time = scenario.time;
+  const int64_t nticks = time.ticks();
+  const double tick = time.tick();
+  const ToolSpec* tool = scenario.tool ? &scenario.tool->spec : nullptr;
+  const bool pull = tool && tool->mode == ToolMode::Pull;
+  result.samples.reserve(static_cast<size_t>(nticks));
+
+  // Sized once here: the loop itself allocates nothing except at a grasp.
+  std::vector<Vec3> positions;
+  if (pull) positions.reserve(static_cast<size_t>(model.npoint()));
+  bool grasped = false, released = false;
+
+  TickRequest request;
+  request.dt = time.dt;
+  request.substeps = time.substeps;
+  request.tool_active = tool != nullptr;
+
+  const auto loop_start = Clock::now();
+  double step_seconds = 0;
+  int64_t ticks_done = 0;
+  bool finish_called = false;
+  std::exception_ptr failure;
+  try {
+    for (RunObserver* o : options.observers) o->on_start(model, backend);
+    for (int64_t i = 0; i < nticks; ++i) {
+      const double t0 = static_cast<double>(i) * tick;
+      const double t1 = static_cast<double>(i + 1) * tick;
+      if (tool) {
+        request.tool_from = tool->position_at(t0);
+        request.tool_to = tool->position_at(t1);
+      }
+      if (pull && !grasped && starts_at_or_after(t0, tool->grasp_time, time.dt)) {
+        backend.positions(positions);
+        const Attachment a = select_grasp(model, positions, request.tool_from, tool->grasp_radius);
+        result.grasped_points = static_cast<int32_t>(a.points.size());
+        backend.attach(a);
+        grasped = true;
+      }
+      if (pull && grasped && !released && tool->release_time &&
+          starts_at_or_after(t0, *tool->release_time, time.dt)) {
+        backend.release();
+        released = true;
+      }
+
+      const auto step_start = Clock::now();
+      const Reaction r = backend.tick(request);
+      step_seconds += seconds_since(step_start);
+      ++ticks_done;
+
+      result.samples.push(t1, r.force, r.torque, request.tool_to, r.contacts);
+      TickInfo info;
+      info.tick = i;
+      info.t = t1;
+      info.tool_center = request.tool_to;
+      info.tool_active = request.tool_active;
+      info.reaction = r;
+      for (RunObserver* o : options.observers) o->on_tick(model, backend, info);
+    }
+    finish_called = true;
+    for (RunObserver* o : options.observers) o->on_finish(model, backend);
+    result.meta.completed = true;
+  } catch (const std::exception& e) {
+    result.meta.completed = false;
+    result.meta.stop_reason = e.what();
+    failure = std::current_exception();
+  }
+
+  const int64_t steps = ticks_done * time.substeps;
+  result.meta.wall_seconds = seconds_since(loop_start);
+  result.meta.steps_per_second = step_seconds > 0 ? static_cast<double>(steps) / step_seconds : 0;
+  result.meta.extra["step_seconds"] = step_seconds;
+  result.meta.extra["steps"] = steps;
+  if (pull) result.meta.extra["grasped_points"] = result.grasped_points;
+
+  if (failure) {
+    // Keep what was recorded, say why it stopped, then let the caller report it.
+    if (!finish_called) {
+      for (RunObserver* o : options.observers) {
+        try {
+          o->on_finish(model, backend);
+        } catch (...) {
+          // The first error is the one to report.
+        }
+      }
+    }
+    if (!result.forces_path.empty()) write_force_log(result.forces_path, result.meta, result.samples);
+    std::rethrow_exception(failure);
+  }
+  if (!result.forces_path.empty()) write_force_log(result.forces_path, result.meta, result.samples);
+  return result;
+}
+
+}  // namespace organsim

@@ -1,0 +1,83 @@
+// CGAL Mesh_3 on a polyhedral domain (the only TU that instantiates Mesh_3).
+#include "meshing/mesh_3.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/Polyhedral_mesh_domain_3.h>
+#include <CGAL/Random.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/make_mesh_3.h>
+
+#include <unordered_map>
+
+namespace organsim {
+
+namespace {
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+using Domain = CGAL::Polyhedral_mesh_domain_3<SurfaceMesh, Kernel>;
+// Sequential: the parallel mesher is not deterministic.
+using Triangulation = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
+using Complex = CGAL::Mesh_complex_3_in_triangulation_3<Triangulation>;
+using Criteria = CGAL::Mesh_criteria_3<Triangulation>;
+constexpr unsigned kSeed = 0;
+}  // namespace
+
+struct Mesh3Domain::Impl {
+  SurfaceMesh surface;
+  CGAL::Random random{kSeed};
+  std::unique_ptr<Domain> domain;
+};
+
+Mesh3Domain::Mesh3Domain(const TriangleMesh& checked_surface) : impl_(std::make_unique<Impl>()) {
+  std::vector<SurfaceMesh::Vertex_index> vertices;
+  vertices.reserve(checked_surface.points.size());
+  for (const Vec3& p : checked_surface.points) {
+    vertices.push_back(impl_->surface.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z())));
+  }
+  for (const Tri& f : checked_surface.faces) impl_->surface.add_face(vertices[f[0]], vertices[f[1]], vertices[f[2]]);
+  impl_->domain = std::make_unique<Domain>(impl_->surface, &impl_->random);
+}
+
+Mesh3Domain::~Mesh3Domain() = default;
+
+TetMesh Mesh3Domain::mesh(const Mesh3Criteria& c) const {
+  using namespace CGAL::parameters;
+  // Same random state for every run: identical criteria give identical meshes,
+  // whatever was meshed before in this process.
+  impl_->random = CGAL::Random(kSeed);
+  CGAL::get_default_random() = CGAL::Random(kSeed);
+  const Criteria criteria(facet_angle = 25, facet_size = c.cell_size, facet_distance = c.facet_distance,
+                          cell_radius_edge_ratio = 3, cell_size = c.cell_size);
+  const Complex complex = c.exude ? CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(), exude())
+                                  : CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(), no_exude());
+
+  // Index only vertices used by cells of the complex (the triangulation also
+  // holds vertices outside it), in the order the cells first use them.
+  const Triangulation& tr = complex.triangulation();
+  TetMesh mesh;
+  std::unordered_map<Triangulation::Vertex_handle, int32_t> index;
+  mesh.tets.reserve(complex.number_of_cells_in_complex());
+  for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
+    Tet tet{};
+    for (int k = 0; k < 4; ++k) {
+      const auto v = cell->vertex(k);
+      const auto [it, inserted] = index.try_emplace(v, static_cast<int32_t>(mesh.points.size()));
+      if (inserted) {
+        const auto& p = tr.point(v);  // a weighted point
+        mesh.points.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
+      }
+      tet[k] = it->second;
+    }
+    // Triangulation cells are positively oriented; make sure in our convention.
+    if (signed_volume(mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]], mesh.points[tet[3]]) < 0) {
+      std::swap(tet[2], tet[3]);
+    }
+    mesh.tets.push_back(tet);
+  }
+  return mesh;
+}
+
+}  // namespace organsim

@@ -1,0 +1,196 @@
+// `organsim mesh` end to end: bad input exits non-zero with a one-line error
+// naming the file and the problem, and writes no output file; --json parses.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include "../core/mesh_io_test_util.h"
+#include "core/mesh/example_shapes.h"
+#include "core/mesh/mesh_io.h"
+#include "core/util/atomic_file.h"
+
+namespace organsim {
+namespace {
+
+using testing::five_tet_cube;
+using testing::fresh_test_dir;
+using testing::write_fixture;
+
+struct CliRun {
+  int exit_code;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+CliRun run_organsim(const std::string& args, const std::filesystem::path& dir) {
+  const std::string err_path = (dir / "stderr.txt").string();
+  const std::string command = std::string(ORGANSIM_EXE) + " " + args + " 2>" + err_path;
+  FILE* pipe = popen(command.c_str(), "r");
+  EXPECT_NE(pipe, nullptr);
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  std::ifstream err_file(err_path);
+  std::string err((std::istreambuf_iterator<char>(err_file)), std::istreambuf_iterator<char>());
+  std::filesystem::remove(err_path);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out, err};
+}
+
+// Files in `dir` other than `keep` (to catch outputs and stray temporaries).
+std::vector<std::string> other_files(const std::filesystem::path& dir, const std::string& keep) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().filename() != keep) names.push_back(entry.path().filename().string());
+  }
+  return names;
+}
+
+struct BadCase {
+  const char* name;      // input file name
+  std::string content;   // written unless empty
+  const char* expected;  // in the error message
+};
+
+std::string off_text(const TriangleMesh& m) {
+  std::string s = "OFF\n" + std::to_string(m.points.size()) + " " + std::to_string(m.faces.size()) + " 0\n";
+  for (const Vec3& p : m.points) s += std::to_string(p.x()) + " " + std::to_string(p.y()) + " " + std::to_string(p.z()) + "\n";
+  for (const Tri& f : m.faces) s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + "\n";
+  return s;
+}
+
+std::string vtk_text(const TetMesh& m) {
+  std::string s = "# vtk DataFile Version 3.0\nfixture\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS " +
+                  std::to_string(m.points.size()) + " double\n";
+  for (const Vec3& p : m.points) s += std::to_string(p.x()) + " " + std::to_string(p.y()) + " " + std::to_string(p.z()) + "\n";
+  s += "CELLS " + std::to_string(m.tets.size()) + " " + std::to_string(5 * m.tets.size()) + "\n";
+  for (const Tet& t : m.tets) {
+    s += "4 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + " " + std::to_string(t[3]) + "\n";
+  }
+  s += "CELL_TYPES " + std::to_string(m.tets.size()) + "\n";
+  for (size_t i = 0; i < m.tets.size(); ++i) s += "10\n";
+  return s;
+}
+
+std::vector<BadCase> bad_cases() {
+  TriangleMesh open = make_sphere_surface(0.05, 2);
+  open.faces.pop_back();
+  TriangleMesh overlapping = make_sphere_surface(0.05, 2);
+  TriangleMesh nested = make_sphere_surface(0.05, 2);
+  const TriangleMesh other = make_sphere_surface(0.05, 2);
+  const auto n = static_cast<int32_t>(overlapping.points.size());
+  for (const Vec3& p : other.points) {
+    overlapping.points.push_back(p + Vec3(0.075, 0, 0));  // overlaps the first sphere
+    nested.points.push_back(0.5 * p);                     // inside it, same orientation
+  }
+  for (const Tri& f : other.faces) {
+    overlapping.faces.push_back({f[0] + n, f[1] + n, f[2] + n});
+    nested.faces.push_back({f[0] + n, f[1] + n, f[2] + n});
+  }
+  TetMesh inverted = five_tet_cube();
+  std::swap(inverted.tets[2][0], inverted.tets[2][1]);
+  TetMesh flat = five_tet_cube();
+  flat.tets[1] = {0, 1, 3, 2};
+  TetMesh range = five_tet_cube();
+  range.tets[4][3] = 8;
+  return {
+      {"missing.off", "", "missing.off: no such file"},
+      {"surface.xyz", "1 2 3\n", "surface.xyz: unknown extension '.xyz'"},
+      {"nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "nofaces.off: no faces"},
+      {"quad.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", "quad.off: line 7: face 0 has 4 vertices; not a triangle mesh"},
+      {"open.off", off_text(open), "open.off: open surface: 3 border edges"},
+      {"overlap.off", off_text(overlapping), "overlap.off: self-intersecting: "},
+      {"nested.off", off_text(nested), "nested.off: does not bound a volume"},
+      {"inverted.vtk", vtk_text(inverted), "inverted.vtk: tetrahedron 2 is inverted"},
+      {"flat.vtk", vtk_text(flat), "flat.vtk: tetrahedron 1 has zero volume"},
+      {"range.vtk", vtk_text(range), "range.vtk: tetrahedron 4 has vertex index 8"},
+  };
+}
+
+TEST(MeshCli, BadInputExitsNonZeroWithOneLineErrorAndWritesNothing) {
+  for (const BadCase& c : bad_cases()) {
+    const auto dir = fresh_test_dir("mesh_cli") / std::filesystem::path(c.name).stem();
+    std::filesystem::create_directories(dir);
+    if (!c.content.empty()) write_fixture(dir / c.name, c.content);
+    const CliRun run = run_organsim("mesh " + (dir / c.name).string() + " -o " + (dir / "out.mesh").string() +
+                                     " --cell-size 0.01", dir);
+    EXPECT_EQ(run.exit_code, 3) << c.name << ": " << run.err;  // ErrorKind::Input
+    EXPECT_NE(run.err.find(c.expected), std::string::npos) << c.name << ": " << run.err;
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << c.name << ": " << run.err;
+    EXPECT_TRUE(other_files(dir, c.name).empty()) << c.name << ": an output or temporary file was left";
+  }
+}
+
+TEST(MeshCli, InwardSurfaceIsFixedAndSaysSo) {
+  const auto dir = fresh_test_dir("mesh_cli");
+  TriangleMesh inward = make_sphere_surface(0.05, 2);
+  for (Tri& f : inward.faces) std::swap(f[1], f[2]);
+  write_surface(dir / "inward.off", inward);
+  const CliRun run = run_organsim("mesh " + (dir / "inward.off").string() + " -o " + (dir / "out.vtk").string() +
+                                   " --cell-size 0.015 --no-exude", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("was oriented inward: its faces were reversed"), std::string::npos) << run.out;
+  EXPECT_GT(read_tet_mesh(dir / "out.vtk").tets.size(), 0u);
+}
+
+TEST(MeshCli, JsonReportParsesAndMatchesTheWrittenMesh) {
+  const auto dir = fresh_test_dir("mesh_cli");
+  write_surface(dir / "sphere.off", make_sphere_surface(0.05, 3));
+  const CliRun run = run_organsim("mesh " + (dir / "sphere.off").string() + " -o " + (dir / "sphere.mesh").string() +
+                                   " --cell-size 0.012 --json", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  const TetMesh mesh = read_tet_mesh(dir / "sphere.mesh");
+  EXPECT_EQ(j.at("points").get<size_t>(), mesh.points.size());
+  EXPECT_EQ(j.at("tets").get<size_t>(), mesh.tets.size());
+  EXPECT_GT(j.at("springs").get<int>(), j.at("points").get<int>());  // ~6.5 springs per point
+  EXPECT_GT(j.at("quality").at("min_dihedral_deg").get<double>(), 0.0);
+  // The histogram counts every point once.
+  int total = 0;
+  for (int count : j.at("springs_per_point").at("histogram")) total += count;
+  EXPECT_EQ(total, j.at("points").get<int>());
+
+  // Converting the written tet mesh (no remeshing) reports the same counts.
+  const CliRun again = run_organsim("mesh " + (dir / "sphere.mesh").string() + " -o " + (dir / "sphere.vtk").string() +
+                                     " --json", dir);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  const nlohmann::json k = nlohmann::json::parse(again.out);
+  for (const char* key : {"points", "springs", "tets", "boundary_triangles"}) EXPECT_EQ(k.at(key), j.at(key)) << key;
+}
+
+TEST(MeshCli, UsageErrorsExitWithTheUsageCode) {
+  const auto dir = fresh_test_dir("mesh_cli");
+  write_surface(dir / "sphere.off", make_sphere_surface(0.05, 1));
+  // Unsupported output extension: refused before meshing, nothing written.
+  CliRun run = run_organsim("mesh " + (dir / "sphere.off").string() + " -o " + (dir / "out.stl").string(), dir);
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find("out.stl: output must end in .mesh (medit) or .vtk"), std::string::npos) << run.err;
+  // --target-points and --cell-size exclude each other (CLI11's parse error).
+  run = run_organsim("mesh " + (dir / "sphere.off").string() + " -o " + (dir / "out.mesh").string() +
+                         " --target-points 100 --cell-size 0.01", dir);
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_EQ(other_files(dir, "sphere.off").size(), 0u);
+}
+
+}  // namespace
+}  // namespace organsim
+
+namespace organsim {
+namespace {
+
+TEST(ExampleCli, RegeneratesTheCommittedExamplesByteForByte) {
+  const auto dir = testing::fresh_test_dir("mesh_cli");
+  for (const char* shape : {"liver", "sphere", "box"}) {
+    const auto path = dir / (std::string(shape) + ".off");
+    const CliRun run = run_organsim(std::string("example ") + shape + " -o " + path.string(), dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const auto committed = std::filesystem::path(ORGANSIM_SOURCE_DIR) / "examples" / (std::string(shape) + ".off");
+    EXPECT_EQ(read_text_file(path), read_text_file(committed)) << shape << ": examples/ is out of date or the generator changed";
+  }
+}
+
+}  // namespace
+}  // namespace organsim
