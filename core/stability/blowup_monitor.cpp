@@ -89,7 +89,7 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
       const double ratio = signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) / model.tet_rest_volume[t];
-      if (ratio <= 0 && (worst_tet < 0 || ratio < worst_ratio)) {
+      if (ratio < -options.max_inversion && (worst_tet < 0 || ratio < worst_ratio)) {
         worst_tet = t;
         worst_ratio = ratio;
       }

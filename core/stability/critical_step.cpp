@@ -112,7 +112,7 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 // lies below max_i (|K_ii| + sum_j |K_ij|) / m_i with spectral norms; we
 // bound the norms by their terms (|k u u^T| = k, |k_v g_i g_j^T| = k_v |g_i| |g_j|,
 // |k_c I| = k_c). Fixed neighbours drop out of the row (their columns are gone).
-std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k) {
+std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k, int terms = kAll) {
   const int32_t n = model.npoint();
   std::vector<double> row(n, 0.0);
   auto free = [&](int32_t i) { return model.inv_mass[i] > 0; };
@@ -122,7 +122,7 @@ std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k) 
     row[a] += ks * (free(b) ? 2 : 1);
     row[b] += ks * (free(a) ? 2 : 1);
   }
-  if (model.has_volume()) {
+  if ((terms & kVolume) && model.has_volume()) {
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
       const auto& g = k.tet_grad[t];
@@ -132,7 +132,8 @@ std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k) 
       for (int i = 0; i < 4; ++i) row[p[i]] += model.tet_k[t] * g[i].norm() * sum_free;
     }
   }
-  for (int32_t i = 0; i < n; ++i) row[i] = free(i) ? (row[i] + k.tool_k[i]) * model.inv_mass[i] : 0.0;
+  for (int32_t i = 0; i < n; ++i)
+    row[i] = free(i) ? (row[i] + ((terms & kTool) ? k.tool_k[i] : 0.0)) * model.inv_mass[i] : 0.0;
   return row;
 }
 
@@ -179,7 +180,62 @@ std::vector<int32_t> largest(const std::vector<double>& values, int32_t count) {
   return idx;
 }
 
+struct PowerResult {
+  double lambda = 0;
+  std::vector<Vec3> y;  // unit top eigenvector estimate of W (npoint, zero at fixed points)
+  int32_t iterations = 0;
+  bool converged = false;
+  double residual = 0;  // |W y - lambda y| / lambda
+};
+
+// Power iteration on W = M^-1/2 K M^-1/2 (K restricted to `terms`) over the
+// free points: y unit, x = M^-1/2 y, W y = M^-1/2 K x. The Rayleigh quotient
+// y.Wy rises to lambda_max; stop when it changed by less than the tolerance
+// over the last 20 iterations.
+PowerResult power_iteration(const Model& model, const RestStiffness& k, const std::vector<double>& inv_sqrt_m,
+                            int terms, const CriticalStepOptions& options, double upper_bound) {
+  const int32_t n = model.npoint();
+  PowerResult r;
+  r.y.resize(n);
+  std::vector<Vec3> x(n), kx(n), wy(n);
+  for (int32_t i = 0; i < n; ++i)
+    r.y[i] = inv_sqrt_m[i] > 0 ? Vec3(start_component(3 * i), start_component(3 * i + 1), start_component(3 * i + 2))
+                               : Vec3::Zero();
+  const double norm = std::sqrt(dot(r.y, r.y));
+  if (!(norm > 0) || !(upper_bound > 0)) return r;
+  for (auto& v : r.y) v /= norm;
+  std::vector<double> history;
+  const int32_t window = 20;
+  for (int32_t it = 0; it < options.max_iterations; ++it) {
+    for (int32_t i = 0; i < n; ++i) x[i] = inv_sqrt_m[i] * r.y[i];
+    apply_stiffness(model, k, x, kx, terms);
+    for (int32_t i = 0; i < n; ++i) wy[i] = inv_sqrt_m[i] * kx[i];
+    r.lambda = dot(r.y, wy);
+    history.push_back(r.lambda);
+    r.iterations = it + 1;
+    double res2 = 0;
+    for (int32_t i = 0; i < n; ++i) res2 += (wy[i] - r.lambda * r.y[i]).squaredNorm();
+    r.residual = r.lambda > 0 ? std::sqrt(res2) / r.lambda : 0;
+    if (it + 1 >= options.min_iterations && it >= window &&
+        std::abs(r.lambda - history[it - window]) <= options.tolerance * r.lambda) {
+      r.converged = true;
+      break;
+    }
+    const double wn = std::sqrt(dot(wy, wy));
+    if (!(wn > 0)) break;  // no stiffness on the free points
+    for (int32_t i = 0; i < n; ++i) r.y[i] = wy[i] / wn;
+  }
+  r.lambda = std::max(r.lambda, 0.0);
+  return r;
+}
+
 }  // namespace
+
+double critical_step_for_mode(double omega2, double damping_rate) {
+  if (!(omega2 > 0)) return std::numeric_limits<double>::infinity();
+  // Root of omega^2 h^2 + 2 a h - 4 = 0, written without cancellation.
+  return 4 / (damping_rate + std::sqrt(damping_rate * damping_rate + 4 * omega2));
+}
 
 double damped_critical_step(double omega, double spring_damping_time, double viscous_damping) {
   if (!(omega > 0)) return std::numeric_limits<double>::infinity();
@@ -212,61 +268,52 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   const std::vector<double> rows = gershgorin_rows(model, k);
   r.lambda_gershgorin = rows.empty() ? 0 : *std::max_element(rows.begin(), rows.end());
 
-  // Power iteration on W = M^-1/2 K M^-1/2 over the free points: y unit,
-  // x = M^-1/2 y, W y = M^-1/2 K x. The Rayleigh quotient y.Wy rises to lambda_max.
-  std::vector<Vec3> y(n), x(n), kx(n), wy(n);
-  for (int32_t i = 0; i < n; ++i)
-    y[i] = inv_sqrt_m[i] > 0 ? Vec3(start_component(3 * i), start_component(3 * i + 1), start_component(3 * i + 2))
-                             : Vec3::Zero();
-  double norm = std::sqrt(dot(y, y));
-  double lambda = 0;
-  std::vector<double> history;
-  if (norm > 0 && r.lambda_gershgorin > 0) {
-    for (auto& v : y) v /= norm;
-    const int window = 20;
-    for (int32_t it = 0; it < options.max_iterations; ++it) {
-      for (int32_t i = 0; i < n; ++i) x[i] = inv_sqrt_m[i] * y[i];
-      apply_stiffness(model, k, x, kx);
-      for (int32_t i = 0; i < n; ++i) wy[i] = inv_sqrt_m[i] * kx[i];
-      lambda = dot(y, wy);
-      history.push_back(lambda);
-      r.iterations = it + 1;
-      const double wn = std::sqrt(dot(wy, wy));
-      // Residual of the current y before moving on.
-      double res2 = 0;
-      for (int32_t i = 0; i < n; ++i) res2 += (wy[i] - lambda * y[i]).squaredNorm();
-      r.residual = lambda > 0 ? std::sqrt(res2) / lambda : 0;
-      if (it + 1 >= options.min_iterations && it >= window &&
-          std::abs(lambda - history[it - window]) <= options.tolerance * lambda) {
-        r.converged = true;
-        break;
-      }
-      if (!(wn > 0)) break;  // no stiffness on the free points
-      for (int32_t i = 0; i < n; ++i) y[i] = wy[i] / wn;
-    }
-  }
-  r.lambda_max = std::max(lambda, 0.0);
+  // Candidate 1: the top mode of the full stiffness, with its own damping
+  // (its spring part c y^T W_springs y plus the drag).
+  const PowerResult top = power_iteration(model, k, inv_sqrt_m, kAll, options, r.lambda_gershgorin);
+  r.iterations = top.iterations;
+  r.converged = top.converged;
+  r.residual = top.residual;
+  r.lambda_max = top.lambda;
   r.omega_max = std::sqrt(r.lambda_max);
-
-  // How much each term contributes to the top mode's stiffness.
+  const std::vector<Vec3>& y = top.y;
+  std::vector<Vec3> x(n), kx(n);
+  const auto rayleigh = [&](const std::vector<Vec3>& v, int terms) {
+    for (int32_t i = 0; i < n; ++i) x[i] = inv_sqrt_m[i] * v[i];
+    apply_stiffness(model, k, x, kx, terms);
+    return dot(x, kx);
+  };
   if (r.lambda_max > 0) {
-    for (int32_t i = 0; i < n; ++i) x[i] = inv_sqrt_m[i] * y[i];
-    const auto share = [&](int terms) {
-      apply_stiffness(model, k, x, kx, terms);
-      return dot(x, kx);
-    };
-    const double s = share(kSprings), v = share(kVolume), t = share(kTool), total = s + v + t;
+    const double s = rayleigh(y, kSprings), v = rayleigh(y, kVolume), t = rayleigh(y, kTool), total = s + v + t;
     if (total > 0) {
       r.share_springs = s / total;
       r.share_volume = v / total;
       r.share_tool = t / total;
     }
   }
-
-  r.damping_ratio = r.omega_max > 0 ? (r.spring_damping_time * r.lambda_max + r.viscous_damping) / (2 * r.omega_max) : 0;
+  const double c = r.spring_damping_time, alpha = r.viscous_damping;
+  const double top_rate = c * r.share_springs * r.lambda_max + alpha;
+  r.damping_ratio = r.omega_max > 0 ? top_rate / (2 * r.omega_max) : 0;
   r.dt_crit_undamped = r.omega_max > 0 ? 2 / r.omega_max : std::numeric_limits<double>::infinity();
-  r.dt_crit = damped_critical_step(r.omega_max, r.spring_damping_time, r.viscous_damping);
-  r.dt_crit_gershgorin = damped_critical_step(std::sqrt(r.lambda_gershgorin), r.spring_damping_time, r.viscous_damping);
+  r.dt_crit = critical_step_for_mode(r.lambda_max, top_rate);
+  // Candidate 2: the top mode of the damped part (springs): the most damped
+  // stiff mode, whose damping may shrink the step more than candidate 1's.
+  r.lambda_springs = r.lambda_max;
+  if (c > 0 && r.share_springs < 0.999) {
+    const PowerResult sp = power_iteration(model, k, inv_sqrt_m, kSprings, options, r.lambda_gershgorin);
+    r.lambda_springs = sp.lambda;
+    if (sp.lambda > 0) {
+      const double omega2 = rayleigh(sp.y, kAll);
+      r.dt_crit = std::min(r.dt_crit, critical_step_for_mode(omega2, c * sp.lambda + alpha));
+    }
+  }
+  // Rigorous for exact eigenvalues: every mode has omega^2 <= lambda_max and
+  // damping rate <= c lambda_springs + alpha.
+  r.dt_crit_bound = critical_step_for_mode(r.lambda_max, c * r.lambda_springs + alpha);
+  const std::vector<double> spring_rows = gershgorin_rows(model, k, kSprings);
+  const double spring_bound = spring_rows.empty() ? 0 : *std::max_element(spring_rows.begin(), spring_rows.end());
+  r.dt_crit_gershgorin = critical_step_for_mode(r.lambda_gershgorin, c * spring_bound + alpha);
+
 
   // Limiting points: the top mode's largest kinetic-energy shares m_i |x_i|^2 = |y_i|^2,
   // and the largest Gershgorin rows.
@@ -326,6 +373,15 @@ std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& t
     near[i] = d <= reach;
   }
   return near;
+}
+
+CriticalStepOptions critical_step_options(const Model& model, const ToolSpec* tool) {
+  CriticalStepOptions o;
+  if (tool) {
+    o.tool_contact_stiffness = tool->contact_stiffness;
+    o.tool_may_touch = points_near_tool_path(model, *tool);
+  }
+  return o;
 }
 
 StepSuggestion suggest_step(const StabilityReport& report, double tick, double safety) {

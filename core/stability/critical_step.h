@@ -62,8 +62,9 @@ struct StabilityReport {
   // Shares of the top mode's stiffness y^T W y from each term (sum 1).
   double share_springs = 0, share_volume = 0, share_tool = 0;
 
-  // Damping of the top mode: xi = (c omega^2 + alpha) / (2 omega), with c the
-  // spring damping time (d = c k) and alpha the drag.
+  double lambda_springs = 0;       // largest eigenvalue of M^-1 K_springs (the damped part), 1/s^2
+  // Damping of the top mode: xi = (c s omega^2 + alpha) / (2 omega), with c the
+  // spring damping time (d = c k), s the springs' share of the mode, alpha the drag.
   double spring_damping_time = 0;  // s
   double viscous_damping = 0;      // 1/s
   double tool_contact_stiffness = 0;  // N/m, as included
@@ -71,8 +72,12 @@ struct StabilityReport {
   double damping_ratio = 0;        // xi
 
   double dt_crit_undamped = 0;     // 2 / omega_max, s
-  double dt_crit = 0;              // with damping: the step `run` enforces, s
-  double dt_crit_gershgorin = 0;   // the same formula from the Gershgorin bound: a guaranteed-stable step, s
+  // With damping: the step `run` enforces, s. The smaller of two candidate
+  // modes' limits: the top mode of K with its own damping, and the top mode
+  // of the springs (the damped part) with its frequency under the full K.
+  double dt_crit = 0;
+  double dt_crit_bound = 0;        // every mode at once: omega^2 = lambda_max, rate c lambda_springs + alpha, s
+  double dt_crit_gershgorin = 0;   // the same from the Gershgorin bound: a guaranteed-stable step, s
 
   std::vector<LimitingPoint> mode_points;        // largest components of the top mode
   std::vector<LimitingPoint> gershgorin_points;  // largest Gershgorin rows
@@ -91,10 +96,18 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
 // most c w^2 + a (spring dampers d = c k are c times part of K).
 double damped_critical_step(double omega, double spring_damping_time, double viscous_damping);
 
+// The general form: a mode with omega^2 (1/s^2) and damping rate a = y^T M^-1 D y
+// (1/s; D the dampers, plus the drag alpha) is stable iff omega^2 h^2 + 2 a h < 4.
+double critical_step_for_mode(double omega2, double damping_rate);
+
 // Points whose rest position lies within reach of the tool's path (keyframe
 // polyline), internal numbering: radius (or grasp radius for pull) plus one
 // more radius of margin for the material the tool drags along.
 std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool);
+
+// Options for a scene: the tool's contact stiffness on the points near its
+// path (no tool term when `tool` is null).
+CriticalStepOptions critical_step_options(const Model& model, const ToolSpec* tool);
 
 // A stable step that keeps the haptic tick: substeps' = ceil(tick / (safety dt_crit)),
 // dt' = tick / substeps'.

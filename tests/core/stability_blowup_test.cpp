@@ -120,12 +120,19 @@ TEST(StabilityBlowup, GeometryChecksNameThePoint) {
   x = model.rest_position;
   x[internal] += Vec3(0.012, 0.012, 0.012);  // through its neighbours' faces, strain < 100 %
   options.max_strain = 10;
+  options.max_inversion = 0;  // any inversion counts here
   f = check_geometry(model, x, options);
   ASSERT_TRUE(f);
   EXPECT_EQ(f->kind, BlowupFinding::Kind::Inversion);
   EXPECT_EQ(f->point, input);
   EXPECT_LT(f->value, 0.0);
 
+  // A slightly inverted tet (a sliver pushed just through) is within the default bound.
+  x = model.rest_position;
+  x[internal] += Vec3(0.0101, 0.0101, 0.0101);  // just past the lattice point (2,2,2) cells away
+  BlowupMonitorOptions defaults;
+  defaults.max_strain = 10;
+  EXPECT_FALSE(check_geometry(model, x, defaults));
   EXPECT_FALSE(check_geometry(model, model.rest_position, options));
   EXPECT_NEAR(elastic_energy(model, model.rest_position), 0.0, 1e-18);  // rest state stores nothing
 }
