@@ -11,6 +11,8 @@
 #include "app/run_observers.h"
 #include "app/scenario_mesh.h"
 #include "core/sim/run.h"
+#include "core/stability/blowup_monitor.h"
+#include "core/stability/critical_step.h"
 #include "core/util/error.h"
 
 namespace organsim::app {
@@ -31,6 +33,8 @@ struct RunArgs {
   std::string precision;
   int32_t threads = -1;
   bool plan = false;
+  bool allow_unstable = false;   // run even when dt > dt_crit
+  int32_t check_interval = 1;    // blow-up check every N ticks
 };
 
 std::string human_bytes(size_t bytes) {
@@ -142,13 +146,29 @@ void run_command(const RunArgs& args) {
   std::vector<std::string> observer_names;
   auto observers = make_observers(s, model, outdir, &observer_names);
 
+  // Stability before the run (issue 5): dt_crit at rest, refusal of dt > dt_crit.
+  const ToolSpec* tool_spec = s.tool ? &s.tool->spec : nullptr;
+  const StabilityReport stability = estimate_critical_step(model, critical_step_options(model, tool_spec));
+
   if (args.plan) {
     print_plan(std::cout, s, model, *backend, observer_names);
+    std::cout << format_stability_report(stability, s.time.dt, s.time.substeps);
     return;
   }
+  const std::string step_warning = check_time_step(stability, s.time.dt, s.time.substeps, args.allow_unstable);
+  if (!step_warning.empty()) std::cerr << "organsim: " << step_warning << "\n";
+  BlowupMonitorOptions monitor_options;
+  monitor_options.interval_ticks = args.check_interval;
+  BlowupContext monitor_context;
+  monitor_context.dt = s.time.dt;
+  monitor_context.tool_radius = tool_spec ? tool_spec->radius : 0;
+  monitor_context.tool_contact_stiffness = tool_spec ? tool_spec->contact_stiffness : 0;
+  monitor_context.stability = stability;
+  BlowupMonitor monitor(monitor_options, monitor_context);
 
   RunOptions options;
   options.outdir = outdir;
+  options.observers.push_back(&monitor);  // first: nothing else sees a blown-up state
   for (auto& o : observers) options.observers.push_back(o.get());
   options.meta_extra = {
       {"mesh", s.mesh.path.string()},
@@ -158,6 +178,9 @@ void run_command(const RunArgs& args) {
       {"model_seconds", model_seconds},
       {"tool", s.tool ? (s.tool->spec.mode == ToolMode::Push ? "push" : "pull") : "none"},
   };
+  options.meta_extra["dt_crit"] = stability.dt_crit;
+  options.meta_extra["stability"] = to_json(stability);
+  options.meta_extra["stability"]["check_interval_ticks"] = args.check_interval;
   std::cout << "run:      " << s.time.ticks() << " ticks of " << s.time.tick() << " s on " << backend->name()
             << " (" << backend->precision() << ", " << backend->device() << ")\n";
   std::cout.flush();
@@ -196,6 +219,11 @@ const bool registered = register_command("run", 20, [](CLI::App& root) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--plan", args->plan,
                 "Print the model counts, the passes and buffers the step would use, without running");
+  cmd->add_flag("--allow-unstable", args->allow_unstable,
+                "Run even when time.dt exceeds the critical step dt_crit [s] (the blow-up check will likely stop it)");
+  cmd->add_option("--check-interval", args->check_interval,
+                  "Check for blow-up (non-finite, energy, strain, inversion) every N haptic ticks (default 1)")
+      ->check(CLI::PositiveNumber);
   cmd->callback([args] { run_command(*args); });
 });
 

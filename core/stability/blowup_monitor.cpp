@@ -1,0 +1,241 @@
+#include "core/stability/blowup_monitor.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "core/mesh/tet_mesh.h"
+#include "core/util/error.h"
+
+namespace organsim {
+
+namespace {
+
+std::string fmt(double v, const char* spec = "%.4g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, spec, v);
+  return buf;
+}
+
+std::string kind_name(BlowupFinding::Kind k) {
+  switch (k) {
+    case BlowupFinding::Kind::NonFinite: return "non-finite position";
+    case BlowupFinding::Kind::Energy: return "kinetic energy growing with no work input";
+    case BlowupFinding::Kind::Strain: return "spring strain beyond the bound";
+    case BlowupFinding::Kind::Inversion: return "inverted tet";
+  }
+  return "";
+}
+
+}  // namespace
+
+double elastic_energy(const Model& model, const std::vector<Vec3>& x) {
+  double e = 0;
+  for (int32_t s = 0; s < model.nspring(); ++s) {
+    const auto [a, b] = model.spring_ends[s];
+    const double stretch = (x[b] - x[a]).norm() - model.spring_rest[s];
+    e += 0.5 * model.spring_k[s] * stretch * stretch;
+  }
+  if (model.has_volume()) {
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const double dv = signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) - model.tet_rest_volume[t];
+      e += 0.5 * model.tet_k[t] * dv * dv;
+    }
+  }
+  return e;
+}
+
+std::optional<BlowupFinding> check_geometry(const Model& model, const std::vector<Vec3>& x,
+                                            const BlowupMonitorOptions& options) {
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if (!x[i].allFinite()) {
+      BlowupFinding f;
+      f.kind = BlowupFinding::Kind::NonFinite;
+      f.point = model.input_of_internal[i];
+      f.detail = "position is not finite";
+      return f;
+    }
+  }
+  // The worst spring, if any is beyond the bound.
+  int32_t worst = -1;
+  double worst_strain = options.max_strain;
+  for (int32_t s = 0; s < model.nspring(); ++s) {
+    const auto [a, b] = model.spring_ends[s];
+    const double strain = ((x[b] - x[a]).norm() - model.spring_rest[s]) / model.spring_rest[s];
+    if (strain > worst_strain) {
+      worst_strain = strain;
+      worst = s;
+    }
+  }
+  if (worst >= 0) {
+    const auto [a, b] = model.spring_ends[worst];
+    BlowupFinding f;
+    f.kind = BlowupFinding::Kind::Strain;
+    // Name the end that moved more.
+    const bool a_moved_more =
+        (x[a] - model.rest_position[a]).squaredNorm() >= (x[b] - model.rest_position[b]).squaredNorm();
+    f.point = model.input_of_internal[a_moved_more ? a : b];
+    f.value = worst_strain;
+    f.detail = "spring " + std::to_string(model.input_of_internal[a]) + "-" + std::to_string(model.input_of_internal[b]) +
+               " stretched by " + fmt(100 * worst_strain, "%.0f") + " % (bound " +
+               fmt(100 * options.max_strain, "%.0f") + " %)";
+    return f;
+  }
+  if (options.check_inversion) {
+    int32_t worst_tet = -1;
+    double worst_ratio = 0;  // V / V_r, the most negative
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const double ratio = signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) / model.tet_rest_volume[t];
+      if (ratio < -options.max_inversion && (worst_tet < 0 || ratio < worst_ratio)) {
+        worst_tet = t;
+        worst_ratio = ratio;
+      }
+    }
+    if (worst_tet >= 0) {
+      const Tet& p = model.tet_points[worst_tet];
+      int32_t moved = p[0];
+      for (int32_t q : p)
+        if ((x[q] - model.rest_position[q]).squaredNorm() > (x[moved] - model.rest_position[moved]).squaredNorm()) moved = q;
+      BlowupFinding f;
+      f.kind = BlowupFinding::Kind::Inversion;
+      f.point = model.input_of_internal[moved];
+      f.value = worst_ratio * model.tet_rest_volume[worst_tet];
+      f.detail = "tet (" + std::to_string(model.input_of_internal[p[0]]) + ", " +
+                 std::to_string(model.input_of_internal[p[1]]) + ", " + std::to_string(model.input_of_internal[p[2]]) +
+                 ", " + std::to_string(model.input_of_internal[p[3]]) + ") inverted: volume " +
+                 fmt(worst_ratio, "%.3g") + " x its rest volume";
+      return f;
+    }
+  }
+  return std::nullopt;
+}
+
+BlowupMonitor::BlowupMonitor(BlowupMonitorOptions options, BlowupContext context)
+    : options_(options), context_(std::move(context)) {
+  if (options_.interval_ticks < 1)
+    throw Error(ErrorKind::Usage, "blow-up check interval must be >= 1 tick, got " +
+                                      std::to_string(options_.interval_ticks));
+}
+
+void BlowupMonitor::on_start(const Model& model, Backend& backend) {
+  backend.positions(x_start_);
+  x_prev_ = x_start_;
+  x_ = x_start_;
+  elastic_start_ = elastic_energy(model, x_start_);
+  tool_work_ = 0;
+  have_tool_ = false;
+  last_check_t_ = backend.time();
+  checks_ = 0;
+  // Floor: KE of the whole mass moving at 1e-3 of the model's size per second.
+  Vec3 lo = x_start_.empty() ? Vec3::Zero() : x_start_[0], hi = lo;
+  for (const Vec3& p : x_start_) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double v = 1e-3 * (hi - lo).norm();
+  energy_floor_ = 0.5 * model.total_mass() * v * v;
+}
+
+std::optional<BlowupFinding> BlowupMonitor::check_energy(const Model& model, double seconds) const {
+  if (!(seconds > 0)) return std::nullopt;
+  double ke = 0, gravity_work = 0, top = 0;
+  int32_t top_point = -1;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if (model.fixed[i]) continue;
+    const Vec3 v = (x_[i] - x_prev_[i]) / seconds;
+    const double e = 0.5 * model.mass[i] * v.squaredNorm();
+    ke += e;
+    if (e > top) {
+      top = e;
+      top_point = i;
+    }
+    gravity_work += model.mass[i] * model.gravity.dot(x_[i] - x_start_[i]);
+  }
+  const double budget = elastic_start_ + std::max(gravity_work, 0.0) + tool_work_;
+  if (ke <= options_.energy_factor * budget + energy_floor_) return std::nullopt;
+  BlowupFinding f;
+  f.kind = BlowupFinding::Kind::Energy;
+  f.point = top_point >= 0 ? model.input_of_internal[top_point] : -1;
+  f.value = ke;
+  f.detail = "kinetic energy " + fmt(ke) + " J exceeds what gravity and the tool put in (" + fmt(budget) +
+             " J, plus the initial elastic energy); the fastest point carries " + fmt(100 * top / ke, "%.0f") + " %";
+  return f;
+}
+
+void BlowupMonitor::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
+  // Tool work bound, every tick (cheap, no readback): |F| |dc|.
+  if (info.tool_active) {
+    if (have_tool_) tool_work_ += info.reaction.force.norm() * (info.tool_center - last_tool_).norm();
+    last_tool_ = info.tool_center;
+    have_tool_ = true;
+  }
+  if ((info.tick + 1) % options_.interval_ticks != 0) return;
+  std::swap(x_prev_, x_);
+  backend.positions(x_);
+  ++checks_;
+  std::optional<BlowupFinding> finding = check_geometry(model, x_, options_);
+  if (finding && finding->kind != BlowupFinding::Kind::NonFinite) {
+    // A growing mode shows as energy first; report that as the cause when it holds.
+    if (auto energy = check_energy(model, info.t - last_check_t_)) finding = energy;
+  } else if (!finding) {
+    finding = check_energy(model, info.t - last_check_t_);
+  }
+  last_check_t_ = info.t;
+  if (finding) throw Error(ErrorKind::Numerical, describe(model, *finding, info.t, info));
+}
+
+std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, double t, const TickInfo& info) const {
+  std::string msg = "run stopped at t = " + fmt(t, "%.6g") + " s: " + kind_name(f.kind) + " at point " +
+                    std::to_string(f.point) + " (input numbering): " + f.detail + ". Likely cause: ";
+  const auto& st = context_.stability;
+  const int32_t internal = f.point >= 0 ? model.internal_of_input[f.point] : -1;
+  bool near_tool = false;
+  if (internal >= 0 && info.tool_active && context_.tool_radius > 0 && x_.size() == model.rest_position.size() &&
+      x_[internal].allFinite())
+    near_tool = (x_[internal] - info.tool_center).norm() < 2 * context_.tool_radius;
+  bool limiting = false;
+  if (st)
+    for (const auto& p : st->mode_points) limiting |= p.point == f.point;
+  if (st && context_.dt > st->dt_crit) {
+    msg += "time.dt = " + fmt(context_.dt) + " s exceeds dt_crit = " + fmt(st->dt_crit) +
+           " s, so the stiffest mode grows every step; use a smaller dt or more substeps.";
+  } else if (near_tool && f.kind == BlowupFinding::Kind::Inversion) {
+    msg += "the tool pushed the material through itself (penetration deeper than the tets can resist); move the "
+           "tool less deep or slower, or raise material.volume_modulus.";
+  } else if (near_tool) {
+    msg += "stiff or fast tool contact (tool.contact_stiffness = " + fmt(context_.tool_contact_stiffness) +
+           " N/m) near this point; lower it, slow the tool, or use a smaller dt.";
+  } else if (limiting) {
+    msg += "this point limits the critical step (stiff springs or slivers around it, see --plan); use a smaller "
+           "dt or remesh.";
+  } else if (f.kind == BlowupFinding::Kind::Inversion || f.kind == BlowupFinding::Kind::Strain) {
+    msg += "a deformation beyond what linear springs represent (they are realistic below about 10 % strain); "
+           "reduce the load, or raise material.volume_modulus.";
+  } else {
+    msg += "a numerically unstable step";
+    if (st) msg += " (dt_crit = " + fmt(st->dt_crit) + " s at rest; deformation can lower it)";
+    msg += "; use a smaller dt.";
+  }
+  return msg;
+}
+
+double measure_check_ms(const Model& model, Backend& backend, int repeats) {
+  BlowupMonitor monitor({}, {});
+  monitor.on_start(model, backend);
+  std::vector<double> ms;
+  TickInfo info;
+  for (int i = 0; i < std::max(repeats, 1); ++i) {
+    info.tick = i;
+    info.t = backend.time() + (i + 1) * 1e-3;  // positions do not move: no finding
+    const auto start = std::chrono::steady_clock::now();
+    monitor.on_tick(model, backend, info);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+  return ms[ms.size() / 2];
+}
+
+}  // namespace organsim

@@ -1,0 +1,397 @@
+#include "core/stability/critical_step.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "core/util/error.h"
+
+namespace organsim {
+
+namespace {
+
+// Stiffness at rest in a matrix-free form: springs keep their unit rest
+// direction, tets the gradient of their signed volume.
+struct RestStiffness {
+  std::vector<Vec3> spring_dir;               // unit rest direction of each spring (nspring)
+  std::vector<std::array<Vec3, 4>> tet_grad;  // dV/dx_i at rest (ntet x 4)
+  std::vector<double> tool_k;                 // k_c on the points the tool may touch, else 0 (npoint)
+};
+
+// Gradient of the signed volume V = (x1-x0).((x2-x0)x(x3-x0))/6.
+std::array<Vec3, 4> volume_gradient(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3) {
+  const Vec3 a = x1 - x0, b = x2 - x0, c = x3 - x0;
+  std::array<Vec3, 4> g;
+  g[1] = b.cross(c) / 6.0;
+  g[2] = c.cross(a) / 6.0;
+  g[3] = a.cross(b) / 6.0;
+  g[0] = -(g[1] + g[2] + g[3]);
+  return g;
+}
+
+RestStiffness rest_stiffness(const Model& model, const CriticalStepOptions& options) {
+  RestStiffness k;
+  const auto& X = model.rest_position;
+  k.spring_dir.resize(model.nspring());
+  for (int32_t s = 0; s < model.nspring(); ++s) {
+    const auto [a, b] = model.spring_ends[s];
+    const Vec3 l = X[b] - X[a];
+    const double n = l.norm();
+    k.spring_dir[s] = n > 0 ? Vec3(l / n) : Vec3::Zero();  // coincident ends: no direction, no stiffness
+  }
+  if (model.has_volume()) {
+    k.tet_grad.resize(model.ntet());
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      k.tet_grad[t] = volume_gradient(X[p[0]], X[p[1]], X[p[2]], X[p[3]]);
+    }
+  }
+  k.tool_k.assign(model.npoint(), 0.0);
+  if (options.tool_contact_stiffness > 0) {
+    if (!options.tool_may_touch.empty() && options.tool_may_touch.size() != static_cast<size_t>(model.npoint()))
+      throw Error(ErrorKind::Usage, "estimate_critical_step: tool_may_touch has " +
+                                        std::to_string(options.tool_may_touch.size()) + " entries, expected " +
+                                        std::to_string(model.npoint()));
+    for (int32_t i = 0; i < model.npoint(); ++i)
+      if (options.tool_may_touch.empty() || options.tool_may_touch[i]) k.tool_k[i] = options.tool_contact_stiffness;
+  }
+  return k;
+}
+
+// Which terms of K to apply (for the per-term shares of the top mode).
+enum Terms { kSprings = 1, kVolume = 2, kTool = 4, kAll = 7 };
+
+// out = K x for displacements x (fixed points must be zero in x; their rows
+// of out are set to zero).
+void apply_stiffness(const Model& model, const RestStiffness& k, const std::vector<Vec3>& x,
+                     std::vector<Vec3>& out, int terms = kAll) {
+  std::fill(out.begin(), out.end(), Vec3::Zero());
+  if (terms & kSprings) {
+    for (int32_t s = 0; s < model.nspring(); ++s) {
+      const auto [a, b] = model.spring_ends[s];
+      const Vec3& u = k.spring_dir[s];
+      // Energy k/2 (u.(x_b - x_a))^2.
+      const Vec3 f = model.spring_k[s] * u.dot(x[b] - x[a]) * u;
+      out[a] -= f;
+      out[b] += f;
+    }
+  }
+  if ((terms & kVolume) && model.has_volume()) {
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const auto& g = k.tet_grad[t];
+      // Energy k_v/2 (V - V_r)^2: at rest only the Gauss-Newton part k_v g g^T remains.
+      const double dv = g[0].dot(x[p[0]]) + g[1].dot(x[p[1]]) + g[2].dot(x[p[2]]) + g[3].dot(x[p[3]]);
+      const double s = model.tet_k[t] * dv;
+      for (int i = 0; i < 4; ++i) out[p[i]] += s * g[i];
+    }
+  }
+  if (terms & kTool)
+    for (int32_t i = 0; i < model.npoint(); ++i) out[i] += k.tool_k[i] * x[i];
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (model.inv_mass[i] <= 0) out[i].setZero();
+}
+
+// Deterministic pseudo-random start vector in [-1, 1] (splitmix64).
+double start_component(uint64_t i) {
+  uint64_t z = i + 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+}
+
+double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double s = 0;
+  for (size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
+  return s;
+}
+
+// Gershgorin with 3x3 blocks: for the block matrix M^-1 K, every eigenvalue
+// lies below max_i (|K_ii| + sum_j |K_ij|) / m_i with spectral norms; we
+// bound the norms by their terms (|k u u^T| = k, |k_v g_i g_j^T| = k_v |g_i| |g_j|,
+// |k_c I| = k_c). Fixed neighbours drop out of the row (their columns are gone).
+std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k, int terms = kAll) {
+  const int32_t n = model.npoint();
+  std::vector<double> row(n, 0.0);
+  auto free = [&](int32_t i) { return model.inv_mass[i] > 0; };
+  for (int32_t s = 0; s < model.nspring(); ++s) {
+    const auto [a, b] = model.spring_ends[s];
+    const double ks = model.spring_k[s];
+    row[a] += ks * (free(b) ? 2 : 1);
+    row[b] += ks * (free(a) ? 2 : 1);
+  }
+  if ((terms & kVolume) && model.has_volume()) {
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const auto& g = k.tet_grad[t];
+      double sum_free = 0;
+      for (int j = 0; j < 4; ++j)
+        if (free(p[j])) sum_free += g[j].norm();
+      for (int i = 0; i < 4; ++i) row[p[i]] += model.tet_k[t] * g[i].norm() * sum_free;
+    }
+  }
+  for (int32_t i = 0; i < n; ++i)
+    row[i] = free(i) ? (row[i] + ((terms & kTool) ? k.tool_k[i] : 0.0)) * model.inv_mass[i] : 0.0;
+  return row;
+}
+
+// Smallest interior dihedral angle of a tet, degrees.
+double min_dihedral_deg(const std::array<Vec3, 4>& x) {
+  double best = 180;
+  static const int kEdges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+  for (const auto& e : kEdges) {
+    const Vec3 axis = (x[e[1]] - x[e[0]]).normalized();
+    Vec3 p = x[e[2]] - x[e[0]], q = x[e[3]] - x[e[0]];
+    p -= p.dot(axis) * axis;
+    q -= q.dot(axis) * axis;
+    const double np = p.norm(), nq = q.norm();
+    if (np <= 0 || nq <= 0) return 0;
+    best = std::min(best, std::acos(std::clamp(p.dot(q) / (np * nq), -1.0, 1.0)) * 180.0 / M_PI);
+  }
+  return best;
+}
+
+SliverTet describe_tet(const Model& model, int32_t t) {
+  const Tet& p = model.tet_points[t];
+  std::array<Vec3, 4> x;
+  for (int i = 0; i < 4; ++i) x[i] = model.rest_position[p[i]];
+  double lmax = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) lmax = std::max(lmax, (x[j] - x[i]).norm());
+  SliverTet s;
+  for (int i = 0; i < 4; ++i) s.points[i] = model.input_of_internal[p[i]];
+  s.volume = model.tet_rest_volume[t];
+  s.quality = lmax > 0 ? 6.0 * std::sqrt(2.0) * s.volume / (lmax * lmax * lmax) : 0;
+  s.min_dihedral_deg = min_dihedral_deg(x);
+  return s;
+}
+
+// Indices of the `count` largest values (ties by index, deterministic).
+std::vector<int32_t> largest(const std::vector<double>& values, int32_t count) {
+  std::vector<int32_t> idx(values.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  const size_t k = std::min(idx.size(), static_cast<size_t>(std::max(count, 0)));
+  std::partial_sort(idx.begin(), idx.begin() + k, idx.end(), [&](int32_t a, int32_t b) {
+    return values[a] != values[b] ? values[a] > values[b] : a < b;
+  });
+  idx.resize(k);
+  return idx;
+}
+
+struct PowerResult {
+  double lambda = 0;
+  std::vector<Vec3> y;  // unit top eigenvector estimate of W (npoint, zero at fixed points)
+  int32_t iterations = 0;
+  bool converged = false;
+  double residual = 0;  // |W y - lambda y| / lambda
+};
+
+// Power iteration on W = M^-1/2 K M^-1/2 (K restricted to `terms`) over the
+// free points: y unit, x = M^-1/2 y, W y = M^-1/2 K x. The Rayleigh quotient
+// y.Wy rises to lambda_max; stop when it changed by less than the tolerance
+// over the last 20 iterations.
+PowerResult power_iteration(const Model& model, const RestStiffness& k, const std::vector<double>& inv_sqrt_m,
+                            int terms, const CriticalStepOptions& options, double upper_bound) {
+  const int32_t n = model.npoint();
+  PowerResult r;
+  r.y.resize(n);
+  std::vector<Vec3> x(n), kx(n), wy(n);
+  for (int32_t i = 0; i < n; ++i)
+    r.y[i] = inv_sqrt_m[i] > 0 ? Vec3(start_component(3 * i), start_component(3 * i + 1), start_component(3 * i + 2))
+                               : Vec3::Zero();
+  const double norm = std::sqrt(dot(r.y, r.y));
+  if (!(norm > 0) || !(upper_bound > 0)) return r;
+  for (auto& v : r.y) v /= norm;
+  std::vector<double> history;
+  const int32_t window = 20;
+  for (int32_t it = 0; it < options.max_iterations; ++it) {
+    for (int32_t i = 0; i < n; ++i) x[i] = inv_sqrt_m[i] * r.y[i];
+    apply_stiffness(model, k, x, kx, terms);
+    for (int32_t i = 0; i < n; ++i) wy[i] = inv_sqrt_m[i] * kx[i];
+    r.lambda = dot(r.y, wy);
+    history.push_back(r.lambda);
+    r.iterations = it + 1;
+    double res2 = 0;
+    for (int32_t i = 0; i < n; ++i) res2 += (wy[i] - r.lambda * r.y[i]).squaredNorm();
+    r.residual = r.lambda > 0 ? std::sqrt(res2) / r.lambda : 0;
+    if (it + 1 >= options.min_iterations && it >= window &&
+        std::abs(r.lambda - history[it - window]) <= options.tolerance * r.lambda) {
+      r.converged = true;
+      break;
+    }
+    const double wn = std::sqrt(dot(wy, wy));
+    if (!(wn > 0)) break;  // no stiffness on the free points
+    for (int32_t i = 0; i < n; ++i) r.y[i] = wy[i] / wn;
+  }
+  r.lambda = std::max(r.lambda, 0.0);
+  return r;
+}
+
+}  // namespace
+
+double critical_step_for_mode(double omega2, double damping_rate) {
+  if (!(omega2 > 0)) return std::numeric_limits<double>::infinity();
+  // Root of omega^2 h^2 + 2 a h - 4 = 0, written without cancellation.
+  return 4 / (damping_rate + std::sqrt(damping_rate * damping_rate + 4 * omega2));
+}
+
+double damped_critical_step(double omega, double spring_damping_time, double viscous_damping) {
+  if (!(omega > 0)) return std::numeric_limits<double>::infinity();
+  const double xi = (spring_damping_time * omega * omega + viscous_damping) / (2 * omega);
+  return (2 / omega) * (std::sqrt(1 + xi * xi) - xi);
+}
+
+StabilityReport estimate_critical_step(const Model& model, const CriticalStepOptions& options) {
+  const int32_t n = model.npoint();
+  StabilityReport r;
+  r.viscous_damping = model.viscous_damping;
+  // c = d / k from the springs themselves (the largest, to stay safe), so
+  // hand-built models with their own dampers are covered too.
+  r.spring_damping_time = 0;
+  for (int32_t s = 0; s < model.nspring(); ++s)
+    if (model.spring_k[s] > 0) r.spring_damping_time = std::max(r.spring_damping_time, model.spring_d[s] / model.spring_k[s]);
+  r.tool_contact_stiffness = options.tool_contact_stiffness;
+
+  const RestStiffness k = rest_stiffness(model, options);
+  std::vector<double> inv_sqrt_m(n, 0.0);
+  for (int32_t i = 0; i < n; ++i) {
+    if (model.inv_mass[i] > 0) {
+      inv_sqrt_m[i] = std::sqrt(model.inv_mass[i]);
+      ++r.free_points;
+      if (k.tool_k[i] > 0) ++r.tool_points;
+    }
+  }
+
+  // Gershgorin bound and its rows.
+  const std::vector<double> rows = gershgorin_rows(model, k);
+  r.lambda_gershgorin = rows.empty() ? 0 : *std::max_element(rows.begin(), rows.end());
+
+  // Candidate 1: the top mode of the full stiffness, with its own damping
+  // (its spring part c y^T W_springs y plus the drag).
+  const PowerResult top = power_iteration(model, k, inv_sqrt_m, kAll, options, r.lambda_gershgorin);
+  r.iterations = top.iterations;
+  r.converged = top.converged;
+  r.residual = top.residual;
+  r.lambda_max = top.lambda;
+  r.omega_max = std::sqrt(r.lambda_max);
+  const std::vector<Vec3>& y = top.y;
+  std::vector<Vec3> x(n), kx(n);
+  const auto rayleigh = [&](const std::vector<Vec3>& v, int terms) {
+    for (int32_t i = 0; i < n; ++i) x[i] = inv_sqrt_m[i] * v[i];
+    apply_stiffness(model, k, x, kx, terms);
+    return dot(x, kx);
+  };
+  if (r.lambda_max > 0) {
+    const double s = rayleigh(y, kSprings), v = rayleigh(y, kVolume), t = rayleigh(y, kTool), total = s + v + t;
+    if (total > 0) {
+      r.share_springs = s / total;
+      r.share_volume = v / total;
+      r.share_tool = t / total;
+    }
+  }
+  const double c = r.spring_damping_time, alpha = r.viscous_damping;
+  const double top_rate = c * r.share_springs * r.lambda_max + alpha;
+  r.damping_ratio = r.omega_max > 0 ? top_rate / (2 * r.omega_max) : 0;
+  r.dt_crit_undamped = r.omega_max > 0 ? 2 / r.omega_max : std::numeric_limits<double>::infinity();
+  r.dt_crit = critical_step_for_mode(r.lambda_max, top_rate);
+  // Candidate 2: the top mode of the damped part (springs): the most damped
+  // stiff mode, whose damping may shrink the step more than candidate 1's.
+  r.lambda_springs = r.lambda_max;
+  if (c > 0 && r.share_springs < 0.999) {
+    const PowerResult sp = power_iteration(model, k, inv_sqrt_m, kSprings, options, r.lambda_gershgorin);
+    r.lambda_springs = sp.lambda;
+    if (sp.lambda > 0) {
+      const double omega2 = rayleigh(sp.y, kAll);
+      r.dt_crit = std::min(r.dt_crit, critical_step_for_mode(omega2, c * sp.lambda + alpha));
+    }
+  }
+  // Rigorous for exact eigenvalues: every mode has omega^2 <= lambda_max and
+  // damping rate <= c lambda_springs + alpha.
+  r.dt_crit_bound = critical_step_for_mode(r.lambda_max, c * r.lambda_springs + alpha);
+  const std::vector<double> spring_rows = gershgorin_rows(model, k, kSprings);
+  const double spring_bound = spring_rows.empty() ? 0 : *std::max_element(spring_rows.begin(), spring_rows.end());
+  r.dt_crit_gershgorin = critical_step_for_mode(r.lambda_gershgorin, c * spring_bound + alpha);
+
+
+  // Limiting points: the top mode's largest kinetic-energy shares m_i |x_i|^2 = |y_i|^2,
+  // and the largest Gershgorin rows.
+  std::vector<double> share(n);
+  for (int32_t i = 0; i < n; ++i) share[i] = y[i].squaredNorm();
+  auto point = [&](int32_t i) {
+    LimitingPoint p;
+    p.point = model.input_of_internal[i];
+    p.position = model.rest_position[i];
+    p.mode_share = r.lambda_max > 0 ? share[i] : 0;
+    p.row_bound = rows[i];
+    return p;
+  };
+  std::vector<uint8_t> limiting(n, 0);
+  // Points with under 1 % of the largest share are not what limits the step.
+  const double top_share = share.empty() ? 0 : *std::max_element(share.begin(), share.end());
+  if (r.lambda_max > 0)
+    for (int32_t i : largest(share, options.report_points)) {
+      if (share[i] < 0.01 * top_share) break;
+      r.mode_points.push_back(point(i));
+      limiting[i] = 1;
+    }
+  for (int32_t i : largest(rows, options.report_points)) {
+    if (rows[i] <= 0) break;
+    r.gershgorin_points.push_back(point(i));
+    limiting[i] = 1;
+  }
+
+  // Slivers: the worst-shaped tets touching a limiting point.
+  std::vector<int32_t> tets;
+  for (int32_t t = 0; t < model.ntet(); ++t) {
+    const Tet& p = model.tet_points[t];
+    if (limiting[p[0]] || limiting[p[1]] || limiting[p[2]] || limiting[p[3]]) tets.push_back(t);
+  }
+  std::vector<SliverTet> described;
+  for (int32_t t : tets) described.push_back(describe_tet(model, t));
+  std::sort(described.begin(), described.end(),
+            [](const SliverTet& a, const SliverTet& b) { return a.quality < b.quality; });
+  if (described.size() > static_cast<size_t>(options.report_tets)) described.resize(options.report_tets);
+  r.slivers = std::move(described);
+  return r;
+}
+
+std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool) {
+  const double reach = 2 * std::max(tool.radius, tool.mode == ToolMode::Pull ? tool.grasp_radius : 0.0);
+  std::vector<uint8_t> near(model.npoint(), 0);
+  const auto& kf = tool.keyframes;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    const Vec3& x = model.rest_position[i];
+    double d = kf.empty() ? std::numeric_limits<double>::infinity() : (x - kf[0].position).norm();
+    for (size_t j = 1; j < kf.size(); ++j) {
+      const Vec3 a = kf[j - 1].position, ab = kf[j].position - a;
+      const double len2 = ab.squaredNorm();
+      const double s = len2 > 0 ? std::clamp((x - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+      d = std::min(d, (x - (a + s * ab)).norm());
+    }
+    near[i] = d <= reach;
+  }
+  return near;
+}
+
+CriticalStepOptions critical_step_options(const Model& model, const ToolSpec* tool) {
+  CriticalStepOptions o;
+  if (tool) {
+    o.tool_contact_stiffness = tool->contact_stiffness;
+    o.tool_may_touch = points_near_tool_path(model, *tool);
+  }
+  return o;
+}
+
+StepSuggestion suggest_step(const StabilityReport& report, double tick, double safety) {
+  StepSuggestion s;
+  s.tick = tick;
+  const double limit = safety * report.dt_crit;
+  s.substeps = std::isfinite(limit) && limit > 0 ? std::max<int32_t>(1, static_cast<int32_t>(std::ceil(tick / limit)))
+                                                 : 1;
+  s.dt = tick / s.substeps;
+  return s;
+}
+
+}  // namespace organsim

@@ -1,0 +1,131 @@
+#pragma once
+// The critical time step of a Model at rest, before a run (DESIGN.md section 6).
+//
+// Position Verlet is central differences: undamped it is stable while
+// dt < 2 / omega_max, omega_max^2 = largest eigenvalue of M^-1 K with K the
+// stiffness at rest (springs k u u^T, volume k_v g_i g_j^T, tool contact).
+// We estimate omega_max^2 by power iteration on the symmetric form
+// W = M^-1/2 K M^-1/2 over the free points and bound it from above by
+// Gershgorin. Damping then shrinks the step (see damped_critical_step).
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "core/model/model.h"
+#include "core/sim/tool.h"
+
+namespace organsim {
+
+struct CriticalStepOptions {
+  // Tool contact adds at most k_c (push penalty along the normal, pull
+  // attachment springs isotropically) to the diagonal block of each point it
+  // touches. We add k_c I to every point that *may* be touched: an upper
+  // bound on K, so dt_crit stays on the safe side.
+  double tool_contact_stiffness = 0;      // N/m; 0 = no tool term
+  std::vector<uint8_t> tool_may_touch;    // internal numbering (npoint); empty = every free point
+  int32_t max_iterations = 3000;
+  int32_t min_iterations = 50;
+  // Converged when the Rayleigh quotient changed by less than this (relative)
+  // over the last 20 iterations.
+  double tolerance = 1e-5;
+  int32_t report_points = 5;  // limiting points listed
+  int32_t report_tets = 5;    // slivers listed
+};
+
+// A point that limits the step, in the user's (input) numbering.
+struct LimitingPoint {
+  int32_t point = -1;      // input numbering
+  Vec3 position{0, 0, 0};  // rest position, m
+  double mode_share = 0;   // share of the top mode's kinetic energy m_i |x_i|^2 (0..1)
+  double row_bound = 0;    // Gershgorin row bound of M^-1 K at this point, 1/s^2
+};
+
+// A badly shaped tet at a limiting point.
+struct SliverTet {
+  std::array<int32_t, 4> points{};  // input numbering
+  double volume = 0;                // rest volume, m^3
+  double quality = 0;               // 6 sqrt(2) V / l_max^3: 1 regular, -> 0 flat
+  double min_dihedral_deg = 0;      // smallest dihedral angle, degrees
+};
+
+struct StabilityReport {
+  int32_t free_points = 0;
+  double lambda_max = 0;          // estimated largest eigenvalue of M^-1 K, 1/s^2
+  double lambda_gershgorin = 0;   // Gershgorin upper bound on it, 1/s^2
+  double omega_max = 0;           // sqrt(lambda_max), rad/s
+  int32_t iterations = 0;         // power iterations done
+  bool converged = false;
+  double residual = 0;            // |W y - lambda y| / lambda for the final unit y
+  // Shares of the top mode's stiffness y^T W y from each term (sum 1).
+  double share_springs = 0, share_volume = 0, share_tool = 0;
+
+  double lambda_springs = 0;       // largest eigenvalue of M^-1 K_springs (the damped part), 1/s^2
+  // Damping of the top mode: xi = (c s omega^2 + alpha) / (2 omega), with c the
+  // spring damping time (d = c k), s the springs' share of the mode, alpha the drag.
+  double spring_damping_time = 0;  // s
+  double viscous_damping = 0;      // 1/s
+  double tool_contact_stiffness = 0;  // N/m, as included
+  int32_t tool_points = 0;         // points the tool term was applied to
+  double damping_ratio = 0;        // xi
+
+  double dt_crit_undamped = 0;     // 2 / omega_max, s
+  // With damping: the step `run` enforces, s. The smaller of two candidate
+  // modes' limits: the top mode of K with its own damping, and the top mode
+  // of the springs (the damped part) with its frequency under the full K.
+  double dt_crit = 0;
+  double dt_crit_bound = 0;        // every mode at once: omega^2 = lambda_max, rate c lambda_springs + alpha, s
+  double dt_crit_gershgorin = 0;   // the same from the Gershgorin bound: a guaranteed-stable step, s
+
+  std::vector<LimitingPoint> mode_points;        // largest components of the top mode
+  std::vector<LimitingPoint> gershgorin_points;  // largest Gershgorin rows
+  std::vector<SliverTet> slivers;                // worst tets at those points
+};
+
+// Estimates dt_crit of `model` at rest. Deterministic (fixed start vector).
+StabilityReport estimate_critical_step(const Model& model, const CriticalStepOptions& options = {});
+
+// Largest stable step of position Verlet with a backward-difference damper
+// (as the backends integrate it) for a mode of frequency omega (rad/s):
+//   x+ = x + (1 - a h)(x - x-) - h^2 w^2 x - h c w^2 (x - x-)
+// is stable iff h^2 w^2 + 2 h (c w^2 + a) < 4, i.e.
+//   h < (2 / w) (sqrt(1 + xi^2) - xi),  xi = (c w^2 + a) / (2 w).
+// The same bound holds for the whole model when every mode's damping is at
+// most c w^2 + a (spring dampers d = c k are c times part of K).
+double damped_critical_step(double omega, double spring_damping_time, double viscous_damping);
+
+// The general form: a mode with omega^2 (1/s^2) and damping rate a = y^T M^-1 D y
+// (1/s; D the dampers, plus the drag alpha) is stable iff omega^2 h^2 + 2 a h < 4.
+double critical_step_for_mode(double omega2, double damping_rate);
+
+// Points whose rest position lies within reach of the tool's path (keyframe
+// polyline), internal numbering: radius (or grasp radius for pull) plus one
+// more radius of margin for the material the tool drags along.
+std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool);
+
+// Options for a scene: the tool's contact stiffness on the points near its
+// path (no tool term when `tool` is null).
+CriticalStepOptions critical_step_options(const Model& model, const ToolSpec* tool);
+
+// A stable step that keeps the haptic tick: substeps' = ceil(tick / (safety dt_crit)),
+// dt' = tick / substeps'.
+struct StepSuggestion {
+  double dt = 0;          // s
+  int32_t substeps = 0;
+  double tick = 0;        // s, = dt * substeps
+};
+StepSuggestion suggest_step(const StabilityReport& report, double tick, double safety = 0.9);
+
+// Before a run: throws Error(Numerical) when dt > report.dt_crit, giving
+// dt_crit, the limiting points and the suggested dt and substeps. With
+// allow_unstable it returns the warning text instead (empty when dt is fine).
+std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable);
+
+// For the force log's meta ("stability") and the study.
+nlohmann::json to_json(const StabilityReport& report);
+// Multi-line text for `run --plan`.
+std::string format_stability_report(const StabilityReport& report, double dt, int32_t substeps);
+
+}  // namespace organsim

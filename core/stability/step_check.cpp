@@ -1,0 +1,116 @@
+// The pre-run step check and how a StabilityReport is shown (text, JSON).
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/stability/critical_step.h"
+#include "core/util/error.h"
+
+namespace organsim {
+
+namespace {
+
+std::string fmt(double v, const char* spec = "%.4g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, spec, v);
+  return buf;
+}
+
+std::string point_list(const std::vector<LimitingPoint>& points, size_t count) {
+  std::string s;
+  for (size_t i = 0; i < std::min(count, points.size()); ++i) s += (i ? ", " : "") + std::to_string(points[i].point);
+  return s;
+}
+
+// What dominates the top mode, in words.
+std::string dominant_term(const StabilityReport& r) {
+  if (r.share_volume >= r.share_springs && r.share_volume >= r.share_tool)
+    return "volume term (slivers raise it: K |dV/dx|^2 / V)";
+  if (r.share_tool >= r.share_springs) return "tool contact stiffness";
+  return "springs";
+}
+
+nlohmann::json point_json(const LimitingPoint& p) {
+  return {{"point", p.point},
+          {"position", {p.position.x(), p.position.y(), p.position.z()}},
+          {"mode_share", p.mode_share},
+          {"row_bound", p.row_bound}};
+}
+
+}  // namespace
+
+std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable) {
+  if (!(dt > report.dt_crit)) return {};
+  const StepSuggestion s = suggest_step(report, dt * substeps);
+  std::string msg = "time.dt = " + fmt(dt) + " s exceeds the critical step dt_crit = " + fmt(report.dt_crit) +
+                    " s of this model (limited by the " + dominant_term(report) + " at points " +
+                    point_list(report.mode_points, 3) + ", input numbering); use time.dt = " + fmt(s.dt) +
+                    " s with time.substeps = " + std::to_string(s.substeps) + " to keep the haptic tick of " +
+                    fmt(s.tick) + " s";
+  if (!allow_unstable) throw Error(ErrorKind::Numerical, msg + ", or pass --allow-unstable to run anyway");
+  return "warning: " + msg +
+         ". Running anyway (--allow-unstable): expect the top mode to grow every step until the blow-up "
+         "check stops the run.";
+}
+
+nlohmann::json to_json(const StabilityReport& r) {
+  nlohmann::json j;
+  j["dt_crit"] = r.dt_crit;
+  j["dt_crit_undamped"] = r.dt_crit_undamped;
+  j["dt_crit_bound"] = r.dt_crit_bound;
+  j["dt_crit_gershgorin"] = r.dt_crit_gershgorin;
+  j["lambda_springs"] = r.lambda_springs;
+  j["omega_max"] = r.omega_max;
+  j["lambda_max"] = r.lambda_max;
+  j["lambda_gershgorin"] = r.lambda_gershgorin;
+  j["damping_ratio"] = r.damping_ratio;
+  j["spring_damping_time"] = r.spring_damping_time;
+  j["viscous_damping"] = r.viscous_damping;
+  j["tool_contact_stiffness"] = r.tool_contact_stiffness;
+  j["tool_points"] = r.tool_points;
+  j["free_points"] = r.free_points;
+  j["power_iterations"] = r.iterations;
+  j["converged"] = r.converged;
+  j["residual"] = r.residual;
+  j["mode_share"] = {{"springs", r.share_springs}, {"volume", r.share_volume}, {"tool", r.share_tool}};
+  j["limiting_points"] = nlohmann::json::array();
+  for (const auto& p : r.mode_points) j["limiting_points"].push_back(point_json(p));
+  j["gershgorin_points"] = nlohmann::json::array();
+  for (const auto& p : r.gershgorin_points) j["gershgorin_points"].push_back(point_json(p));
+  j["slivers"] = nlohmann::json::array();
+  for (const auto& s : r.slivers)
+    j["slivers"].push_back({{"points", s.points},
+                            {"volume", s.volume},
+                            {"quality", s.quality},
+                            {"min_dihedral_deg", s.min_dihedral_deg}});
+  return j;
+}
+
+std::string format_stability_report(const StabilityReport& r, double dt, int32_t substeps) {
+  std::ostringstream o;
+  o << "stability (at rest):\n";
+  o << "  dt_crit " << fmt(r.dt_crit) << " s (undamped 2/omega_max " << fmt(r.dt_crit_undamped)
+    << " s, damping ratio of the top mode " << fmt(r.damping_ratio, "%.3g") << ")\n"
+    << "  bounds: all modes at once " << fmt(r.dt_crit_bound) << " s, guaranteed by Gershgorin "
+    << fmt(r.dt_crit_gershgorin) << " s\n";
+  o << "  omega_max " << fmt(r.omega_max) << " rad/s from " << r.iterations << " power iterations"
+    << (r.converged ? "" : " (NOT converged)") << "; top mode: springs " << fmt(100 * r.share_springs, "%.0f")
+    << " %, volume " << fmt(100 * r.share_volume, "%.0f") << " %, tool " << fmt(100 * r.share_tool, "%.0f") << " %\n";
+  if (r.tool_points > 0)
+    o << "  tool contact " << fmt(r.tool_contact_stiffness) << " N/m counted on " << r.tool_points
+      << " points near the tool path\n";
+  o << "  limiting points (input numbering): " << point_list(r.mode_points, r.mode_points.size())
+    << "; largest Gershgorin rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
+  for (const auto& s : r.slivers)
+    o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3]
+      << "): quality " << fmt(s.quality, "%.3f") << ", min dihedral " << fmt(s.min_dihedral_deg, "%.1f")
+      << " deg, volume " << fmt(s.volume) << " m^3\n";
+  const StepSuggestion s = suggest_step(r, dt * substeps);
+  o << "  dt " << fmt(dt) << " s is " << fmt(dt / r.dt_crit, "%.2f") << " x dt_crit: "
+    << (dt > r.dt_crit ? "UNSTABLE, refused without --allow-unstable" : "stable") << "; suggested dt " << fmt(s.dt)
+    << " s x " << s.substeps << " substeps for the tick of " << fmt(s.tick) << " s\n";
+  return o.str();
+}
+
+}  // namespace organsim

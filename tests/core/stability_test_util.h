@@ -1,0 +1,72 @@
+#pragma once
+// Helpers for the stability tests: small models and an empirical stability
+// probe (does a tiny random perturbation grow under the CPU backend?).
+#include <cmath>
+#include <random>
+
+#include "core/model/model.h"
+#include "core/sim/cpu_backend.h"
+#include "tests/core/test_models.h"
+
+namespace organsim::testing {
+
+// A box of n^3 cubes (6 tets each), edge `size` m, bottom face (z = 0) fixed.
+inline Model stability_box(int n, double size, const Material& material, double jitter = 0, unsigned seed = 1) {
+  TetMesh mesh = jitter > 0 ? jittered_box(n, size, jitter, seed)
+                            : make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(size), n, n, n);
+  ModelOptions options;
+  FixedSelector bottom;
+  bottom.kind = FixedSelector::Kind::Plane;
+  bottom.point = Vec3(0, 0, 1e-9 * size);
+  bottom.normal = Vec3(0, 0, -1);  // fixed where z <= 0
+  options.fixed.push_back(bottom);
+  return build_model(mesh, material, options);
+}
+
+inline Material undamped_material(double young = 3000, double volume_modulus = 0) {
+  Material m;
+  m.density = 1000;
+  m.young_modulus = young;
+  m.spring_damping_time = 0;
+  m.viscous_damping = 0;
+  m.volume_modulus = volume_modulus;
+  return m;
+}
+
+// True when a perturbation of relative size 1e-6 of the model's extent grows
+// by 1e4 (or turns non-finite) within `steps` steps of dt.
+inline bool perturbation_grows(const Model& model, double dt, int steps = 3000) {
+  auto backend = make_cpu_backend(model, {});
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double scale = 1e-6 * (model.rest_position.front() - model.rest_position.back()).norm();
+  std::vector<Vec3> x = model.rest_position;
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (!model.fixed[i]) x[i] += scale * Vec3(u(rng), u(rng), u(rng));
+  backend->set_state(x, x);
+  TickRequest request;
+  request.dt = dt;
+  request.substeps = 50;
+  std::vector<Vec3> pos;
+  for (int s = 0; s < steps; s += request.substeps) {
+    backend->tick(request);
+    backend->positions(pos);
+    for (int32_t i = 0; i < model.npoint(); ++i) {
+      const double d = (pos[i] - model.rest_position[i]).norm();
+      if (!std::isfinite(d) || d > 1e4 * scale) return true;
+    }
+  }
+  return false;
+}
+
+// The smallest dt at which the perturbation grows, by bisection between
+// `stable` and `unstable` to a relative width of `tolerance`.
+inline double empirical_threshold(const Model& model, double stable, double unstable, double tolerance = 2e-3) {
+  while (unstable - stable > tolerance * stable) {
+    const double mid = 0.5 * (stable + unstable);
+    (perturbation_grows(model, mid) ? unstable : stable) = mid;
+  }
+  return 0.5 * (stable + unstable);
+}
+
+}  // namespace organsim::testing
