@@ -30,9 +30,10 @@ TEST(RunLiverPush, NoForceBeforeContactThenOpposingAndGrowingWithDepth) {
   ASSERT_LT(z1, z0);
 
   // Contact begins at the first tick with a contact point. The tool's bottom
-  // (centre z - 2 cm) starts level with the undeformed top (z = 0.058 m on the
-  // tool's path) and descends at 3.5 cm/s while the liver sags under gravity
-  // away from it, so contact must start after 0.25 s and well before the end.
+  // (centre z - 2 cm) starts 1 cm above the undeformed top (z = 0.058 m on the
+  // tool's path) and descends at 3.5 cm/s: contact at t = 0.29 s if the liver
+  // did not move; it sags under gravity away from the tool, so contact must
+  // start after 0.25 s and well before the end.
   size_t first = n;
   for (size_t i = 0; i < n; ++i) {
     if (s["contacts"][i].get<int>() > 0) {
