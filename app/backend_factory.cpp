@@ -1,5 +1,6 @@
 #include "app/backend_factory.h"
 
+#include "core/gl/gl_backend.h"
 #include "core/sim/cpu_backend.h"
 #include "core/util/error.h"
 
@@ -25,12 +26,12 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
   return make_cpu_backend(model, tool, o);
 }
 
-std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& /*model*/, const BackendTool& /*tool*/) {
+std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, const BackendTool& tool) {
   if (s.precision && *s.precision != "float") {
     throw Error(ErrorKind::Usage, "the gl backend computes in float (precision \"" + *s.precision + "\" asked)");
   }
-  // Wired to make_gl_backend once the GL module is part of the build.
-  throw Error(ErrorKind::Backend, "gl backend not available in this build");
+  // Throws Error(Backend) naming the EGL call when no context can be made.
+  return make_gl_backend(model, tool);
 }
 }  // namespace
 
