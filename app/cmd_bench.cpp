@@ -257,14 +257,14 @@ void run_bench(const BenchArgs& args) {
             << (args.exude ? " (with exudation)" : "") << "\n\n";
   std::cout << std::left << std::setw(8) << "paper" << std::right << std::setw(7) << "points" << std::setw(8)
             << "springs" << std::setw(8) << "tets" << "  " << std::left << std::setw(8) << "backend" << std::setw(7)
-            << "prec" << std::right << std::setw(10) << "median ms" << std::setw(18) << "(min..max)"
+            << "prec" << std::right << std::setw(10) << "median ms" << std::setw(21) << "(min..max)"
             << "  | paper ms: " << "QuadroFX3450 GeForceGo7900 Xeon3GHz\n";
   for (const Row& r : rows) {
     const PaperRow* p = paper_row(r.target);
     std::cout << std::left << std::setw(8) << (p ? p->model : "-") << std::right << std::setw(7) << r.points
               << std::setw(8) << r.springs << std::setw(8) << r.tets << "  " << std::left << std::setw(8)
               << r.backend << std::setw(7) << r.precision << std::right << std::setw(10)
-              << fixed(r.timing.median_ms, 4) << std::setw(18)
+              << fixed(r.timing.median_ms, 4) << std::setw(21)
               << ("(" + fixed(r.timing.min_ms, 4) + ".." + fixed(r.timing.max_ms, 4) + ")") << "  | ";
     if (p) {
       std::cout << std::setw(12) << fixed(p->quadro_fx_3450, 3) << std::setw(14) << fixed(p->geforce_go_7900, 3)

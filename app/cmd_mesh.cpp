@@ -1,6 +1,8 @@
 // `organsim mesh INPUT -o OUTPUT`: tetrahedralise a closed surface with CGAL
 // Mesh_3 (or read a tet mesh), report counts, quality and the springs-per-point
 // histogram, and write .mesh or .vtk. Sizes in metres.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -22,7 +24,8 @@ struct MeshArgs {
 };
 
 void run_mesh(const MeshArgs& args) {
-  const std::string ext = std::filesystem::path(args.output).extension().string();
+  std::string ext = std::filesystem::path(args.output).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext != ".mesh" && ext != ".vtk") {
     throw Error(ErrorKind::Usage, args.output + ": output must end in .mesh (medit) or .vtk (VTK legacy)");
   }
@@ -66,7 +69,7 @@ const bool registered = register_command("mesh", 10, [](CLI::App& root) {
   cmd->add_option("--facet-distance", args->options.facet_distance,
                   "max distance between the surface and the mesh boundary, m (default 0.1 h)");
   cmd->add_flag("--exude,!--no-exude", args->options.exude,
-                "sliver exudation: much better dihedral angles, ~10x slower (default on)");
+                "sliver exudation: min dihedral angle ~0.3 -> ~10 deg, 1.3-3x the meshing time (default on)");
   cmd->add_flag("--json", args->json, "print the report as JSON");
   cmd->callback([args] { run_mesh(*args); });
 });

@@ -47,7 +47,7 @@ struct Try {
 };
 
 double search_cell_size(const Mesh3Domain& domain, double volume, int32_t target, const MeshOptions& options,
-                        std::vector<std::string>& notes) {
+                        const std::string& source, std::vector<std::string>& notes) {
   const auto facet_distance = [&](double h) { return options.facet_distance.value_or(0.1 * h); };
   std::vector<Try> tries;
   double h = std::cbrt(kPointsPerVolume * volume / target);
@@ -77,7 +77,7 @@ double search_cell_size(const Mesh3Domain& domain, double volume, int32_t target
        << " tries (" << best.points << " points)";
   notes.push_back(note.str());
   if (std::abs(best.points - target) > 0.1 * target) {
-    throw Error(ErrorKind::Input, "cannot reach " + std::to_string(target) + " points within 10 %: closest was " +
+    throw input_error(source, "cannot reach " + std::to_string(target) + " points within 10 %: closest was " +
                                       std::to_string(best.points) + " at cell size " + format_number(best.h) +
                                       " m; give --cell-size instead");
   }
@@ -89,8 +89,6 @@ double search_cell_size(const Mesh3Domain& domain, double volume, int32_t target
 TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, const std::string& source,
                      MeshReport* report) {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> notes;
-  const TriangleMesh checked = check_surface(surface, source, notes);
   if (options.target_points && options.cell_size) {
     throw Error(ErrorKind::Usage, "give either a target point count or a cell size, not both");
   }
@@ -104,12 +102,14 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
     throw Error(ErrorKind::Usage, "facet distance must be positive (metres), got " + format_number(*options.facet_distance));
   }
 
+  std::vector<std::string> notes;
+  const TriangleMesh checked = check_surface(surface, source, notes);
   const Mesh3Domain domain(checked);
   double h = 0;
   if (options.cell_size) {
     h = *options.cell_size;
   } else if (options.target_points) {
-    h = search_cell_size(domain, surface_volume(checked), *options.target_points, options, notes);
+    h = search_cell_size(domain, surface_volume(checked), *options.target_points, options, source, notes);
   } else {
     h = bounding_box_diagonal(checked) / 20.0;  // default: see docs/meshing.md
     notes.push_back("no --cell-size or --target-points: cell size " + format_number(h) +

@@ -70,7 +70,7 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
         in.next_int("the entity dimension");
         in.next_int("the entity tag");
         const int64_t parametric = in.next_int("the parametric flag");
-        const int64_t n = in.next_int("the block's node count");
+        const int64_t n = in.checked_count(in.next_int("the block's node count"), 2, "nodes");
         std::vector<int64_t> tags(static_cast<size_t>(n));
         for (auto& t : tags) t = in.next_int("a node tag");
         for (int64_t i = 0; i < n; ++i) {

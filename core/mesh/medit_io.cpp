@@ -33,8 +33,7 @@ TetMesh read_medit(std::string_view text, const std::string& source) {
       const int64_t d = in.next_int("the dimension");
       if (d != 3) in.fail("Dimension " + std::to_string(d) + ": expected 3");
     } else if (keyword == "Vertices") {
-      const int64_t n = in.next_int("the vertex count");
-      if (n < 0) in.fail("negative vertex count");
+      const int64_t n = in.checked_count(in.next_int("the vertex count"), 8, "vertices");
       mesh.points.reserve(static_cast<size_t>(n));
       for (int64_t i = 0; i < n; ++i) {
         const double x = in.next_double("a vertex x coordinate");
@@ -45,8 +44,7 @@ TetMesh read_medit(std::string_view text, const std::string& source) {
       }
       have_vertices = true;
     } else if (keyword == "Tetrahedra") {
-      const int64_t n = in.next_int("the tetrahedron count");
-      if (n < 0) in.fail("negative tetrahedron count");
+      const int64_t n = in.checked_count(in.next_int("the tetrahedron count"), 10, "tetrahedra");
       mesh.tets.reserve(static_cast<size_t>(n));
       const auto nv = static_cast<int64_t>(mesh.points.size());
       for (int64_t t = 0; t < n; ++t) {
@@ -72,7 +70,7 @@ TetMesh read_medit(std::string_view text, const std::string& source) {
         in.skip_line();
         continue;
       }
-      const int64_t n = in.next_int("the entry count");
+      const int64_t n = in.checked_count(in.next_int("the entry count"), 2 * section->values, "entries");
       for (int64_t i = 0; i < n * section->values; ++i) in.next(section->name);
     }
   }

@@ -24,6 +24,9 @@ class TokenReader {
   std::string_view peek();             // the next token without consuming it; empty at the end
   double next_double(const char* what);
   int64_t next_int(const char* what);
+  // Checks a count read from the file before anything is sized by it: not
+  // negative, and `n` items of at least `min_bytes` each fit in what is left.
+  int64_t checked_count(int64_t n, int min_bytes, const char* what);
   void skip_line();                    // rest of the current line
   std::string_view rest_of_line();     // the rest of the current line, without the newline
   int line() const { return line_; }

@@ -24,7 +24,8 @@ struct MeshReport {
 };
 
 // Counts (springs = unique tet edges; boundary triangles = faces of exactly
-// one tet), quality and the springs-per-point histogram.
+// one tet), quality and the springs-per-point histogram. The mesh must be
+// valid (validate_tet_mesh: indices in range, positive volumes).
 MeshReport describe_tet_mesh(const TetMesh& mesh);
 
 // Unique tet edges (a < b), sorted.

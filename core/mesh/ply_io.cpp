@@ -107,7 +107,9 @@ TriangleMesh read_ply(std::string_view bytes, const std::string& source) {
       Element e;
       e.name = header.next("an element name");
       e.count = header.next_int("the element count");
-      if (e.count < 0) header.fail("negative element count");
+      if (e.count < 0 || e.count > static_cast<int64_t>(bytes.size())) {
+        header.fail("element count " + std::to_string(e.count) + " is negative or larger than the file");
+      }
       elements.push_back(e);
     } else if (word == "property") {
       if (elements.empty()) header.fail("'property' before any 'element'");
@@ -162,7 +164,10 @@ TriangleMesh read_ply(std::string_view bytes, const std::string& source) {
             if (n < 0) throw input_error(source, where + ": negative list length");
             for (int64_t j = 0; j < n; ++j) {
               const double v = read_scalar(prop, where);
-              if (static_cast<int>(k) == index_list) corners.push_back(static_cast<int64_t>(v));
+              if (static_cast<int>(k) == index_list) {
+                if (!(v >= 0 && v < 2147483647.0)) throw input_error(source, where + ": vertex index " + std::to_string(v) + " out of range");
+                corners.push_back(static_cast<int64_t>(v));
+              }
             }
           } else {
             const double v = read_scalar(prop, where);

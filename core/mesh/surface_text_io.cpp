@@ -39,10 +39,10 @@ TriangleMesh read_off(std::string_view text, const std::string& source) {
     in.fail("expected the header 'OFF', got '" + header + "'");
   }
   if (in.peek() == "BINARY") in.fail("binary OFF is not supported; save the surface as ASCII OFF");
-  const int64_t nv = in.next_int("the vertex count");
+  const int64_t nv = in.checked_count(in.next_int("the vertex count"), 6, "vertices");
   const int64_t nf = in.next_int("the face count");
   in.next_int("the edge count");
-  if (nv < 0 || nf < 0) in.fail("negative vertex or face count");
+  in.checked_count(nf, 8, "faces");
   in.skip_line();
   TriangleMesh mesh;
   mesh.points.reserve(static_cast<size_t>(nv));

@@ -65,6 +65,14 @@ int64_t TokenReader::next_int(const char* what) {
   return value;
 }
 
+int64_t TokenReader::checked_count(int64_t n, int min_bytes, const char* what) {
+  if (n < 0) fail(std::string("negative ") + what + " " + std::to_string(n));
+  if (n > static_cast<int64_t>((text_.size() - pos_) / static_cast<size_t>(min_bytes))) {
+    fail(std::to_string(n) + " " + what + " cannot fit in the rest of the file (truncated or corrupt)");
+  }
+  return n;
+}
+
 void TokenReader::skip_line() { rest_of_line(); }
 
 std::string_view TokenReader::rest_of_line() {

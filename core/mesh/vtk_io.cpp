@@ -3,6 +3,7 @@
 // 10 (tetra) are kept; vertices, lines and triangles (1, 3, 5) are read past.
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <ostream>
 #include <vector>
@@ -28,8 +29,9 @@ class VtkValues {
 
   // Reads n values of `type`; in binary mode they start after the current line.
   std::vector<double> read(int64_t n, std::string_view type, const char* what) {
+    in_.checked_count(n, binary_ ? 1 : 2, what);
     std::vector<double> values;
-    values.reserve(static_cast<size_t>(std::max<int64_t>(n, 0)));
+    values.reserve(static_cast<size_t>(n));
     if (!binary_) {
       for (int64_t i = 0; i < n; ++i) values.push_back(in_.next_double(what));
       return values;
@@ -64,6 +66,16 @@ class VtkValues {
   std::string_view bytes_;
   bool binary_;
 };
+
+// Point ids as integers; anything that is not a representable whole number
+// becomes -1 and fails the range check with the cell named.
+int64_t to_index(double v) { return v >= 0 && v < 9.0e15 && v == std::floor(v) ? static_cast<int64_t>(v) : -1; }
+
+std::vector<int64_t> to_indices(std::vector<double>::const_iterator begin, std::vector<double>::const_iterator end) {
+  std::vector<int64_t> ids;
+  for (auto it = begin; it != end; ++it) ids.push_back(to_index(*it));
+  return ids;
+}
 
 }  // namespace
 
@@ -104,20 +116,20 @@ TetMesh read_vtk(std::string_view bytes, const std::string& source) {
         const std::string ctype(in.next("the connectivity type"));
         const auto ids = values.read(size, ctype, "cell connectivity index");
         for (int64_t c = 0; c + 1 < n; ++c) {
-          const auto begin = static_cast<int64_t>(offsets[c]), end = static_cast<int64_t>(offsets[c + 1]);
+          const int64_t begin = to_index(offsets[c]), end = to_index(offsets[c + 1]);
           if (begin < 0 || end < begin || end > size) in.fail("cell " + std::to_string(c) + ": offsets out of range");
-          cells.emplace_back(ids.begin() + begin, ids.begin() + end);
+          cells.push_back(to_indices(ids.begin() + begin, ids.begin() + end));
         }
       } else {
         const auto list = values.read(size, "int", "cell list entry");
         size_t k = 0;
         for (int64_t c = 0; c < n; ++c) {
           if (k >= list.size()) in.fail("CELLS list is shorter than its " + std::to_string(n) + " cells");
-          const auto count = static_cast<int64_t>(list[k++]);
+          const int64_t count = to_index(list[k++]);
           if (count < 0 || k + static_cast<size_t>(count) > list.size()) {
             in.fail("cell " + std::to_string(c) + " has an invalid point count " + std::to_string(count));
           }
-          cells.emplace_back(list.begin() + static_cast<int64_t>(k), list.begin() + static_cast<int64_t>(k) + count);
+          cells.push_back(to_indices(list.begin() + static_cast<int64_t>(k), list.begin() + static_cast<int64_t>(k) + count));
           k += static_cast<size_t>(count);
         }
       }
@@ -130,9 +142,15 @@ TetMesh read_vtk(std::string_view bytes, const std::string& source) {
       }
       const auto types = values.read(n, "int", "cell type");
       for (int64_t c = 0; c < n; ++c) {
-        const int type = static_cast<int>(types[c]);
+        const int64_t type = to_index(types[c]);
         if (type == 10) {
           if (cells[c].size() != 4) in.fail("tetra cell " + std::to_string(c) + " has " + std::to_string(cells[c].size()) + " points, expected 4");
+          for (int64_t v : cells[c]) {
+            if (v < 0 || v >= static_cast<int64_t>(mesh.points.size())) {
+              in.fail("tetrahedron " + std::to_string(mesh.tets.size()) + " (cell " + std::to_string(c) + ") has vertex index " +
+                      std::to_string(v) + ", expected 0.." + std::to_string(static_cast<int64_t>(mesh.points.size()) - 1));
+            }
+          }
           mesh.tets.push_back({static_cast<int32_t>(cells[c][0]), static_cast<int32_t>(cells[c][1]),
                                static_cast<int32_t>(cells[c][2]), static_cast<int32_t>(cells[c][3])});
         } else if (type != 1 && type != 3 && type != 5) {

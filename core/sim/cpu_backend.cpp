@@ -34,13 +34,31 @@ int choose_threads(const Model& model, const CpuBackendOptions& options) {
 template <class Real>
 struct StepContext {
   Real dt, inv_dt, dt2, drag;  // drag = 1 - alpha dt
-  Eigen::Matrix<Real, 3, 1> gravity, tool_center;
+  Real gravity[3], tool_center[3];
   Real tool_radius, tool_k;
+};
+
+// Three coordinate arrays (structure of arrays), so that one slot of a
+// group of lanes is a contiguous load and the compiler vectorises over lanes.
+template <class Real>
+struct Soa3 {
+  std::vector<Real> x, y, z;
+  void assign(size_t n, Real v) {
+    x.assign(n, v);
+    y.assign(n, v);
+    z.assign(n, v);
+  }
+  void swap(Soa3& other) {
+    x.swap(other.x);
+    y.swap(other.y);
+    z.swap(other.z);
+  }
 };
 
 template <class Real>
 class CpuBackend final : public Backend {
-  using V3 = Eigen::Matrix<Real, 3, 1>;
+  // Lanes evaluated together: one 512-bit register of Real.
+  static constexpr int32_t kLanes = 64 / static_cast<int32_t>(sizeof(Real));
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options)
@@ -50,36 +68,50 @@ class CpuBackend final : public Backend {
     // State is the displacement u = x - X from rest: in float, x itself
     // would round away the per-step increment dt^2 F/m (~1e-9 m against a
     // 4e-9 m spacing of floats near 5 cm); u starts at 0 where floats are fine.
-    rest_.resize(n);
-    for (int32_t i = 0; i < n; ++i) rest_[i] = model.rest_position[i].cast<Real>();
-    u_.assign(n, V3::Zero());
-    u_prev_ = u_;
-    u_next_ = u_;
-    // Per-entry copies of the spring and tet parameters in the backend's
-    // precision, so the gather reads one contiguous stream per slot. Rest
-    // lengths and volumes are recomputed from the rounded rest positions
-    // exactly as the gather computes them, so the rest state is force-free.
-    spring_rest_.resize(layout.springs.item.size(), 0);
-    spring_k_.resize(layout.springs.item.size(), 0);
-    spring_d_.resize(layout.springs.item.size(), 0);
-    for (size_t e = 0; e < layout.springs.item.size(); ++e) {
-      const int32_t s = layout.springs.item[e];
+    rest_.assign(n, 0);
+    for (int32_t i = 0; i < n; ++i) {
+      rest_.x[i] = static_cast<Real>(model.rest_position[i].x());
+      rest_.y[i] = static_cast<Real>(model.rest_position[i].y());
+      rest_.z[i] = static_cast<Real>(model.rest_position[i].z());
+    }
+    u_.assign(n, 0);
+    u_prev_.assign(n, 0);
+    u_next_.assign(n, 0);
+
+    // Per-slot copies of the parameters in the backend's precision, one
+    // contiguous stream per slot. Padding slots point at their own point
+    // with zero stiffness: a zero-length spring and a flat tet add nothing,
+    // so the loops need no branch. Rest lengths and volumes are recomputed
+    // from the rounded rest positions exactly as the loops compute them, so
+    // the rest state is force-free in either precision.
+    const auto& springs = layout.springs;
+    spring_other_.resize(springs.item.size());
+    spring_rest_.assign(springs.item.size(), 0);
+    spring_k_.assign(springs.item.size(), 0);
+    spring_d_.assign(springs.item.size(), 0);
+    for (int32_t e = 0; e < static_cast<int32_t>(springs.item.size()); ++e) {
+      const int32_t p = point_of_entry(springs, layout.chunk_size, e);
+      const int32_t s = springs.item[e];
+      spring_other_[e] = s < 0 ? p : layout.spring_other[e];
       if (s < 0) continue;
-      const int32_t p = point_of_entry(layout.springs, layout.chunk_size, static_cast<int32_t>(e));
-      spring_rest_[e] = (rest_[layout.spring_other[e]] - rest_[p]).norm();
+      spring_rest_[e] = rest_distance(p, spring_other_[e]);
       spring_k_[e] = static_cast<Real>(model.spring_k[s]);
       spring_d_[e] = static_cast<Real>(model.spring_d[s]);
     }
     if (model.has_volume()) {
-      tet_rest_.resize(layout.tets.item.size(), 0);
-      tet_k_.resize(layout.tets.item.size(), 0);
-      for (size_t e = 0; e < layout.tets.item.size(); ++e) {
-        const int32_t t = layout.tets.item[e];
-        if (t < 0) continue;
-        const int32_t p = point_of_entry(layout.tets, layout.chunk_size, static_cast<int32_t>(e));
+      const auto& tets = layout.tets;
+      for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
+      tet_rest_.assign(tets.item.size(), 0);
+      tet_k_.assign(tets.item.size(), 0);
+      for (int32_t e = 0; e < static_cast<int32_t>(tets.item.size()); ++e) {
+        const int32_t p = point_of_entry(tets, layout.chunk_size, e);
+        const int32_t t = tets.item[e];
         const auto& o = layout.tet_others[e];
-        const V3 a = rest_[o[0]] - rest_[p], b = rest_[o[1]] - rest_[p], c = rest_[o[2]] - rest_[p];
-        tet_rest_[e] = a.dot(b.cross(c)) / Real(6);
+        tet_a_[e] = t < 0 ? p : o[0];
+        tet_b_[e] = t < 0 ? p : o[1];
+        tet_c_[e] = t < 0 ? p : o[2];
+        if (t < 0) continue;
+        tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
       }
     }
@@ -89,6 +121,18 @@ class CpuBackend final : public Backend {
       mass_[i] = static_cast<Real>(model.mass[i]);
       inv_mass_[i] = static_cast<Real>(model.inv_mass[i]);
     }
+    // Slots per group of lanes: the widest point of the group.
+    const int32_t groups_per_chunk = (layout.chunk_size + kLanes - 1) / kLanes;
+    spring_width_.assign(static_cast<size_t>(layout.nchunk) * groups_per_chunk, 0);
+    tet_width_.assign(spring_width_.size(), 0);
+    for (int32_t p = 0; p < n; ++p) {
+      const int32_t c = p / layout.chunk_size, g = (p % layout.chunk_size) / kLanes;
+      auto& sw = spring_width_[c * groups_per_chunk + g];
+      auto& tw = tet_width_[c * groups_per_chunk + g];
+      sw = std::max(sw, springs.count[p]);
+      tw = std::max(tw, layout.tets.count[p]);
+    }
+    groups_per_chunk_ = groups_per_chunk;
     attached_.assign(n, -1);
     partial_.resize(layout.nchunk);
     device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "");
@@ -113,9 +157,10 @@ class CpuBackend final : public Backend {
     if (tool_.present)
       plan.passes.push_back({"tool-contact", tool_.mode == ToolMode::Push ? "sphere penalty contact"
                                                                           : "grasp attachment springs"});
-    plan.passes.push_back({"integrate", "position Verlet, fused with the gathers above"});
+    plan.passes.push_back({"integrate", "position Verlet, fused with the passes above (" +
+                                            std::to_string(kLanes) + " lanes per SIMD group)"});
     const size_t n = static_cast<size_t>(m.npoint());
-    plan.buffers.push_back({"x_t, x_{t-1}, x_{t+1}", 3 * n * 3 * real});
+    plan.buffers.push_back({"X, u_t, u_{t-1}, u_{t+1}", 4 * n * 3 * real});
     plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
     plan.buffers.push_back({"spring slots (other, rest, k, d)",
                             m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
@@ -130,7 +175,7 @@ class CpuBackend final : public Backend {
 
   void attach(const Attachment& attachment) override {
     release();
-    attach_offset_.assign(attachment.points.size(), V3::Zero());
+    attach_offset_.assign(attachment.points.size(), Eigen::Matrix<Real, 3, 1>::Zero());
     for (size_t k = 0; k < attachment.points.size(); ++k) {
       attached_[attachment.points[k]] = static_cast<int32_t>(k);
       attach_offset_[k] = attachment.offsets[k].cast<Real>();
@@ -144,16 +189,21 @@ class CpuBackend final : public Backend {
   }
 
   void positions(std::vector<Vec3>& out) const override {
-    out.resize(u_.size());
-    for (size_t i = 0; i < u_.size(); ++i) out[i] = model_.rest_position[i] + u_[i].template cast<double>();
+    out.resize(u_.x.size());
+    for (size_t i = 0; i < out.size(); ++i) out[i] = model_.rest_position[i] + displacement(u_, i);
   }
 
   void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override {
-    if (x.size() != u_.size() || x_prev.size() != u_.size())
-      throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.size()) + " positions");
-    for (size_t i = 0; i < u_.size(); ++i) {
-      u_[i] = (x[i] - model_.rest_position[i]).cast<Real>();
-      u_prev_[i] = (x_prev[i] - model_.rest_position[i]).cast<Real>();
+    if (x.size() != u_.x.size() || x_prev.size() != u_.x.size())
+      throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.x.size()) + " positions");
+    for (size_t i = 0; i < x.size(); ++i) {
+      const Vec3 u = x[i] - model_.rest_position[i], up = x_prev[i] - model_.rest_position[i];
+      u_.x[i] = static_cast<Real>(u.x());
+      u_.y[i] = static_cast<Real>(u.y());
+      u_.z[i] = static_cast<Real>(u.z());
+      u_prev_.x[i] = static_cast<Real>(up.x());
+      u_prev_.y[i] = static_cast<Real>(up.y());
+      u_prev_.z[i] = static_cast<Real>(up.z());
     }
   }
 
@@ -163,7 +213,7 @@ class CpuBackend final : public Backend {
     ctx.inv_dt = static_cast<Real>(1.0 / request.dt);
     ctx.dt2 = static_cast<Real>(request.dt * request.dt);
     ctx.drag = static_cast<Real>(1.0 - model_.viscous_damping * request.dt);
-    ctx.gravity = model_.gravity.cast<Real>();
+    for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(model_.gravity[k]);
     ctx.tool_radius = static_cast<Real>(tool_.radius);
     ctx.tool_k = static_cast<Real>(tool_.contact_stiffness);
     const int tool_kind = !(tool_.present && request.tool_active) ? kNoTool
@@ -173,7 +223,8 @@ class CpuBackend final : public Backend {
     for (int32_t s = 0; s < request.substeps; ++s) {
       // The force of substep s acts at its start: tool centre interpolated there.
       const double f = static_cast<double>(s) / request.substeps;
-      ctx.tool_center = (request.tool_from + f * (request.tool_to - request.tool_from)).cast<Real>();
+      const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
+      for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
       reaction = step(ctx, tool_kind);
       time_ += request.dt;
     }
@@ -182,9 +233,24 @@ class CpuBackend final : public Backend {
 
  private:
   struct Partial {
-    V3 force, torque;
+    Vec3 force, torque;
     int32_t contacts;
   };
+
+  static Vec3 displacement(const Soa3<Real>& u, size_t i) {
+    return Vec3(static_cast<double>(u.x[i]), static_cast<double>(u.y[i]), static_cast<double>(u.z[i]));
+  }
+  Real rest_distance(int32_t p, int32_t q) const {
+    const Real dx = rest_.x[q] - rest_.x[p], dy = rest_.y[q] - rest_.y[p], dz = rest_.z[q] - rest_.z[p];
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+  }
+  Real rest_volume(int32_t p, int32_t a, int32_t b, int32_t c) const {
+    auto d = [&](int32_t q, const std::vector<Real>& v) { return v[q] - v[p]; };
+    const Real ax = d(a, rest_.x), ay = d(a, rest_.y), az = d(a, rest_.z);
+    const Real bx = d(b, rest_.x), by = d(b, rest_.y), bz = d(b, rest_.z);
+    const Real cx = d(c, rest_.x), cy = d(c, rest_.y), cz = d(c, rest_.z);
+    return (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
+  }
 
   Reaction step(const StepContext<Real>& ctx, int tool_kind) {
     const bool volume = model_.has_volume(), gravity = model_.has_gravity();
@@ -212,19 +278,16 @@ class CpuBackend final : public Backend {
     const int32_t nchunk = model_.layout.nchunk;
 #pragma omp parallel for schedule(static) num_threads(threads_)
     for (int32_t c = 0; c < nchunk; ++c) chunk<Volume, Gravity, Tool>(ctx, c);
-    std::swap(u_prev_, u_);  // u_{t-1} <- u_t
-    std::swap(u_, u_next_);  // u_t <- u_{t+1}
+    u_prev_.swap(u_);  // u_{t-1} <- u_t
+    u_.swap(u_next_);  // u_t <- u_{t+1}
     Reaction reaction;
     if constexpr (Tool != kNoTool) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
-      V3 force = V3::Zero(), torque = V3::Zero();
       for (const Partial& p : partial_) {
-        force += p.force;
-        torque += p.torque;
+        reaction.force += p.force;
+        reaction.torque += p.torque;
         reaction.contacts += p.contacts;
       }
-      reaction.force = force.template cast<double>();
-      reaction.torque = torque.template cast<double>();
     }
     return reaction;
   }
@@ -233,70 +296,129 @@ class CpuBackend final : public Backend {
   void chunk(const StepContext<Real>& ctx, int32_t c) {
     const auto& L = model_.layout;
     const int32_t C = L.chunk_size;
-    const int32_t begin = c * C, end = std::min(model_.npoint(), begin + C);
-    Partial partial{V3::Zero(), V3::Zero(), 0};
-    for (int32_t p = begin; p < end; ++p) {
-      const int32_t lane = p - begin;
-      const V3 Xi = rest_[p], ui = u_[p];
-      const V3 vi = (ui - u_prev_[p]) * ctx.inv_dt;
-      V3 f = V3::Zero();
+    const int32_t first = c * C, last = std::min(model_.npoint(), first + C);
+    Partial partial{Vec3::Zero(), Vec3::Zero(), 0};
+    const Real* __restrict X = rest_.x.data();
+    const Real* __restrict Y = rest_.y.data();
+    const Real* __restrict Z = rest_.z.data();
+    const Real* __restrict ux = u_.x.data();
+    const Real* __restrict uy = u_.y.data();
+    const Real* __restrict uz = u_.z.data();
+    const Real* __restrict px = u_prev_.x.data();
+    const Real* __restrict py = u_prev_.y.data();
+    const Real* __restrict pz = u_prev_.z.data();
+    for (int32_t g0 = first; g0 < last; g0 += kLanes) {
+      const int32_t lanes = std::min(kLanes, last - g0);
+      const int32_t lane0 = g0 - first;
+      const int32_t group = c * groups_per_chunk_ + lane0 / kLanes;
+      alignas(64) Real fx[kLanes], fy[kLanes], fz[kLanes];
+#pragma omp simd
+      for (int32_t l = 0; l < lanes; ++l) {
+        const int32_t p = g0 + l;
+        fx[l] = Gravity ? mass_[p] * ctx.gravity[0] : Real(0);
+        fy[l] = Gravity ? mass_[p] * ctx.gravity[1] : Real(0);
+        fz[l] = Gravity ? mass_[p] * ctx.gravity[2] : Real(0);
+      }
 
-      const int32_t* other = L.spring_other.data() + L.springs.chunk_offset[c] + lane;
-      const int32_t nspring = L.springs.count[p];
-      const int32_t base = L.springs.chunk_offset[c] + lane;
-      for (int32_t j = 0; j < nspring; ++j) {
-        const int32_t e = base + j * C;
-        const int32_t q = other[j * C];
-        const V3 l = (rest_[q] - Xi) + (u_[q] - ui);
-        const Real length = l.norm();
-        if (length <= Real(0)) continue;  // coincident points: no direction, no force
-        const V3 dir = l / length;
-        const V3 dv = (u_[q] - u_prev_[q]) * ctx.inv_dt - vi;
-        f += (spring_k_[e] * (length - spring_rest_[e]) + spring_d_[e] * dv.dot(dir)) * dir;
+      // Springs + dampers: f = [k (L - r) + d (dv . l/L)] l/L, l = x_q - x_p.
+      const int32_t* __restrict other = spring_other_.data();
+      const Real* __restrict rest = spring_rest_.data();
+      const Real* __restrict k = spring_k_.data();
+      const Real* __restrict d = spring_d_.data();
+      for (int32_t j = 0; j < spring_width_[group]; ++j) {
+        const int32_t e0 = L.springs.chunk_offset[c] + j * C + lane0;
+#pragma omp simd
+        for (int32_t l = 0; l < lanes; ++l) {
+          const int32_t e = e0 + l, p = g0 + l, q = other[e];
+          const Real lx = (X[q] - X[p]) + (ux[q] - ux[p]);
+          const Real ly = (Y[q] - Y[p]) + (uy[q] - uy[p]);
+          const Real lz = (Z[q] - Z[p]) + (uz[q] - uz[p]);
+          const Real length = std::sqrt(lx * lx + ly * ly + lz * lz);
+          // Coincident ends (and padding slots) have no direction: no force.
+          const Real inv = length > Real(0) ? Real(1) / length : Real(0);
+          const Real dvx = (ux[q] - px[q]) - (ux[p] - px[p]);
+          const Real dvy = (uy[q] - py[q]) - (uy[p] - py[p]);
+          const Real dvz = (uz[q] - pz[q]) - (uz[p] - pz[p]);
+          const Real along = (dvx * lx + dvy * ly + dvz * lz) * inv * ctx.inv_dt;
+          const Real s = (k[e] * (length - rest[e]) + d[e] * along) * inv;
+          fx[l] += s * lx;
+          fy[l] += s * ly;
+          fz[l] += s * lz;
+        }
       }
 
       if constexpr (Volume) {
-        const int32_t tbase = L.tets.chunk_offset[c] + lane;
-        for (int32_t j = 0; j < L.tets.count[p]; ++j) {
-          const int32_t e = tbase + j * C;
-          const auto& o = L.tet_others[e];
-          const V3 a = (rest_[o[0]] - Xi) + (u_[o[0]] - ui);
-          const V3 b = (rest_[o[1]] - Xi) + (u_[o[1]] - ui);
-          const V3 cc = (rest_[o[2]] - Xi) + (u_[o[2]] - ui);
-          const Real v = a.dot(b.cross(cc)) / Real(6);
-          // dV/dx_p for V = (a-p).((b-p)x(c-p))/6 is (c-a)x(b-a)/6.
-          const V3 grad = (cc - a).cross(b - a) / Real(6);
-          f += tet_k_[e] * (tet_rest_[e] - v) * grad;
-        }
-      }
-      if constexpr (Gravity) f += mass_[p] * ctx.gravity;
-
-      [[maybe_unused]] const V3 xi = Xi + ui;
-      if constexpr (Tool == kPush) {
-        const V3 d = xi - ctx.tool_center;
-        const Real dist = d.norm();
-        if (dist < ctx.tool_radius) {
-          const V3 n = dist > Real(0) ? V3(d / dist) : V3(0, 0, 1);
-          const V3 fc = ctx.tool_k * (ctx.tool_radius - dist) * n;
-          f += fc;
-          partial.force -= fc;
-          partial.torque += d.cross(-fc);
-          ++partial.contacts;
-        }
-      } else if constexpr (Tool == kPull) {
-        const int32_t k = attached_[p];
-        if (k >= 0) {
-          const V3 fc = ctx.tool_k * (ctx.tool_center + attach_offset_[k] - xi);
-          f += fc;
-          partial.force -= fc;
-          partial.torque += (xi - ctx.tool_center).cross(-fc);
-          ++partial.contacts;
+        // f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
+        const int32_t* __restrict ta = tet_a_.data();
+        const int32_t* __restrict tb = tet_b_.data();
+        const int32_t* __restrict tc = tet_c_.data();
+        const Real* __restrict vr = tet_rest_.data();
+        const Real* __restrict kv = tet_k_.data();
+        for (int32_t j = 0; j < tet_width_[group]; ++j) {
+          const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
+#pragma omp simd
+          for (int32_t l = 0; l < lanes; ++l) {
+            const int32_t e = e0 + l, p = g0 + l, a = ta[e], b = tb[e], cc = tc[e];
+            const Real ax = (X[a] - X[p]) + (ux[a] - ux[p]), ay = (Y[a] - Y[p]) + (uy[a] - uy[p]),
+                       az = (Z[a] - Z[p]) + (uz[a] - uz[p]);
+            const Real bx = (X[b] - X[p]) + (ux[b] - ux[p]), by = (Y[b] - Y[p]) + (uy[b] - uy[p]),
+                       bz = (Z[b] - Z[p]) + (uz[b] - uz[p]);
+            const Real cx = (X[cc] - X[p]) + (ux[cc] - ux[p]), cy = (Y[cc] - Y[p]) + (uy[cc] - uy[p]),
+                       cz = (Z[cc] - Z[p]) + (uz[cc] - uz[p]);
+            const Real volume = (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
+            const Real s = kv[e] * (vr[e] - volume) / Real(6);
+            const Real ex = cx - ax, ey = cy - ay, ez = cz - az;  // c - a
+            const Real gx = bx - ax, gy = by - ay, gz = bz - az;  // b - a
+            fx[l] += s * (ey * gz - ez * gy);
+            fy[l] += s * (ez * gx - ex * gz);
+            fz[l] += s * (ex * gy - ey * gx);
+          }
         }
       }
 
-      // Position Verlet with mass-proportional drag; fixed points have 1/m = 0
-      // and no velocity, so they stay put.
-      u_next_[p] = inv_mass_[p] > Real(0) ? V3(ui + ctx.drag * (ui - u_prev_[p]) + ctx.dt2 * inv_mass_[p] * f) : ui;
+      if constexpr (Tool != kNoTool) {
+        // Few points touch the tool: a plain loop, reaction summed per lane in order.
+        const Vec3 center(ctx.tool_center[0], ctx.tool_center[1], ctx.tool_center[2]);
+        for (int32_t l = 0; l < lanes; ++l) {
+          const int32_t p = g0 + l;
+          const Eigen::Matrix<Real, 3, 1> x(X[p] + ux[p], Y[p] + uy[p], Z[p] + uz[p]);
+          const Eigen::Matrix<Real, 3, 1> ctr(ctx.tool_center[0], ctx.tool_center[1], ctx.tool_center[2]);
+          Eigen::Matrix<Real, 3, 1> fc;
+          if constexpr (Tool == kPush) {
+            const Eigen::Matrix<Real, 3, 1> dvec = x - ctr;
+            const Real dist = dvec.norm();
+            if (dist >= ctx.tool_radius) continue;
+            const Eigen::Matrix<Real, 3, 1> n =
+                dist > Real(0) ? Eigen::Matrix<Real, 3, 1>(dvec / dist) : Eigen::Matrix<Real, 3, 1>(0, 0, 1);
+            fc = ctx.tool_k * (ctx.tool_radius - dist) * n;
+          } else {
+            const int32_t a = attached_[p];
+            if (a < 0) continue;
+            fc = ctx.tool_k * (ctr + attach_offset_[a] - x);
+          }
+          fx[l] += fc.x();
+          fy[l] += fc.y();
+          fz[l] += fc.z();
+          const Vec3 fd = fc.template cast<double>();
+          partial.force -= fd;
+          partial.torque += (x.template cast<double>() - center).cross(-fd);
+          ++partial.contacts;
+        }
+      }
+
+      // Position Verlet with drag; fixed points (1/m = 0) stay put.
+      Real* __restrict nx = u_next_.x.data();
+      Real* __restrict ny = u_next_.y.data();
+      Real* __restrict nz = u_next_.z.data();
+#pragma omp simd
+      for (int32_t l = 0; l < lanes; ++l) {
+        const int32_t p = g0 + l;
+        const Real w = inv_mass_[p] * ctx.dt2;
+        const bool free = inv_mass_[p] > Real(0);
+        nx[p] = free ? ux[p] + ctx.drag * (ux[p] - px[p]) + w * fx[l] : ux[p];
+        ny[p] = free ? uy[p] + ctx.drag * (uy[p] - py[p]) + w * fy[l] : uy[p];
+        nz[p] = free ? uz[p] + ctx.drag * (uz[p] - pz[p]) + w * fz[l] : uz[p];
+      }
     }
     if constexpr (Tool != kNoTool) partial_[c] = partial;
   }
@@ -306,14 +428,18 @@ class CpuBackend final : public Backend {
   int threads_;
   std::string device_;
   double time_ = 0;
-  std::vector<V3> rest_;                // X, rest positions (npoint)
-  std::vector<V3> u_, u_prev_, u_next_;  // displacements at t, t-1, t+1 (npoint)
+  Soa3<Real> rest_;                   // X, rest positions (npoint)
+  Soa3<Real> u_, u_prev_, u_next_;    // displacements at t, t-1, t+1 (npoint)
+  std::vector<int32_t> spring_other_;  // per slot, self for padding (nentry)
   std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry)
-  std::vector<Real> tet_rest_, tet_k_;                   // per slot (nentry), empty without volume
+  std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
+  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry)
+  std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
+  int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;
   std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint)
   std::vector<int32_t> attached_points_;
-  std::vector<V3> attach_offset_;
+  std::vector<Eigen::Matrix<Real, 3, 1>> attach_offset_;
   std::vector<Partial> partial_;   // tool reaction per chunk (nchunk)
 };
 

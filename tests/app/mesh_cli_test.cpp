@@ -106,7 +106,7 @@ std::vector<BadCase> bad_cases() {
       {"nested.off", off_text(nested), "nested.off: does not bound a volume"},
       {"inverted.vtk", vtk_text(inverted), "inverted.vtk: tetrahedron 2 is inverted"},
       {"flat.vtk", vtk_text(flat), "flat.vtk: tetrahedron 1 has zero volume"},
-      {"range.vtk", vtk_text(range), "range.vtk: tetrahedron 4 has vertex index 8"},
+      {"range.vtk", vtk_text(range), "tetrahedron 4 (cell 4) has vertex index 8"},
   };
 }
 

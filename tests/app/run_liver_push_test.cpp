@@ -30,9 +30,9 @@ TEST(RunLiverPush, NoForceBeforeContactThenOpposingAndGrowingWithDepth) {
   ASSERT_LT(z1, z0);
 
   // Contact begins at the first tick with a contact point. The tool's bottom
-  // (centre z - 2 cm) meets the undeformed top (about z = 0.05 m above the
-  // tool's path) at t = 0.29 s; sagging under gravity delays it, so contact
-  // must start after 0.25 s and well before the end.
+  // (centre z - 2 cm) starts level with the undeformed top (z = 0.058 m on the
+  // tool's path) and descends at 3.5 cm/s while the liver sags under gravity
+  // away from it, so contact must start after 0.25 s and well before the end.
   size_t first = n;
   for (size_t i = 0; i < n; ++i) {
     if (s["contacts"][i].get<int>() > 0) {

@@ -176,7 +176,12 @@ TEST(SurfaceIo, ErrorsNameTheFileAndTheProblem) {
   msg = error_message([&] { read_surface(garbage); });
   EXPECT_NE(msg.find("neither binary STL"), std::string::npos) << msg;
 
-  const auto truncated = write_fixture(dir / "trunc.off", "OFF\n3 1 0\n0 0 0\n1 0\n");
+  // A corrupt count must not make the reader allocate gigabytes first.
+  const auto huge = write_fixture(dir / "huge.off", "OFF\n1000000000 1 0\n0 0 0\n");
+  msg = error_message([&] { read_surface(huge); });
+  EXPECT_NE(msg.find("1000000000 vertices cannot fit in the rest of the file"), std::string::npos) << msg;
+
+  const auto truncated = write_fixture(dir / "trunc.off", "OFF\n3 1 0\n0.0 0.0 0.0\n1.0 0.0 0.0\n0.0 1.0\n");
   msg = error_message([&] { read_surface(truncated); });
   EXPECT_NE(msg.find("expected a vertex"), std::string::npos) << msg;
 }

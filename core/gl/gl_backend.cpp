@@ -1,0 +1,339 @@
+#include "core/gl/gl_backend.h"
+
+#include <EGL/egl.h>
+
+#include <cstring>
+#include <string>
+
+#include "core/gl/gl_model_pack.h"
+#include "core/util/error.h"
+#include "shaders/bindings.glsl.h"
+
+namespace organsim {
+namespace {
+
+constexpr int kSlots = ORGANSIM_GL_READBACK_SLOTS;
+constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // status slot value: every position finite
+constexpr GLuint64 kReadbackTimeoutNs = 10'000'000'000ull;  // a tick taking 10 s is a hung device
+
+}  // namespace
+
+GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBackendOptions& options)
+    : model_(model), tool_(tool), options_(options) {
+  gl::EglContextOptions context_options;
+  context_options.debug = options.debug;
+  context_ = std::make_unique<gl::EglContext>(context_options);
+
+  const gl::PackedModel packed = gl::pack_model(model);
+  npoint_ = packed.npoint;
+  nchunk_ = packed.nchunk;
+  npad_ = packed.npad;
+  volume_ = model.has_volume();
+  gravity_ = model.has_gravity();
+  push_ = tool.present && tool.mode == ToolMode::Push;
+  pull_ = tool.present && tool.mode == ToolMode::Pull;
+
+  // Lean scenes: code for absent physics is compiled out (STYLE #12).
+  std::vector<std::string> defines;
+  if (volume_) defines.push_back("HAS_VOLUME");
+  if (gravity_) defines.push_back("HAS_GRAVITY");
+  if (push_) defines.push_back("TOOL_PUSH");
+  if (pull_) defines.push_back("TOOL_PULL");
+  if (options.record_forces) defines.push_back("RECORD_FORCE");
+  step_ = gl::ComputeProgram("step.comp", defines);
+  if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
+
+  // x_t = rest, d_t = 0; two pairs of buffers swapped after each substep.
+  const size_t xbytes = packed.rest.size() * sizeof(float);
+  const std::vector<float> zero(packed.rest.size(), 0.0f);
+  x_[0] = create_buffer("x_t", xbytes, packed.rest.data(), GL_DYNAMIC_STORAGE_BIT);
+  x_[1] = create_buffer("x_{t+1}", xbytes, packed.rest.data(), GL_DYNAMIC_STORAGE_BIT);
+  d_[0] = create_buffer("x_t - x_{t-1}", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
+  d_[1] = create_buffer("x_{t+1} - x_t", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
+  mass_ = create_buffer("mass {1/m, m}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
+  chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
+  springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
+                           packed.springs.data(), 0);
+  if (volume_) {
+    tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
+                          packed.tets.data(), 0);
+  }
+  if (pull_) {
+    attach_upload_.assign(static_cast<size_t>(npad_) * 4, 0.0f);
+    attach_ = create_buffer("attachments {offset, attached}", attach_upload_.size() * sizeof(float),
+                            attach_upload_.data(), GL_DYNAMIC_STORAGE_BIT);
+  }
+  if (tool.present) {
+    partials_ = create_buffer("reaction partials per workgroup", static_cast<size_t>(nchunk_) * 8 * sizeof(float),
+                              nullptr, 0);
+    // Written by the GPU, read by the CPU one tick later without a copy.
+    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    const size_t ring = static_cast<size_t>(kSlots) * 8 * sizeof(float);
+    reaction_ = create_buffer("reaction ring (mapped)", ring, nullptr, map);
+    reaction_map_ = static_cast<const float*>(glMapNamedBufferRange(reaction_, 0, static_cast<GLsizeiptr>(ring), map));
+    if (!reaction_map_) {
+      throw Error(ErrorKind::Backend, "GL backend: glMapNamedBufferRange(reaction ring, persistent coherent) failed");
+    }
+  }
+  {
+    // Blow-up flag per ring slot, read with the reaction; cleared on the GPU
+    // (glClearNamedBufferSubData) before the tick that writes it.
+    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    const std::vector<uint32_t> none(kSlots, kNoPoint);
+    status_ = create_buffer("non-finite flag ring (mapped)", none.size() * sizeof(uint32_t), none.data(), map);
+    status_map_ = static_cast<const uint32_t*>(
+        glMapNamedBufferRange(status_, 0, static_cast<GLsizeiptr>(none.size() * sizeof(uint32_t)), map));
+    if (!status_map_) {
+      throw Error(ErrorKind::Backend, "GL backend: glMapNamedBufferRange(status ring, persistent coherent) failed");
+    }
+  }
+  if (options.record_forces) {
+    force_ = create_buffer("recorded forces", static_cast<size_t>(npad_) * 4 * sizeof(float), nullptr, 0);
+  }
+  slots_.assign(kSlots, Slot{});
+  readback_.resize(static_cast<size_t>(npad_) * 4);
+
+  // Bindings that never change; the three position buffers rotate per substep.
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_MASS, mass_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CHUNKS, chunks_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SPRINGS, springs_);
+  if (tets_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_TETS, tets_);
+  if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
+  if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
+  if (reaction_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REACTION, reaction_);
+  if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_STATUS, status_);
+  if (gravity_) {
+    glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
+                       static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
+  }
+  if (tool.present) {
+    glProgramUniform1f(step_.id(), ORGANSIM_GL_U_TOOL_RADIUS, static_cast<float>(tool.radius));
+    glProgramUniform1f(step_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
+    glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
+  }
+  context_->check_errors("GL backend setup");
+}
+
+GlBackend::~GlBackend() {
+  make_current();
+  for (Slot& s : slots_) {
+    if (s.fence) glDeleteSync(s.fence);
+  }
+  if (reaction_map_) glUnmapNamedBuffer(reaction_);
+  if (status_map_) glUnmapNamedBuffer(status_);
+  const GLuint buffers[] = {x_[0], x_[1], d_[0], d_[1], mass_,     chunks_, springs_,
+                            tets_, attach_, partials_, reaction_, force_, status_};
+  for (GLuint b : buffers) {
+    if (b) glDeleteBuffers(1, &b);
+  }
+  step_ = gl::ComputeProgram();
+  reduce_ = gl::ComputeProgram();
+}
+
+void GlBackend::make_current() const {
+  // A renderer may have made its own context current on this thread.
+  if (eglGetCurrentContext() != static_cast<EGLContext>(context_->egl_context())) context_->make_current();
+}
+
+GLuint GlBackend::create_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags) {
+  GLuint buffer = 0;
+  glCreateBuffers(1, &buffer);
+  // Zero-sized storage is an error in GL; an empty table still gets 16 bytes.
+  const size_t size = bytes > 0 ? bytes : 16;
+  glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(size), bytes > 0 ? data : nullptr, flags);
+  const GLenum error = glGetError();
+  if (error != GL_NO_ERROR) {
+    throw Error(ErrorKind::Backend, std::string("GL backend: glNamedBufferStorage(") + what + ", " +
+                                        std::to_string(size) + " bytes) failed, error " + std::to_string(error));
+  }
+  buffer_sizes_.emplace_back(what, size);
+  return buffer;
+}
+
+Plan GlBackend::plan() const {
+  Plan plan;
+  const auto& m = model_;
+  std::string fused = std::to_string(m.nspring()) + " springs gathered from both ends (" +
+                      std::to_string(m.layout.springs.item.size()) + " slots)";
+  if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
+  if (gravity_) fused += ", gravity";
+  if (push_) fused += ", sphere penalty contact";
+  if (pull_) fused += ", grasp attachment springs";
+  plan.passes.push_back({"step (step.comp)", "one fused dispatch per substep, " + std::to_string(nchunk_) +
+                                                 " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + ": " + fused +
+                                                 ", position Verlet"});
+  if (tool_.present) {
+    plan.passes.push_back({"reduce-reaction (reduce_reaction.comp)",
+                           "once per tick while the tool acts: " + std::to_string(nchunk_) +
+                               " workgroup partials -> 6 floats + contacts into a persistently mapped ring"});
+  }
+  plan.passes.push_back({"readback", "fence per tick; the CPU reads tick n-1's reaction after submitting tick n "
+                                     "(latency 1 tick, no wait unless the device is a full tick behind)"});
+  for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
+  plan.dispatches_per_step = 1;  // + 1 reduce per tick with a tool
+  plan.syncs_per_step = 0;
+  return plan;
+}
+
+void GlBackend::set_state(const std::vector<Vec3>& x_t, const std::vector<Vec3>& x_prev) {
+  if (static_cast<int32_t>(x_t.size()) != npoint_ || static_cast<int32_t>(x_prev.size()) != npoint_) {
+    throw Error(ErrorKind::Backend, "GL backend: set_state needs " + std::to_string(npoint_) + " points");
+  }
+  make_current();
+  auto upload = [&](GLuint buffer, auto&& value_of, float w) {
+    for (int32_t i = 0; i < npad_; ++i) {
+      const Vec3 r = value_of(static_cast<size_t>(i < npoint_ ? i : npoint_ - 1));
+      for (int k = 0; k < 3; ++k) readback_[4 * i + k] = static_cast<float>(r[k]);
+      readback_[4 * i + 3] = w;
+    }
+    glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(readback_.size() * sizeof(float)), readback_.data());
+  };
+  upload(x_[cur_], [&](size_t i) { return x_t[i]; }, 1.0f);
+  // The difference in double, then rounded: as precise as float allows.
+  upload(d_[cur_], [&](size_t i) { return Vec3(x_t[i] - x_prev[i]); }, 0.0f);
+  context_->check_errors("GL backend set_state");
+}
+
+void GlBackend::attach(const Attachment& attachment) {
+  if (!pull_) return;  // only a pulling tool grasps
+  make_current();
+  std::fill(attach_upload_.begin(), attach_upload_.end(), 0.0f);
+  for (size_t k = 0; k < attachment.points.size(); ++k) {
+    const int32_t p = attachment.points[k];
+    if (p < 0 || p >= npoint_) {
+      throw Error(ErrorKind::Backend, "GL backend: attached point " + std::to_string(p) + " out of range");
+    }
+    for (int j = 0; j < 3; ++j) attach_upload_[4 * p + j] = static_cast<float>(attachment.offsets[k][j]);
+    attach_upload_[4 * p + 3] = 1.0f;
+  }
+  // An event, not per step: GL orders it after the dispatches already queued.
+  glNamedBufferSubData(attach_, 0, static_cast<GLsizeiptr>(attach_upload_.size() * sizeof(float)),
+                       attach_upload_.data());
+}
+
+void GlBackend::release() {
+  if (!pull_) return;
+  make_current();
+  std::fill(attach_upload_.begin(), attach_upload_.end(), 0.0f);
+  glNamedBufferSubData(attach_, 0, static_cast<GLsizeiptr>(attach_upload_.size() * sizeof(float)),
+                       attach_upload_.data());
+}
+
+Reaction GlBackend::tick(const TickRequest& request) {
+  make_current();
+  const GLuint program = step_.id();
+  glUseProgram(program);
+  glProgramUniform1f(program, ORGANSIM_GL_U_DT, static_cast<float>(request.dt));
+  glProgramUniform1f(program, ORGANSIM_GL_U_DAMPING, static_cast<float>(1.0 - model_.viscous_damping * request.dt));
+  const bool tool_acts = tool_.present && request.tool_active;
+  if (tool_.present) glProgramUniform1i(program, ORGANSIM_GL_U_TOOL_ACTIVE, tool_acts ? 1 : 0);
+  const int slot = static_cast<int>(ticks_ % kSlots);
+  Slot& current = slots_[static_cast<size_t>(slot)];
+  // Its previous fence was consumed by read_slot() three ticks ago, so the CPU
+  // is done with this slot; the clear is ordered before this tick's dispatches.
+  glProgramUniform1i(program, ORGANSIM_GL_U_SLOT, slot);
+  glClearNamedBufferSubData(status_, GL_R32UI, static_cast<GLintptr>(slot * sizeof(uint32_t)), sizeof(uint32_t),
+                            GL_RED_INTEGER, GL_UNSIGNED_INT, &kNoPoint);
+
+  for (int32_t s = 0; s < request.substeps; ++s) {
+    if (tool_.present) {
+      // The force of substep s acts at its start (as on the CPU): centre there.
+      const double f = static_cast<double>(s) / request.substeps;
+      const Vec3 c = request.tool_from + f * (request.tool_to - request.tool_from);
+      glProgramUniform3f(program, ORGANSIM_GL_U_TOOL_CENTER, static_cast<float>(c.x()), static_cast<float>(c.y()),
+                         static_cast<float>(c.z()));
+      glProgramUniform1i(program, ORGANSIM_GL_U_REDUCE, tool_acts && s == request.substeps - 1 ? 1 : 0);
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_[cur_]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_[cur_]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[1 - cur_]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[1 - cur_]);
+    glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    ++dispatches_;
+    cur_ = 1 - cur_;  // x_{t+1} becomes x_t
+    time_ += request.dt;
+  }
+
+  current.has_reaction = tool_acts;
+  current.t_end = time_;
+  if (tool_acts) {
+    glUseProgram(reduce_.id());
+    glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_SLOT, slot);
+    glDispatchCompute(1, 1, 1);
+    ++dispatches_;
+  }
+  // Make this tick's reaction and status writes visible to the CPU through
+  // the mappings, and to the status clear that reuses the slot later.
+  glMemoryBarrier(GL_CLIENT_MAPPED_BUFFER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  if (current.fence) glDeleteSync(current.fence);
+  current.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+  glFlush();  // start the work now; the fence is polled next tick
+
+  Reaction reaction;  // zero until the first tick has completed
+  if (ticks_ > 0) reaction = read_slot(static_cast<int>((ticks_ - 1) % kSlots));
+  ++ticks_;
+  if (options_.debug) context_->check_errors("GL backend tick");
+  return reaction;
+}
+
+Reaction GlBackend::read_slot(int slot) {
+  Slot& s = slots_[static_cast<size_t>(slot)];
+  Reaction reaction;
+  if (!s.fence) return reaction;
+  // Normally already signalled: the device finished tick n-1 while the CPU
+  // prepared tick n. Waiting only happens when it is a whole tick behind.
+  GLenum status = glClientWaitSync(s.fence, 0, 0);
+  if (status == GL_TIMEOUT_EXPIRED) {
+    ++blocked_readbacks_;
+    status = glClientWaitSync(s.fence, GL_SYNC_FLUSH_COMMANDS_BIT, kReadbackTimeoutNs);
+  }
+  if (status == GL_WAIT_FAILED || status == GL_TIMEOUT_EXPIRED) {
+    throw Error(ErrorKind::Backend, std::string("GL backend: glClientWaitSync on the reaction fence ") +
+                                        (status == GL_WAIT_FAILED ? "failed" : "timed out after 10 s"));
+  }
+  glDeleteSync(s.fence);
+  s.fence = nullptr;
+  const uint32_t bad = status_map_[slot];
+  if (bad != kNoPoint) {
+    const int32_t p = static_cast<int32_t>(bad);
+    const double t0 = s.t_end;
+    throw Error(ErrorKind::Numerical,
+                "GL backend: non-finite position of point " + std::to_string(model_.input_of_internal[p]) +
+                    " (input numbering) in the tick ending at t = " + std::to_string(t0) +
+                    " s: the simulation blew up (dt above the critical step, a sliver tet or an extreme tool "
+                    "stiffness); positions are no longer valid");
+  }
+  if (!s.has_reaction) return reaction;
+  const float* r = reaction_map_ + 8 * slot;
+  reaction.force = Vec3(r[0], r[1], r[2]);
+  reaction.contacts = static_cast<int32_t>(r[3] + 0.5f);
+  reaction.torque = Vec3(r[4], r[5], r[6]);
+  return reaction;
+}
+
+void GlBackend::positions(std::vector<Vec3>& out) const {
+  make_current();
+  glGetNamedBufferSubData(x_[cur_], 0, static_cast<GLsizeiptr>(static_cast<size_t>(npoint_) * 4 * sizeof(float)),
+                          readback_.data());
+  out.resize(static_cast<size_t>(npoint_));
+  for (int32_t i = 0; i < npoint_; ++i) out[i] = Vec3(readback_[4 * i], readback_[4 * i + 1], readback_[4 * i + 2]);
+  context_->check_errors("GL backend positions");
+}
+
+void GlBackend::forces(std::vector<Vec3>& out) const {
+  if (!force_) throw Error(ErrorKind::Backend, "GL backend: forces() needs GlBackendOptions::record_forces");
+  make_current();
+  glGetNamedBufferSubData(force_, 0, static_cast<GLsizeiptr>(static_cast<size_t>(npoint_) * 4 * sizeof(float)),
+                          readback_.data());
+  out.resize(static_cast<size_t>(npoint_));
+  for (int32_t i = 0; i < npoint_; ++i) out[i] = Vec3(readback_[4 * i], readback_[4 * i + 1], readback_[4 * i + 2]);
+}
+
+std::unique_ptr<Backend> make_gl_backend(const Model& model, const BackendTool& tool,
+                                         const GlBackendOptions& options) {
+  return std::make_unique<GlBackend>(model, tool, options);
+}
+
+}  // namespace organsim

@@ -1,0 +1,101 @@
+#pragma once
+// The GL backend: the whole Verlet step as one fused GLSL compute dispatch per
+// substep over the Model's SELL-C gather layout (C = workgroup size), float
+// state in storage buffers (x_t and x_t - x_{t-1}, ping-pong), and the tool reaction reduced on the GPU and read
+// back one tick late through a fence and a persistently mapped buffer, so the
+// step never waits for the GPU. A non-finite position is flagged on the GPU
+// and read back the same way: tick() then throws Error(Numerical). See docs/gl.md.
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "core/gl/egl_context.h"
+#include "core/gl/gl_api.h"
+#include "core/gl/gl_program.h"
+#include "core/sim/backend.h"
+
+namespace organsim {
+
+struct GlBackendOptions {
+  bool debug = gl::EglContextOptions::default_debug();  // GL_KHR_debug errors become Errors
+  // Tests: also store every point's total force of the last substep (forces()).
+  bool record_forces = false;
+};
+
+// Creates its own headless context (gl::EglContext); throws Error(Backend)
+// when none can be made or a shader fails. Never falls back to the CPU.
+std::unique_ptr<Backend> make_gl_backend(const Model& model, const BackendTool& tool,
+                                         const GlBackendOptions& options = {});
+
+class GlBackend final : public Backend {
+ public:
+  GlBackend(const Model& model, const BackendTool& tool, const GlBackendOptions& options);
+  ~GlBackend() override;
+
+  std::string name() const override { return "gl"; }
+  std::string device() const override { return context_->renderer(); }
+  std::string precision() const override { return "float"; }
+  Plan plan() const override;
+  int32_t reaction_latency_ticks() const override { return 1; }
+  Reaction tick(const TickRequest& request) override;
+  void attach(const Attachment& attachment) override;
+  void release() override;
+  void positions(std::vector<Vec3>& out) const override;
+  double time() const override { return time_; }
+
+  // For a renderer drawing straight from the simulation (same or shared
+  // context): the storage buffer holding x_t as vec4 (w = 1), internal
+  // numbering, first point_count() entries valid. The id changes every
+  // substep (ping-pong), so ask again after each tick.
+  GLuint position_buffer() const { return x_[cur_]; }
+  int32_t point_count() const { return npoint_; }
+  const gl::EglContext& context() const { return *context_; }
+
+  // x_{t-1} is kept as d = x_t - x_{t-1}, computed here in double.
+  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override;
+  // Total force on each point during the last substep, N (record_forces only).
+  void forces(std::vector<Vec3>& out) const;
+
+  // Counters: compute dispatches issued, ticks whose reaction was not ready
+  // when read (the CPU then waited for it; 0 means the readback never stalled).
+  int64_t dispatches() const { return dispatches_; }
+  int64_t blocked_readbacks() const { return blocked_readbacks_; }
+
+ private:
+  void make_current() const;
+  GLuint create_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags);
+  Reaction read_slot(int slot);
+
+  const Model& model_;
+  BackendTool tool_;
+  GlBackendOptions options_;
+  std::unique_ptr<gl::EglContext> context_;
+  int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0;
+  bool volume_ = false, gravity_ = false, push_ = false, pull_ = false;
+
+  gl::ComputeProgram step_, reduce_;
+  // Ping-pong pairs: x_[cur_], d_[cur_] hold x_t and d_t = x_t - x_{t-1};
+  // the step writes x_[1 - cur_], d_[1 - cur_].
+  std::array<GLuint, 2> x_{}, d_{};
+  int cur_ = 0;
+  GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0,
+         status_ = 0;
+  const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
+  const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
+  std::vector<std::pair<const char*, size_t>> buffer_sizes_;
+
+  // Readback ring: the fence and whether the slot holds a reaction.
+  struct Slot {
+    GLsync fence = nullptr;
+    bool has_reaction = false;
+    double t_end = 0;  // simulated time at the end of that tick, s
+  };
+  std::vector<Slot> slots_;
+  int64_t ticks_ = 0;
+  double time_ = 0;
+  int64_t dispatches_ = 0, blocked_readbacks_ = 0;
+  std::vector<float> attach_upload_;  // sized once (npad x 4)
+  mutable std::vector<float> readback_;  // positions() scratch (npad x 4)
+};
+
+}  // namespace organsim

@@ -1,0 +1,77 @@
+#include "core/gl/gl_model_pack.h"
+
+#include <string>
+
+#include "core/util/error.h"
+#include "shaders/bindings.glsl.h"
+
+namespace organsim::gl {
+
+PackedModel pack_model(const Model& model) {
+  const auto& L = model.layout;
+  constexpr int32_t C = ORGANSIM_GL_CHUNK;
+  if (L.chunk_size != C) {
+    throw Error(ErrorKind::Backend, "GL backend: the model's layout chunk size is " + std::to_string(L.chunk_size) +
+                                        " but the step kernel's workgroup is " + std::to_string(C) +
+                                        " (shaders/bindings.glsl.h); build the model with chunk_size " +
+                                        std::to_string(C));
+  }
+  PackedModel p;
+  p.npoint = model.npoint();
+  p.nchunk = L.nchunk;
+  p.npad = p.nchunk * C;
+  const bool volume = model.has_volume();
+
+  p.rest.assign(static_cast<size_t>(p.npad) * 4, 0.0f);
+  p.mass.assign(static_cast<size_t>(p.npad) * 2, 0.0f);  // padding: 1/m = 0, never moves
+  for (int32_t i = 0; i < p.npad; ++i) {
+    const Vec3& r = model.rest_position[static_cast<size_t>(i < p.npoint ? i : p.npoint - 1)];
+    for (int k = 0; k < 3; ++k) p.rest[4 * i + k] = static_cast<float>(r[k]);
+    p.rest[4 * i + 3] = 1.0f;
+  }
+  for (int32_t i = 0; i < p.npoint; ++i) {
+    p.mass[2 * i] = static_cast<float>(model.inv_mass[i]);
+    p.mass[2 * i + 1] = static_cast<float>(model.mass[i]);
+  }
+
+  p.chunks.assign(static_cast<size_t>(p.nchunk) * 4, 0);
+  for (int32_t c = 0; c < p.nchunk; ++c) {
+    p.chunks[4 * c + 0] = L.springs.chunk_offset[c];
+    p.chunks[4 * c + 1] = L.springs.chunk_width[c];
+    p.chunks[4 * c + 2] = volume ? L.tets.chunk_offset[c] : 0;
+    p.chunks[4 * c + 3] = volume ? L.tets.chunk_width[c] : 0;
+  }
+
+  // Entry e of chunk c belongs to lane (e - offset) mod C, i.e. point c C + lane.
+  auto self = [&](const GatherTable& table, int32_t c, int32_t e) {
+    return c * C + (e - table.chunk_offset[c]) % C;
+  };
+  p.springs.resize(L.springs.item.size());
+  for (int32_t c = 0; c < p.nchunk; ++c) {
+    for (int32_t e = L.springs.chunk_offset[c]; e < L.springs.chunk_offset[c + 1]; ++e) {
+      const int32_t s = L.springs.item[e];
+      p.springs[e] = s < 0 ? SpringEntry{self(L.springs, c, e), 0, 0, 0}
+                           : SpringEntry{L.spring_other[e], static_cast<float>(model.spring_rest[s]),
+                                         static_cast<float>(model.spring_k[s]), static_cast<float>(model.spring_d[s])};
+    }
+  }
+  if (volume) {
+    p.tets.resize(L.tets.item.size());
+    for (int32_t c = 0; c < p.nchunk; ++c) {
+      for (int32_t e = L.tets.chunk_offset[c]; e < L.tets.chunk_offset[c + 1]; ++e) {
+        const int32_t t = L.tets.item[e];
+        if (t < 0) {
+          const int32_t q = self(L.tets, c, e);
+          p.tets[e] = {q, q, q, 0, 0};
+        } else {
+          const auto& o = L.tet_others[e];
+          p.tets[e] = {o[0], o[1], o[2], static_cast<float>(model.tet_k[t]),
+                       static_cast<float>(model.tet_rest_volume[t])};
+        }
+      }
+    }
+  }
+  return p;
+}
+
+}  // namespace organsim::gl

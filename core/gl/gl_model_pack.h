@@ -1,0 +1,45 @@
+#pragma once
+// The immutable Model packed into the std430 arrays the step kernel reads
+// (shaders/step.comp, bindings in shaders/bindings.glsl.h). Pure CPU code, no
+// GL: the GL backend uploads these arrays once.
+#include <cstdint>
+#include <vector>
+
+#include "core/model/model.h"
+
+namespace organsim::gl {
+
+// One gathered spring seen from its point: mirrors `SpringEntry` in step.comp.
+struct SpringEntry {
+  int32_t other;  // other end (internal id); the point itself for padding
+  float rest;     // m
+  float k;        // N/m
+  float d;        // N s/m
+};
+static_assert(sizeof(SpringEntry) == 16);
+
+// One gathered tet seen from its vertex p: (p, a, b, c) positively oriented.
+struct TetEntry {
+  int32_t a, b, c;  // the point itself for padding
+  float k_v;        // N/m^5, 0 for padding
+  float v_r;        // rest volume, m^3
+};
+static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has stride 20
+
+struct PackedModel {
+  int32_t npoint = 0, nchunk = 0, npad = 0;  // npad = nchunk * C
+  std::vector<float> rest;        // vec4 rest positions, m, w = 1 (npad x 4); padding copies the last point
+  std::vector<float> mass;        // vec2 {1/m (0 = fixed or padding), m}, kg (npad x 2)
+  std::vector<int32_t> chunks;    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk x 4)
+  std::vector<SpringEntry> springs;  // per (chunk, slot, lane) (nspring_entry)
+  std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume (ntet_entry)
+};
+
+// Padding entries point at the lane's own point with zero parameters: a
+// zero-length spring and a zero-volume tet with k_v = 0 add no force, so
+// every lane of a chunk runs the same number of slots (uniform control
+// flow). Throws Error(Backend) when the layout's chunk size is not the
+// kernel's workgroup size.
+PackedModel pack_model(const Model& model);
+
+}  // namespace organsim::gl

@@ -1,0 +1,45 @@
+// Storage-buffer bindings, uniform locations and workgroup sizes shared by the
+// C++ GL backend (core/gl) and every GLSL kernel (prepended to each one by
+// core/gl/shader_sources.cpp). Written in the common subset of C++ and GLSL:
+// #define lines of integer literals and // comments only (STYLE #13).
+#ifndef ORGANSIM_GL_BINDINGS_GLSL_H
+#define ORGANSIM_GL_BINDINGS_GLSL_H
+
+// Workgroup size of the step kernel = chunk size C of the gather layout
+// (core/model/layout.h): one workgroup gathers one chunk, one lane one point.
+#define ORGANSIM_GL_CHUNK 64
+// Workgroup size of the reaction reduction (one workgroup sums all partials).
+#define ORGANSIM_GL_REDUCE_SIZE 64
+// Slots of the persistently mapped reaction ring read back one tick late.
+#define ORGANSIM_GL_READBACK_SLOTS 4
+
+// Shader storage buffer bindings (std430). Sizes: npad = nchunk * C points.
+// State: x_t and d_t = x_t - x_{t-1} (equivalent to storing x_{t-1}, but in
+// float the difference of two nearby positions loses the velocity; see docs/gl.md).
+#define ORGANSIM_GL_B_X_CUR 0     // vec4 x_t, m (npad); w = 1
+#define ORGANSIM_GL_B_D_CUR 1     // vec4 d_t = x_t - x_{t-1}, m (npad)
+#define ORGANSIM_GL_B_X_NEXT 2    // vec4 x_{t+1}, m (npad); written by the step
+#define ORGANSIM_GL_B_D_NEXT 3    // vec4 d_{t+1}, m (npad); written by the step
+#define ORGANSIM_GL_B_MASS 4      // vec2 {1/m (0 = fixed or padding), m}, kg (npad)
+#define ORGANSIM_GL_B_CHUNKS 5    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk)
+#define ORGANSIM_GL_B_SPRINGS 6   // {int other; float rest, k, d} per (chunk, slot, lane) (nspring_entry)
+#define ORGANSIM_GL_B_TETS 7      // {int a, b, c; float k_v, V_r} per (chunk, slot, lane) (ntet_entry)
+#define ORGANSIM_GL_B_ATTACH 8    // vec4 {offset from tool centre (m), attached 0/1} (npad)
+#define ORGANSIM_GL_B_PARTIALS 9  // vec4 pairs {F.xyz, contacts}, {T.xyz, 0} per workgroup (nchunk x 2)
+#define ORGANSIM_GL_B_REACTION 10 // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
+#define ORGANSIM_GL_B_FORCE 11    // vec4 total force per point, N (npad); RECORD_FORCE variant (tests) only
+#define ORGANSIM_GL_B_STATUS 12   // uint per ring slot: lowest point whose x_{t+1} is not finite, or ~0u; mapped
+
+// Uniform locations (layout(location = N) uniform ...).
+#define ORGANSIM_GL_U_DT 0            // float dt, s
+#define ORGANSIM_GL_U_DAMPING 1       // float 1 - alpha dt (viscous drag in Verlet form)
+#define ORGANSIM_GL_U_GRAVITY 2       // vec3 g, m/s^2
+#define ORGANSIM_GL_U_TOOL_CENTER 3   // vec3 tool centre during this step, m
+#define ORGANSIM_GL_U_TOOL_ACTIVE 4   // int: 1 when the tool acts in this step
+#define ORGANSIM_GL_U_TOOL_RADIUS 5   // float R, m
+#define ORGANSIM_GL_U_TOOL_K 6        // float contact / attachment stiffness, N/m
+#define ORGANSIM_GL_U_REDUCE 7        // int: 1 when this step writes reaction partials
+#define ORGANSIM_GL_U_NPARTIAL 8      // int: partials to sum (reduce kernel)
+#define ORGANSIM_GL_U_SLOT 9          // int: ring slot of this tick (reduce: reaction; step: status)
+
+#endif

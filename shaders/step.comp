@@ -1,0 +1,174 @@
+// One position-Verlet substep, fused: each lane owns one point, gathers its
+// springs (spring + damper) and, per variant, its tets (volume force), gravity
+// and tool contact, then writes x_{t+1}. Chunk = workgroup, so entry
+// (slot j, lane l) of chunk c is at chunk offset + j * C + l: neighbouring
+// lanes read neighbouring entries. No atomics: every point writes only itself.
+// Variants (prepended #defines): HAS_VOLUME, HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// and RECORD_FORCE (tests: also store each point's total force).
+// Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
+layout(local_size_x = ORGANSIM_GL_CHUNK) in;
+
+struct SpringEntry {
+  int other;   // other end; the point itself for padding (zero length: no force)
+  float rest;  // m
+  float k;     // N/m
+  float d;     // N s/m
+};
+struct TetEntry {
+  int a, b, c;  // other vertices, (p, a, b, c) positively oriented; p itself for padding
+  float k_v;    // N/m^5 (0 for padding)
+  float v_r;    // rest volume, m^3
+};
+
+layout(std430, binding = ORGANSIM_GL_B_X_CUR) readonly buffer XCur { vec4 x_cur[]; };
+layout(std430, binding = ORGANSIM_GL_B_D_CUR) readonly buffer DCur { vec4 d_cur[]; };
+layout(std430, binding = ORGANSIM_GL_B_X_NEXT) writeonly buffer XNext { vec4 x_next[]; };
+layout(std430, binding = ORGANSIM_GL_B_D_NEXT) writeonly buffer DNext { vec4 d_next[]; };
+layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec2 mass[]; };
+layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
+layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
+#ifdef HAS_VOLUME
+layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
+#endif
+#ifdef TOOL_PULL
+layout(std430, binding = ORGANSIM_GL_B_ATTACH) readonly buffer Attach { vec4 attach[]; };
+#endif
+#if defined(TOOL_PUSH) || defined(TOOL_PULL)
+layout(std430, binding = ORGANSIM_GL_B_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
+#endif
+// Fail fast on blow-up without a readback per step: the lowest point whose new
+// position is not finite, per tick (ring slot), read back with the reaction.
+layout(std430, binding = ORGANSIM_GL_B_STATUS) buffer Status { uint first_non_finite[]; };
+layout(location = ORGANSIM_GL_U_SLOT) uniform int u_slot;
+
+#ifdef RECORD_FORCE
+layout(std430, binding = ORGANSIM_GL_B_FORCE) writeonly buffer Force { vec4 force_out[]; };
+#endif
+
+layout(location = ORGANSIM_GL_U_DT) uniform float u_dt;
+layout(location = ORGANSIM_GL_U_DAMPING) uniform float u_drag;  // 1 - alpha dt
+#ifdef HAS_GRAVITY
+layout(location = ORGANSIM_GL_U_GRAVITY) uniform vec3 u_gravity;
+#endif
+#if defined(TOOL_PUSH) || defined(TOOL_PULL)
+layout(location = ORGANSIM_GL_U_TOOL_CENTER) uniform vec3 u_tool_center;
+layout(location = ORGANSIM_GL_U_TOOL_ACTIVE) uniform int u_tool_active;
+layout(location = ORGANSIM_GL_U_TOOL_RADIUS) uniform float u_tool_radius;
+layout(location = ORGANSIM_GL_U_TOOL_K) uniform float u_tool_k;
+layout(location = ORGANSIM_GL_U_REDUCE) uniform int u_reduce;
+
+shared vec4 s_force[ORGANSIM_GL_CHUNK];   // {F.xyz, contacts}
+shared vec4 s_torque[ORGANSIM_GL_CHUNK];  // {T.xyz, 0}
+#endif
+
+void main() {
+  const uint lane = gl_LocalInvocationID.x;
+  const uint chunk = gl_WorkGroupID.x;
+  const int p = int(chunk * ORGANSIM_GL_CHUNK + lane);
+  const ivec4 info = chunks[chunk];  // spring offset, spring slots, tet offset, tet slots
+  const float inv_dt = 1.0 / u_dt;
+
+  const vec3 xi = x_cur[p].xyz;
+  const vec3 di = d_cur[p].xyz;  // x_t - x_{t-1}
+  const vec3 vi = di * inv_dt;
+  vec3 f = vec3(0.0);
+
+  // Springs + dampers: f = [k (L - r) + d ((v_q - v_p) . u)] u.
+  for (int j = 0; j < info.y; ++j) {
+    const SpringEntry e = springs[info.x + j * ORGANSIM_GL_CHUNK + int(lane)];
+    const vec3 xq = x_cur[e.other].xyz;
+    const vec3 l = xq - xi;
+    const float len = length(l);
+    if (len > 0.0) {  // coincident points (and padding): no direction, no force
+      const vec3 u = l / len;
+      const vec3 dv = d_cur[e.other].xyz * inv_dt - vi;
+      f += (e.k * (len - e.rest) + e.d * dot(dv, u)) * u;
+    }
+  }
+
+#ifdef HAS_VOLUME
+  // Volume: f = k_v (V_r - V) dV/dx_p, with V = a.(b x c)/6 relative to p and
+  // dV/dx_p = (c - a) x (b - a) / 6.
+  for (int j = 0; j < info.w; ++j) {
+    const TetEntry e = tets[info.z + j * ORGANSIM_GL_CHUNK + int(lane)];
+    const vec3 a = x_cur[e.a].xyz - xi;
+    const vec3 b = x_cur[e.b].xyz - xi;
+    const vec3 c = x_cur[e.c].xyz - xi;
+    const float v = dot(a, cross(b, c)) * (1.0 / 6.0);
+    const vec3 grad = cross(c - a, b - a) * (1.0 / 6.0);
+    f += e.k_v * (e.v_r - v) * grad;
+  }
+#endif
+
+  const vec2 m = mass[p];  // {1/m, m}
+#ifdef HAS_GRAVITY
+  f += m.y * u_gravity;
+#endif
+
+#if defined(TOOL_PUSH) || defined(TOOL_PULL)
+  vec4 contact_force = vec4(0.0);   // reaction on the tool {-f.xyz, 1}
+  vec4 contact_torque = vec4(0.0);  // (x - c) x (-f)
+  // Padding lanes (m = 0) sit on a real point's position: they must not touch the tool.
+  if (u_tool_active != 0 && m.y > 0.0) {
+    const vec3 d = xi - u_tool_center;
+#ifdef TOOL_PUSH
+    // Penalty contact inside the sphere: f = k_c (R - |d|) d/|d| (+z at the centre).
+    const float dist = length(d);
+    if (dist < u_tool_radius) {
+      const vec3 n = dist > 0.0 ? d / dist : vec3(0.0, 0.0, 1.0);
+      const vec3 fc = u_tool_k * (u_tool_radius - dist) * n;
+      f += fc;
+      contact_force = vec4(-fc, 1.0);
+      contact_torque = vec4(cross(d, -fc), 0.0);
+    }
+#else
+    // Grasped points follow centre + offset through springs of stiffness k_c.
+    const vec4 at = attach[p];
+    if (at.w > 0.0) {
+      const vec3 fc = u_tool_k * (u_tool_center + at.xyz - xi);
+      f += fc;
+      contact_force = vec4(-fc, 1.0);
+      contact_torque = vec4(cross(d, -fc), 0.0);
+    }
+#endif
+  }
+  // Last substep of a tick: reduce this workgroup's reaction in shared memory
+  // (fixed tree order, deterministic) into one partial; reduce_reaction.comp
+  // sums the partials. u_reduce is uniform, so the barriers are in uniform flow.
+  if (u_reduce != 0) {
+    s_force[lane] = contact_force;
+    s_torque[lane] = contact_torque;
+    memoryBarrierShared();
+    barrier();
+    for (uint half_size = ORGANSIM_GL_CHUNK / 2; half_size > 0; half_size /= 2) {
+      if (lane < half_size) {
+        s_force[lane] += s_force[lane + half_size];
+        s_torque[lane] += s_torque[lane + half_size];
+      }
+      memoryBarrierShared();
+      barrier();
+    }
+    if (lane == 0) {
+      partials[2 * chunk] = s_force[0];
+      partials[2 * chunk + 1] = s_torque[0];
+    }
+  }
+#endif
+
+#ifdef RECORD_FORCE
+  force_out[p] = vec4(f, 0.0);
+#endif
+  // Position Verlet with mass-proportional drag, in difference form:
+  // d_{t+1} = (1 - alpha dt) d_t + dt^2 f/m, x_{t+1} = x_t + d_{t+1}; the same
+  // x_{t+1} = x_t + (1 - alpha dt)(x_t - x_{t-1}) + dt^2 f/m as the CPU, but
+  // the velocity never passes through the rounding of absolute positions.
+  // Fixed points and padding lanes have 1/m = 0 and stay put.
+  const vec3 d_new = m.x > 0.0 ? u_drag * di + (u_dt * u_dt * m.x) * f : vec3(0.0);
+  const vec3 x_new = xi + d_new;
+  x_next[p] = vec4(x_new, 1.0);
+  d_next[p] = vec4(d_new, 0.0);
+  // Exponent bits all ones = inf or NaN; bit tests survive any fast-math
+  // assumption a compiler might make about isnan(). Rare: one atomic per bad point.
+  const uvec3 exponent = floatBitsToUint(x_new) & 0x7f800000u;
+  if (any(equal(exponent, uvec3(0x7f800000u)))) atomicMin(first_non_finite[u_slot], uint(p));
+}

@@ -1,0 +1,159 @@
+// The GL backend against the double-precision CPU reference over 1000 steps
+// (100 ticks x 10 substeps of 0.1 ms) of a push, a pull and a lean scene, on
+// box models built in the test (the liver_push/liver_pull scenario files mesh
+// a surface with CGAL; these tests stay CGAL-free and fast).
+//
+// Tolerances (single precision; docs/gl.md "Accuracy"):
+// - positions, 1e-5 of the bounding-box diagonal: float stores 0.1 m
+//   coordinates to ~4e-9 m (4e-8 of the 0.12 m diagonal) and each step rounds
+//   x_{t+1} = x_t + d once more; as the GL state keeps d = x_t - x_{t-1}
+//   itself, those roundings do not feed the velocity, so they random-walk:
+//   ~sqrt(1000) x 4e-8 ~ 1e-6. Measured: 5e-7 (push, pull), 2.7e-6 (lean
+//   cantilever, larger motion). A wrong force term moves points by
+//   millimetres (1e-2 of the diagonal); storing x_{t-1} instead of d gives
+//   ~1e-3 (the CPU float path does, measured 0.6-1.5e-3 on these scenes).
+// - tool force, 1e-4 of the peak reaction: each contact's force is
+//   k_c x penetration, so a position error e changes it by k_c e: with
+//   e ~ 1e-7 m, k_c = 200 N/m against a ~1.4 N peak that is ~1e-5 per
+//   contact. Measured: 5-7e-6.
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "core/gl/gl_backend.h"
+#include "core/sim/cpu_backend.h"
+#include "gl_test_scenes.h"
+
+namespace organsim {
+namespace {
+
+constexpr double kDt = 1e-4;    // s
+constexpr int kSubsteps = 10;   // per tick
+constexpr int kTicks = 100;     // 1000 steps
+
+struct Comparison {
+  double position = 0;    // max over ticks and points |x_gl - x_cpu| / bbox diagonal
+  double force = 0;       // max over ticks |F_gl - F_cpu| / max |F_cpu|
+  double peak_force = 0;  // N
+  int32_t max_contacts = 0;
+  int64_t dispatches = 0, blocked = 0;
+};
+
+// Runs both backends through the same ticks. The GL reaction of tick n is
+// returned by tick n+1 (latency 1), so it is compared with the CPU's tick n.
+Comparison compare(const Model& model, const BackendTool& tool, const std::function<TickRequest(int)>& request_at,
+                   const Attachment* attachment = nullptr) {
+  // One thread: the machine is shared and OpenMP spinning under load is slow.
+  auto cpu = make_cpu_backend(model, tool, {Precision::Double, 1});
+
+  GlBackend gl(model, tool, {});
+  EXPECT_EQ(cpu->reaction_latency_ticks(), 0);
+  EXPECT_EQ(gl.reaction_latency_ticks(), 1);
+  if (attachment) {
+    cpu->attach(*attachment);
+    gl.attach(*attachment);
+  }
+  const double diagonal = gl_test::bbox_diagonal(model);
+  Comparison c;
+  std::vector<Reaction> cpu_reaction, gl_reaction;
+  std::vector<Vec3> xc, xg;
+  for (int n = 0; n <= kTicks; ++n) {
+    TickRequest r = request_at(std::min(n, kTicks - 1));
+    if (n == kTicks) r.substeps = 1;  // one more (GL only) to fetch the last reaction
+    if (n < kTicks) cpu_reaction.push_back(cpu->tick(r));
+    const Reaction g = gl.tick(r);
+    if (n > 0) gl_reaction.push_back(g);
+    if (n < kTicks && (n % 10 == 9)) {
+      cpu->positions(xc);
+      gl.positions(xg);
+      for (size_t i = 0; i < xc.size(); ++i) c.position = std::max(c.position, (xc[i] - xg[i]).norm() / diagonal);
+    }
+  }
+  double worst = 0;
+  for (int n = 0; n < kTicks; ++n) {
+    c.peak_force = std::max(c.peak_force, cpu_reaction[n].force.norm());
+    worst = std::max(worst, (cpu_reaction[n].force - gl_reaction[n].force).norm());
+    c.max_contacts = std::max(c.max_contacts, cpu_reaction[n].contacts);
+  }
+  c.force = c.peak_force > 0 ? worst / c.peak_force : worst;
+  c.dispatches = gl.dispatches();
+  c.blocked = gl.blocked_readbacks();
+  return c;
+}
+
+TickRequest tool_request(int n, const Vec3& start, const Vec3& end) {
+  TickRequest r;
+  r.dt = kDt;
+  r.substeps = kSubsteps;
+  r.tool_active = true;
+  r.tool_from = start + (end - start) * (static_cast<double>(n) / kTicks);
+  r.tool_to = start + (end - start) * (static_cast<double>(n + 1) / kTicks);
+  return r;
+}
+
+TEST(GlParity, PushMatchesTheDoubleReference) {
+  // Volume, gravity, fixed bottom; a 2 cm sphere pressed 1.5 cm into the top.
+  const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
+  const BackendTool tool{true, ToolMode::Push, 0.02, 200.0};
+  const Vec3 start(0.05, 0.05, 0.072), end(0.05, 0.05, 0.055);
+  const Comparison c = compare(model, tool, [&](int n) { return tool_request(n, start, end); });
+  std::cout << "push: position " << c.position << " of diagonal, force " << c.force << " of peak " << c.peak_force
+            << " N, " << c.max_contacts << " contacts, " << c.dispatches << " dispatches, " << c.blocked
+            << " blocked readbacks\n";
+  ASSERT_GT(c.max_contacts, 3);
+  ASSERT_GT(c.peak_force, 0.1);
+  EXPECT_LT(c.position, 1e-5);
+  EXPECT_LT(c.force, 1e-4);
+  // One fused dispatch per substep plus one reduction per tick (the extra
+  // one-substep tick that fetches the last reaction adds 2).
+  EXPECT_EQ(c.dispatches, kTicks * (kSubsteps + 1) + 2);
+}
+
+TEST(GlParity, PullMatchesTheDoubleReference) {
+  const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
+  const BackendTool tool{true, ToolMode::Pull, 0.01, 200.0};
+  const Vec3 grasp(0.05, 0.05, 0.05), end = grasp + Vec3(0.004, 0, 0.012);
+  Attachment attachment;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if ((model.rest_position[i] - grasp).norm() < 0.015) {
+      attachment.points.push_back(i);
+      attachment.offsets.push_back(model.rest_position[i] - grasp);
+    }
+  }
+  ASSERT_GE(attachment.points.size(), 4u);
+  const Comparison c = compare(model, tool, [&](int n) { return tool_request(n, grasp, end); }, &attachment);
+  std::cout << "pull: position " << c.position << " of diagonal, force " << c.force << " of peak " << c.peak_force
+            << " N, " << c.max_contacts << " attached\n";
+  ASSERT_GT(c.peak_force, 0.1);
+  EXPECT_LT(c.position, 1e-5);
+  EXPECT_LT(c.force, 1e-4);
+}
+
+TEST(GlParity, LeanSceneMatchesTheDoubleReference) {
+  // Springs and gravity only: a cantilever fixed at x = 0 sagging, no volume
+  // pass and no tool kernels compiled in.
+  const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.02, 0.02), 10, 2, 2);
+  Material material;
+  ModelOptions options;
+  options.gravity = Vec3(0, 0, -9.81);
+  FixedSelector wall;
+  wall.kind = FixedSelector::Kind::Plane;
+  wall.point = Vec3(1e-9, 0, 0);
+  wall.normal = Vec3(-1, 0, 0);
+  options.fixed.push_back(wall);
+  const Model model = build_model(mesh, material, options, "cantilever");
+  ASSERT_FALSE(model.has_volume());
+  const Comparison c = compare(model, BackendTool{}, [](int) {
+    TickRequest r;
+    r.dt = kDt;
+    r.substeps = kSubsteps;
+    return r;
+  });
+  std::vector<Vec3> x;
+  std::cout << "lean: position " << c.position << " of diagonal, " << c.dispatches << " dispatches\n";
+  EXPECT_LT(c.position, 1e-5);
+  EXPECT_EQ(c.dispatches, (kTicks + 1) * kSubsteps - (kSubsteps - 1));  // no reduction without a tool
+}
+
+}  // namespace
+}  // namespace organsim

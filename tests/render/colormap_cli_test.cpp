@@ -1,0 +1,99 @@
+// Colour map scalars and legend, `organsim render` end to end, and the
+// frame cost measurement bench uses.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sys/wait.h>
+
+#include "core/mesh/mesh_io.h"
+#include "core/model/model.h"
+#include "core/render/colormap.h"
+#include "core/render/frame_cost.h"
+#include "tests/render/render_test_util.h"
+
+namespace organsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(ColorMap, StrainOfAStretchedModelIsTheStretch) {
+  const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), 2, 2, 2);
+  const Model model = build_model(mesh, Material{}, ModelOptions{}, "cube");
+  // Uniform scaling by 1.1 stretches every spring by 10 %: strain 0.1 at
+  // every point (float output: 1e-6).
+  std::vector<Vec3> x = model.rest_position;
+  for (Vec3& p : x) p *= 1.1;
+  std::vector<float> strain, displacement;
+  point_strain(model, x, strain);
+  ASSERT_EQ(strain.size(), static_cast<size_t>(model.npoint()));
+  for (float s : strain) EXPECT_NEAR(s, 0.1, 1e-6);
+  // Displacement |0.1 x|: largest at the far corner (1,1,1): 0.1 * sqrt(3).
+  point_displacement(model, x, displacement);
+  EXPECT_NEAR(colormap_range_max(displacement, 0), 0.1 * std::sqrt(3.0), 1e-6);
+  EXPECT_EQ(colormap_range_max(displacement, 0.5), 0.5);  // a fixed range wins
+}
+
+TEST(ColorMap, ScaleRunsFromDarkBlueToRedAndLegendShowsIt) {
+  const Vec3f lo = colormap_rgb(0), hi = colormap_rgb(1);
+  EXPECT_GT(lo.z(), lo.x());  // blue end
+  EXPECT_GT(hi.x(), hi.z());  // red end
+  EXPECT_EQ(colormap_rgb(-1), lo);  // clamped
+  EXPECT_EQ(colormap_rgb(2), hi);
+  cv::Mat img(300, 400, CV_8UC3, cv::Scalar(255, 255, 255));
+  draw_colormap_legend(img, "strain", 0.0, 0.12, "");
+  // The bar's top row has the high colour, its bottom row the low colour.
+  const cv::Mat red = testing::differs_from(img, cv::Vec3b(static_cast<uchar>(hi.z() * 255), static_cast<uchar>(hi.y() * 255),
+                                                           static_cast<uchar>(hi.x() * 255)), 3);
+  EXPECT_LT(cv::countNonZero(red), img.rows * img.cols - 5);  // some pixels are the top colour
+  // Text was written (dark pixels right of the bar).
+  cv::Mat grey;
+  cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(cv::countNonZero(grey(cv::Rect(300, 0, 100, 300)) < 100), 20);
+}
+
+TEST(RenderCommand, WritesAStillOfATetMeshAndRejectsBadCameras) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "render_cmd";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  write_tet_mesh(dir / "box.vtk", make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.08, 0.06), 4, 4, 3));
+  const fs::path image = dir / "box.png";
+  const std::string cmd = std::string(ORGANSIM_EXE) + " render " + (dir / "box.vtk").string() + " -o " +
+                          image.string() + " --width 240 --height 180 --background 0,0,0 --wireframe > " +
+                          (dir / "out.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const cv::Mat img = cv::imread(image.string());
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 240);
+  EXPECT_EQ(img.rows, 180);
+  const cv::Mat object = testing::differs_from(img, cv::Vec3b(0, 0, 0), 8);
+  // Auto-fit: the box is in the middle, the corners are background.
+  EXPECT_GT(cv::countNonZero(object(cv::Rect(110, 80, 20, 20))), 350);
+  EXPECT_EQ(cv::countNonZero(object(cv::Rect(0, 0, 15, 15))), 0);
+  // A camera vector with two numbers is a usage error (exit 2), no file.
+  const fs::path bad = dir / "bad.png";
+  const std::string bad_cmd = std::string(ORGANSIM_EXE) + " render " + (dir / "box.vtk").string() + " -o " +
+                              bad.string() + " --camera-position 1,2 > /dev/null 2>&1";
+  const int status = std::system(bad_cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  EXPECT_FALSE(fs::exists(bad));
+}
+
+TEST(FrameCost, MeasuresEveryStage) {
+  const Model model =
+      build_model(make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.1), 4, 4, 4), Material{}, ModelOptions{}, "box");
+  const FrameCost cost = measure_frame_cost(model, 160, 120, 3);
+  EXPECT_EQ(cost.frames, 3);
+  EXPECT_EQ(cost.triangles, static_cast<size_t>(4 * 3 * 16));
+  // Times are positive (their size is bench's business, not a test's).
+  EXPECT_GT(cost.render_ms, 0.0);
+  EXPECT_GT(cost.readback_ms, 0.0);
+  EXPECT_GT(cost.png_ms, 0.0);
+  EXPECT_GT(cost.video_ms, 0.0);
+  EXPECT_FALSE(cost.renderer.empty());
+}
+
+}  // namespace
+}  // namespace organsim
