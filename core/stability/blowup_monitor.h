@@ -8,8 +8,8 @@
 //      dampers and drag only removing energy, KE <= E_elastic(start) + work of
 //      gravity + work of the tool; a growing mode breaks this by orders of
 //      magnitude within a few ticks while physical motion never does;
-//   3. spring strain beyond a bound (default 100 % stretch);
-//   4. tet inversion beyond a bound (signed volume < -0.5 rest volume).
+//   3. spring strain beyond a bound (default 400 % stretch);
+//   4. tet inversion beyond a bound (signed volume < -3 rest volumes).
 // A finding stops the run: on_tick throws Error(Numerical) naming the
 // simulated time, the point (input numbering) and the likely cause. The run
 // loop then writes the force log with completed = false and this reason.
@@ -25,12 +25,13 @@ namespace organsim {
 
 struct BlowupMonitorOptions {
   int32_t interval_ticks = 1;    // check every this many ticks (>= 1)
-  double max_strain = 1.0;       // (L - r) / r beyond this stops the run
-  // A tet inverted beyond this (V < -max_inversion V_r) stops the run. Slivers
-  // flatten slightly inside out under ordinary loads (a linear spring lattice
-  // does not forbid it): seen at V = -0.006 V_r on the liver at any dt. A
-  // blow-up or a tool driven through the mesh goes far beyond.
-  double max_inversion = 0.5;
+  // Geometric guards behind the energy check (which sees a growing mode
+  // first). Generous on purpose: a spring lattice collapses locally without
+  // exploding. Measured on scenarios/liver_push.json (2481 points) under
+  // gravity alone, at any dt: slivers reach 250 % strain and V = -1.65 V_r,
+  // then settle. An explosion goes far beyond both.
+  double max_strain = 4.0;       // (L - r) / r beyond this stops the run
+  double max_inversion = 3.0;    // V < -max_inversion V_r stops the run
   bool check_inversion = true;
   // KE > energy_factor * (budget) + floor stops the run. The slack covers the
   // measured KE (from position differences) versus Verlet's conserved energy.

@@ -1,0 +1,71 @@
+// `organsim study` end to end on the small gentle-push box: the reference
+// converges, a dt above dt_crit is reported unstable with its reason, stable
+// runs have small errors that shrink with dt, and the three files are there.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+int run(const std::string& args, std::string& output) {
+  const std::string cmd = std::string(ORGANSIM_EXE) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return -1;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) output.append(buf, n);
+  const int status = pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(StudyCli, GentlePushStudy) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_gentle";
+  fs::remove_all(out);
+  std::string output;
+  const int code = run("study " + std::string(ORGANSIM_SOURCE_DIR) +
+                           "/scenarios/stress/gentle_push.json --dt 0.002,0.0005,0.00025 --precision double,float "
+                           "--duration 0.1 -o " + out.string(),
+                       output);
+  ASSERT_EQ(code, 0) << output;
+  for (const char* f : {"study.json", "study.csv", "study.png"}) EXPECT_TRUE(fs::exists(out / f)) << f;
+  std::ifstream png(out / "study.png", std::ios::binary);
+  char magic[4] = {};
+  png.read(magic, 4);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(out / "study.json"));
+  EXPECT_TRUE(j["reference"]["converged"].get<bool>());
+  EXPECT_LE(j["reference"]["halving_position_change_max"].get<double>(), 1e-4);
+  const double dt_crit = j["stability"]["dt_crit"].get<double>();
+  ASSERT_EQ(j["runs"].size(), 6u);  // 2 precisions x 3 dt
+  for (const auto& r : j["runs"]) {
+    const double dt = r["dt"].get<double>();
+    if (dt > dt_crit) {
+      // 2 ms is 1.5 x dt_crit (1.37 ms): stopped by the blow-up check.
+      EXPECT_FALSE(r["stable"].get<bool>()) << r.dump();
+      EXPECT_NE(r["reason"].get<std::string>().find("run stopped at t = "), std::string::npos);
+      continue;
+    }
+    EXPECT_TRUE(r["stable"].get<bool>()) << r.dump();
+    // A 5 mm push on a 6.9 cm diagonal: errors of a few 1e-4 of the diagonal
+    // at these steps; 1e-2 would mean a wrong comparison.
+    EXPECT_GT(r["position_error_rms"].get<double>(), 0.0);
+    EXPECT_LT(r["position_error_max"].get<double>(), 1e-2);
+    EXPECT_LT(r["force_error_rms"].get<double>(), 5e-2);
+    EXPECT_GT(r["wall_seconds_per_simulated_second"].get<double>(), 0.0);
+  }
+  // Halving dt halves the error (first order: the backward-difference damper
+  // and the per-tick tool path); at least a 1.5x drop, double precision.
+  const auto& a = j["runs"][1];  // double, 0.5 ms
+  const auto& b = j["runs"][2];  // double, 0.25 ms
+  EXPECT_GT(a["position_error_rms"].get<double>(), 1.5 * b["position_error_rms"].get<double>());
+}
+
+}  // namespace
