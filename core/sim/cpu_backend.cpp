@@ -65,9 +65,12 @@ class CpuBackend final : public Backend {
       : model_(model), tool_(tool), threads_(choose_threads(model, options)) {
     const int32_t n = model.npoint();
     const auto& layout = model.layout;
-    // State is the displacement u = x - X from rest: in float, x itself
-    // would round away the per-step increment dt^2 F/m (~1e-9 m against a
-    // 4e-9 m spacing of floats near 5 cm); u starts at 0 where floats are fine.
+    // State is the displacement u = x - X from rest and the last step's
+    // increment d = u_t - u_{t-1}. In float, x itself would round away the
+    // per-step increment dt^2 F/m (~1e-9 m against a 4e-9 m spacing of floats
+    // near 5 cm), and u_{t-1} would leave the velocity d/dt as the difference
+    // of two nearly equal numbers, worse the smaller dt is. In exact
+    // arithmetic this is the same position Verlet.
     rest_.assign(n, 0);
     for (int32_t i = 0; i < n; ++i) {
       rest_.x[i] = static_cast<Real>(model.rest_position[i].x());
@@ -75,8 +78,9 @@ class CpuBackend final : public Backend {
       rest_.z[i] = static_cast<Real>(model.rest_position[i].z());
     }
     u_.assign(n, 0);
-    u_prev_.assign(n, 0);
+    d_.assign(n, 0);
     u_next_.assign(n, 0);
+    d_next_.assign(n, 0);
 
     // Per-slot copies of the parameters in the backend's precision, one
     // contiguous stream per slot. Padding slots point at their own point
@@ -160,7 +164,7 @@ class CpuBackend final : public Backend {
     plan.passes.push_back({"integrate", "position Verlet, fused with the passes above (" +
                                             std::to_string(kLanes) + " lanes per SIMD group)"});
     const size_t n = static_cast<size_t>(m.npoint());
-    plan.buffers.push_back({"X, u_t, u_{t-1}, u_{t+1}", 4 * n * 3 * real});
+    plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
     plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
     plan.buffers.push_back({"spring slots (other, rest, k, d)",
                             m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
@@ -197,13 +201,13 @@ class CpuBackend final : public Backend {
     if (x.size() != u_.x.size() || x_prev.size() != u_.x.size())
       throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.x.size()) + " positions");
     for (size_t i = 0; i < x.size(); ++i) {
-      const Vec3 u = x[i] - model_.rest_position[i], up = x_prev[i] - model_.rest_position[i];
+      const Vec3 u = x[i] - model_.rest_position[i], d = x[i] - x_prev[i];
       u_.x[i] = static_cast<Real>(u.x());
       u_.y[i] = static_cast<Real>(u.y());
       u_.z[i] = static_cast<Real>(u.z());
-      u_prev_.x[i] = static_cast<Real>(up.x());
-      u_prev_.y[i] = static_cast<Real>(up.y());
-      u_prev_.z[i] = static_cast<Real>(up.z());
+      d_.x[i] = static_cast<Real>(d.x());
+      d_.y[i] = static_cast<Real>(d.y());
+      d_.z[i] = static_cast<Real>(d.z());
     }
   }
 
@@ -278,8 +282,8 @@ class CpuBackend final : public Backend {
     const int32_t nchunk = model_.layout.nchunk;
 #pragma omp parallel for schedule(static) num_threads(threads_)
     for (int32_t c = 0; c < nchunk; ++c) chunk<Volume, Gravity, Tool>(ctx, c);
-    u_prev_.swap(u_);  // u_{t-1} <- u_t
     u_.swap(u_next_);  // u_t <- u_{t+1}
+    d_.swap(d_next_);  // d_t <- d_{t+1}
     Reaction reaction;
     if constexpr (Tool != kNoTool) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
@@ -304,9 +308,9 @@ class CpuBackend final : public Backend {
     const Real* __restrict ux = u_.x.data();
     const Real* __restrict uy = u_.y.data();
     const Real* __restrict uz = u_.z.data();
-    const Real* __restrict px = u_prev_.x.data();
-    const Real* __restrict py = u_prev_.y.data();
-    const Real* __restrict pz = u_prev_.z.data();
+    const Real* __restrict dx = d_.x.data();
+    const Real* __restrict dy = d_.y.data();
+    const Real* __restrict dz = d_.z.data();
     for (int32_t g0 = first; g0 < last; g0 += kLanes) {
       const int32_t lanes = std::min(kLanes, last - g0);
       const int32_t lane0 = g0 - first;
@@ -336,9 +340,7 @@ class CpuBackend final : public Backend {
           const Real length = std::sqrt(lx * lx + ly * ly + lz * lz);
           // Coincident ends (and padding slots) have no direction: no force.
           const Real inv = length > Real(0) ? Real(1) / length : Real(0);
-          const Real dvx = (ux[q] - px[q]) - (ux[p] - px[p]);
-          const Real dvy = (uy[q] - py[q]) - (uy[p] - py[p]);
-          const Real dvz = (uz[q] - pz[q]) - (uz[p] - pz[p]);
+          const Real dvx = dx[q] - dx[p], dvy = dy[q] - dy[p], dvz = dz[q] - dz[p];
           const Real along = (dvx * lx + dvy * ly + dvz * lz) * inv * ctx.inv_dt;
           const Real s = (k[e] * (length - rest[e]) + d[e] * along) * inv;
           fx[l] += s * lx;
@@ -406,18 +408,25 @@ class CpuBackend final : public Backend {
         }
       }
 
-      // Position Verlet with drag; fixed points (1/m = 0) stay put.
+      // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m,
+      // u' = u + d'. Fixed points (1/m = 0) stay put.
       Real* __restrict nx = u_next_.x.data();
       Real* __restrict ny = u_next_.y.data();
       Real* __restrict nz = u_next_.z.data();
+      Real* __restrict ndx = d_next_.x.data();
+      Real* __restrict ndy = d_next_.y.data();
+      Real* __restrict ndz = d_next_.z.data();
 #pragma omp simd
       for (int32_t l = 0; l < lanes; ++l) {
         const int32_t p = g0 + l;
         const Real w = inv_mass_[p] * ctx.dt2;
         const bool free = inv_mass_[p] > Real(0);
-        nx[p] = free ? ux[p] + ctx.drag * (ux[p] - px[p]) + w * fx[l] : ux[p];
-        ny[p] = free ? uy[p] + ctx.drag * (uy[p] - py[p]) + w * fy[l] : uy[p];
-        nz[p] = free ? uz[p] + ctx.drag * (uz[p] - pz[p]) + w * fz[l] : uz[p];
+        ndx[p] = free ? ctx.drag * dx[p] + w * fx[l] : Real(0);
+        ndy[p] = free ? ctx.drag * dy[p] + w * fy[l] : Real(0);
+        ndz[p] = free ? ctx.drag * dz[p] + w * fz[l] : Real(0);
+        nx[p] = ux[p] + ndx[p];
+        ny[p] = uy[p] + ndy[p];
+        nz[p] = uz[p] + ndz[p];
       }
     }
     if constexpr (Tool != kNoTool) partial_[c] = partial;
@@ -429,7 +438,8 @@ class CpuBackend final : public Backend {
   std::string device_;
   double time_ = 0;
   Soa3<Real> rest_;                   // X, rest positions (npoint)
-  Soa3<Real> u_, u_prev_, u_next_;    // displacements at t, t-1, t+1 (npoint)
+  Soa3<Real> u_, u_next_;             // displacements from rest at t, t+1 (npoint)
+  Soa3<Real> d_, d_next_;             // step increments u_t - u_{t-1}, u_{t+1} - u_t (npoint)
   std::vector<int32_t> spring_other_;  // per slot, self for padding (nentry)
   std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry)
   std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
