@@ -51,7 +51,11 @@ TetMesh Mesh3Domain::mesh(const Mesh3Criteria& c) const {
   CGAL::get_default_random() = CGAL::Random(kSeed);
   const Criteria criteria(facet_angle = 25, facet_size = c.cell_size, facet_distance = c.facet_distance,
                           cell_radius_edge_ratio = 3, cell_size = c.cell_size);
-  const Complex complex = c.exude ? CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(), exude())
+  // Exudation without an explicit limit stops after as much wall-clock time
+  // as refinement took, so the same input gave different meshes from run to
+  // run; time_limit = 0 means no limit: it runs to completion, deterministic.
+  const Complex complex = c.exude ? CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(),
+                                                               exude(time_limit = 0))
                                   : CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(), no_exude());
 
   // Index only vertices used by cells of the complex (the triangulation also
