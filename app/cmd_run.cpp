@@ -123,7 +123,13 @@ void run_command(const RunArgs& args) {
   Scenario s = load_scenario(args.scenario);
   BackendSelection selection;
   selection.name = args.backend.empty() ? s.backend.name : args.backend;
-  selection.precision = args.precision.empty() ? s.backend.precision : std::optional<std::string>(args.precision);
+  // The scenario's precision belongs to the scenario's backend: switching
+  // backend on the command line takes the new backend's default precision.
+  const bool backend_switched = !args.backend.empty() && args.backend != s.backend.name;
+  if (!args.precision.empty())
+    selection.precision = args.precision;
+  else if (!backend_switched)
+    selection.precision = s.backend.precision;
   selection.threads = args.threads >= 0 ? args.threads : s.backend.threads;
   s.backend.name = selection.name;
 

@@ -147,5 +147,15 @@ TEST(RunCli, GlBackendRunsOrFailsLoudlyNeverFallsBackToCpu) {
   }
 }
 
+TEST(RunCli, BackendSwitchOnTheCommandLineTakesThatBackendsPrecision) {
+  // liver_push.json asks for cpu in double; --backend gl must not inherit
+  // "double" (which gl cannot do) but use gl's own float.
+  const fs::path dir = test_dir("switch");
+  const std::string scenario = std::string(ORGANSIM_SOURCE_DIR) + "/scenarios/liver_push.json";
+  const auto r = run_organsim("run --plan '" + scenario + "' --backend gl", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("gl (float"), std::string::npos) << r.out;
+}
+
 }  // namespace
 }  // namespace organsim
