@@ -20,6 +20,8 @@
 #include "core/mesh/example_shapes.h"
 #include "core/mesh/mesh_io.h"
 #include "core/model/model.h"
+#include "core/render/frame_cost.h"
+#include "core/stability/blowup_monitor.h"
 #include "core/util/error.h"
 #include "meshing/mesh_surface.h"
 
@@ -58,6 +60,7 @@ struct BenchArgs {
   double volume_modulus = 20000;  // Pa; 0 leaves the volume pass out
   std::string surface;        // default: the built-in liver-like surface (= examples/liver.off)
   bool exude = true;
+  bool frames = true;         // also measure one rendered frame per model
   bool json = false;
 };
 
@@ -133,6 +136,13 @@ struct Row {
   std::string backend, precision, device;
   Timing timing;
   Plan plan;
+  double check_ms = 0;  // one blow-up check (positions read back included)
+};
+
+// Frame cost per model size (backend-independent: the renderer's own paths).
+struct FrameRow {
+  int32_t points = 0;
+  FrameCost cost;
 };
 
 std::vector<std::pair<std::string, std::string>> configurations(const BenchArgs& args) {
@@ -163,6 +173,8 @@ void run_bench(const BenchArgs& args) {
   const bool explicit_backends = !args.backends.empty();
 
   std::vector<Row> rows;
+  std::vector<FrameRow> frame_rows;
+  std::string frames_unavailable;
   std::vector<std::pair<std::string, std::string>> unavailable;  // backend, reason
   std::vector<Vec3> positions;
   for (const int32_t target : args.sizes) {
@@ -210,7 +222,15 @@ void run_bench(const BenchArgs& args) {
       row.device = backend->device();
       row.plan = backend->plan();
       row.timing = time_backend(*backend, args, positions);
+      row.check_ms = measure_check_ms(model, *backend);
       rows.push_back(row);
+    }
+    if (args.frames) {
+      try {
+        frame_rows.push_back({model.npoint(), measure_frame_cost(model)});
+      } catch (const Error& e) {
+        frames_unavailable = e.what();
+      }
     }
   }
 
@@ -232,7 +252,7 @@ void run_bench(const BenchArgs& args) {
                            {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
                            {"steps_per_second", 1e3 / r.timing.median_ms},
                            {"dispatches_per_step", r.plan.dispatches_per_step},
-                           {"syncs_per_step", r.plan.syncs_per_step}};
+                           {"syncs_per_step", r.plan.syncs_per_step}, {"blowup_check_ms", r.check_ms}};
       nlohmann::json passes = nlohmann::json::array();
       for (const PassInfo& p : r.plan.passes) passes.push_back(p.name);
       jr["passes"] = passes;
@@ -243,6 +263,15 @@ void run_bench(const BenchArgs& args) {
       }
       j["rows"].push_back(jr);
     }
+    j["frames"] = nlohmann::json::array();
+    for (const FrameRow& f : frame_rows) {
+      const FrameCost& c = f.cost;
+      j["frames"].push_back({{"points", f.points}, {"width", c.width}, {"height", c.height},
+                             {"triangles", c.triangles}, {"renderer", c.renderer}, {"upload_ms", c.upload_ms},
+                             {"render_ms", c.render_ms}, {"readback_ms", c.readback_ms}, {"png_ms", c.png_ms},
+                             {"video_ms", c.video_ms}, {"run_loop_ms", c.run_loop_ms()}});
+    }
+    if (!frames_unavailable.empty()) j["frames_unavailable"] = frames_unavailable;
     j["unavailable"] = nlohmann::json::array();
     for (const auto& [b, why] : unavailable) j["unavailable"].push_back({{"backend", b}, {"reason", why}});
     std::cout << j.dump(2) << "\n";
@@ -289,6 +318,25 @@ void run_bench(const BenchArgs& args) {
     }
   }
   for (const auto& [b, why] : unavailable) std::cout << "  " << b << ": not measured: " << why << "\n";
+
+  std::cout << "\nblow-up check (non-finite, energy, strain, inversion; positions read back), ms per check:\n";
+  for (const Row& r : rows)
+    std::cout << "  " << std::setw(7) << r.points << " points  " << std::left << std::setw(4) << r.backend
+              << std::setw(7) << r.precision << std::right << std::setw(8) << fixed(r.check_ms, 4) << "  ("
+              << fixed(100 * r.check_ms / r.timing.median_ms, 0) << " % of one step; run checks once per tick)\n";
+  if (!frame_rows.empty()) {
+    std::cout << "\nframes (" << frame_rows.front().cost.width << "x" << frame_rows.front().cost.height << ", "
+              << frame_rows.front().cost.renderer << "), median ms per frame:\n";
+    std::cout << "   points  triangles  upload  render  readback | run loop pays | png  mp4v (writer thread)\n";
+    for (const FrameRow& f : frame_rows) {
+      const FrameCost& c = f.cost;
+      std::cout << std::setw(9) << f.points << std::setw(11) << c.triangles << std::setw(8) << fixed(c.upload_ms, 2)
+                << std::setw(8) << fixed(c.render_ms, 2) << std::setw(10) << fixed(c.readback_ms, 2) << " | "
+                << std::setw(13) << fixed(c.run_loop_ms(), 2) << " | " << std::setw(4) << fixed(c.png_ms, 1)
+                << std::setw(6) << fixed(c.video_ms, 1) << "\n";
+    }
+  }
+  if (!frames_unavailable.empty()) std::cout << "\nframes: not measured: " << frames_unavailable << "\n";
 }
 
 std::vector<std::string> split_list(const std::string& s) {
@@ -319,6 +367,7 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_option("--dt", args->dt, "Integration step, s (default 1e-4)")->check(CLI::PositiveNumber);
   cmd->add_option("--volume-modulus", args->volume_modulus, "Pa; 0 leaves the volume pass out (default 20000)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");
   cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
   cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");
   cmd->add_flag("--json", args->json, "Print the results as JSON");
