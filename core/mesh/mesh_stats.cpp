@@ -1,6 +1,8 @@
 // Tet mesh counts and quality measures (see mesh_stats.h).
 #include "core/mesh/mesh_stats.h"
 
+#include "core/mesh/boundary.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -75,30 +77,7 @@ std::vector<Edge> unique_edges(const TetMesh& mesh) {
   return edges;
 }
 
-std::vector<Tri> boundary_triangles(const TetMesh& mesh) {
-  struct Face {
-    std::array<int32_t, 3> key;  // sorted corners
-    Tri oriented;
-  };
-  std::vector<Face> faces;
-  faces.reserve(mesh.tets.size() * 4);
-  for (const Tet& t : mesh.tets) {
-    for (const auto& f : kFaces) {
-      Face face{{t[f[0]], t[f[1]], t[f[2]]}, {t[f[0]], t[f[1]], t[f[2]]}};
-      std::sort(face.key.begin(), face.key.end());
-      faces.push_back(face);
-    }
-  }
-  std::sort(faces.begin(), faces.end(), [](const Face& x, const Face& y) { return x.key < y.key; });
-  std::vector<Tri> boundary;
-  for (size_t i = 0; i < faces.size();) {
-    size_t j = i + 1;
-    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
-    if (j - i == 1) boundary.push_back(faces[i].oriented);
-    i = j;
-  }
-  return boundary;
-}
+std::vector<Tri> boundary_triangles(const TetMesh& mesh) { return extract_boundary_faces(mesh.tets); }
 
 double tet_mesh_volume(const TetMesh& mesh) {
   double volume = 0;

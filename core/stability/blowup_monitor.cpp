@@ -7,16 +7,13 @@
 
 #include "core/mesh/tet_mesh.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim {
 
 namespace {
 
-std::string fmt(double v, const char* spec = "%.4g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
+std::string fmt(double v, const char* spec = "%.4g") { return format_number(v, spec); }
 
 std::string kind_name(BlowupFinding::Kind k) {
   switch (k) {

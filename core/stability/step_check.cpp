@@ -6,16 +6,13 @@
 
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim {
 
 namespace {
 
-std::string fmt(double v, const char* spec = "%.4g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
+std::string fmt(double v, const char* spec = "%.4g") { return format_number(v, spec); }
 
 std::string point_list(const std::vector<LimitingPoint>& points, size_t count) {
   std::string s;
