@@ -3,6 +3,7 @@
 // their content. A slab fixed at the bottom is pressed by the tool in its
 // middle: frames must change around the contact and nowhere far from it.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -36,7 +37,9 @@ constexpr double kRadius = 0.015; // tool radius, m
 
 PressRun run_press(const std::string& name) {
   PressRun run;
-  run.outdir = fs::path(ORGANSIM_TEST_TMP) / name;
+  // ctest runs each test of the suite in its own process, in parallel: the
+  // shared run needs a folder per process or they delete each other's frames.
+  run.outdir = fs::path(ORGANSIM_TEST_TMP) / (name + "_" + std::to_string(::getpid()));
   fs::remove_all(run.outdir);
   const TetMesh mesh = make_box_tet_mesh(Vec3(-0.1, -0.1, 0), Vec3(0.1, 0.1, kTop), 10, 10, 2);
   ModelOptions options;
