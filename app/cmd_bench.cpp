@@ -22,6 +22,7 @@
 #include "core/model/model.h"
 #include "core/render/frame_cost.h"
 #include "core/stability/blowup_monitor.h"
+#include "core/stability/critical_step.h"
 #include "core/util/error.h"
 #include "meshing/mesh_surface.h"
 
@@ -104,9 +105,9 @@ struct Timing {
 
 // Warm-up, then `repetitions` ticks of `steps` substeps each, each closed by
 // a position read-back (a GPU synchronisation); per-step times from each.
-Timing time_backend(Backend& backend, const BenchArgs& args, std::vector<Vec3>& positions) {
+Timing time_backend(Backend& backend, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
   TickRequest request;
-  request.dt = args.dt;
+  request.dt = dt;
   request.tool_active = false;
   request.substeps = args.warmup;
   if (args.warmup > 0) backend.tick(request);
@@ -133,6 +134,7 @@ struct Row {
   int32_t target = 0;
   int32_t points = 0, springs = 0, tets = 0;
   double mesh_seconds = 0;
+  double dt = 0, dt_crit = 0;  // s: the step used and the model's critical step
   std::string backend, precision, device;
   Timing timing;
   Plan plan;
@@ -189,9 +191,13 @@ void run_bench(const BenchArgs& args) {
     ModelOptions options;
     options.gravity = Vec3(0, 0, -9.81);  // a moving model, not one at rest
     const Model model = build_model(mesh, material, options, surface_name);
+    // Finer meshes have a smaller critical step: time each model at a step
+    // it is stable at (at most --dt), as a run would be.
+    const double dt_crit = estimate_critical_step(model).dt_crit;
+    const double dt = std::min(args.dt, 0.5 * dt_crit);
     if (!args.json) {
       std::cerr << "bench: " << target << " points asked, " << model.npoint() << " meshed in "
-                << fixed(report.seconds, 2) << " s\n";
+                << fixed(report.seconds, 2) << " s; dt_crit " << dt_crit << " s, dt " << dt << " s\n";
     }
     for (const auto& [name, precision] : configurations(args)) {
       BackendSelection sel;
@@ -221,7 +227,9 @@ void run_bench(const BenchArgs& args) {
       row.precision = backend->precision();
       row.device = backend->device();
       row.plan = backend->plan();
-      row.timing = time_backend(*backend, args, positions);
+      row.dt = dt;
+      row.dt_crit = dt_crit;
+      row.timing = time_backend(*backend, args, dt, positions);
       row.check_ms = measure_check_ms(model, *backend);
       rows.push_back(row);
     }
@@ -247,7 +255,8 @@ void run_bench(const BenchArgs& args) {
     j["rows"] = nlohmann::json::array();
     for (const Row& r : rows) {
       nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
-                           {"tets", r.tets}, {"backend", r.backend}, {"precision", r.precision},
+                           {"tets", r.tets}, {"dt", r.dt}, {"dt_crit", r.dt_crit},
+                           {"backend", r.backend}, {"precision", r.precision},
                            {"device", r.device}, {"median_ms", r.timing.median_ms},
                            {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
                            {"steps_per_second", 1e3 / r.timing.median_ms},
@@ -282,18 +291,21 @@ void run_bench(const BenchArgs& args) {
   std::cout << "machine: " << machine.cpu << ", " << machine.logical_cpus << " logical CPUs, load average "
             << machine.load_average << " at start\n";
   std::cout << "step:    springs + dampers" << (args.volume_modulus > 0 ? " + volume" : "")
-            << " + gravity + Verlet, dt " << args.dt << " s; " << args.warmup << " warm-up steps, then "
+            << " + gravity + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
+            << args.warmup << " warm-up steps, then "
             << args.repetitions << " repetitions of " << args.steps << " steps; median (min..max) ms per step\n";
   std::cout << "models:  " << surface_name << " meshed to the paper's point counts"
             << (args.exude ? " (with exudation)" : "") << "\n\n";
   std::cout << std::left << std::setw(8) << "paper" << std::right << std::setw(7) << "points" << std::setw(8)
-            << "springs" << std::setw(8) << "tets" << "  " << std::left << std::setw(8) << "backend" << std::setw(7)
+            << "springs" << std::setw(8) << "tets" << std::setw(8) << "dt us" << "  " << std::left << std::setw(8)
+            << "backend" << std::setw(7)
             << "prec" << std::right << std::setw(10) << "median ms" << std::setw(21) << "(min..max)"
             << "  | paper ms: " << "QuadroFX3450 GeForceGo7900 Xeon3GHz\n";
   for (const Row& r : rows) {
     const PaperRow* p = paper_row(r.target);
     std::cout << std::left << std::setw(8) << (p ? p->model : "-") << std::right << std::setw(7) << r.points
-              << std::setw(8) << r.springs << std::setw(8) << r.tets << "  " << std::left << std::setw(8)
+              << std::setw(8) << r.springs << std::setw(8) << r.tets << std::setw(8) << fixed(1e6 * r.dt, 1) << "  "
+              << std::left << std::setw(8)
               << r.backend << std::setw(7) << r.precision << std::right << std::setw(10)
               << fixed(r.timing.median_ms, 4) << std::setw(21)
               << ("(" + fixed(r.timing.min_ms, 4) + ".." + fixed(r.timing.max_ms, 4) + ")") << "  | ";
@@ -323,7 +335,8 @@ void run_bench(const BenchArgs& args) {
   for (const Row& r : rows)
     std::cout << "  " << std::setw(7) << r.points << " points  " << std::left << std::setw(4) << r.backend
               << std::setw(7) << r.precision << std::right << std::setw(8) << fixed(r.check_ms, 4) << "  ("
-              << fixed(100 * r.check_ms / r.timing.median_ms, 0) << " % of one step; run checks once per tick)\n";
+              << fixed(100 * r.check_ms / r.timing.median_ms, 0)
+              << " % of one step; run checks every 10 ticks by default)\n";
   if (!frame_rows.empty()) {
     std::cout << "\nframes (" << frame_rows.front().cost.width << "x" << frame_rows.front().cost.height << ", "
               << frame_rows.front().cost.renderer << "), median ms per frame:\n";
@@ -364,7 +377,7 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_option("--warmup", args->warmup, "Warm-up steps before timing (default 200)");
   cmd->add_option("--repetitions", args->repetitions, "Timed repetitions; the median is reported (default 7)");
   cmd->add_option("--steps", args->steps, "Steps per repetition (default 200)");
-  cmd->add_option("--dt", args->dt, "Integration step, s (default 1e-4)")->check(CLI::PositiveNumber);
+  cmd->add_option("--dt", args->dt, "Integration step, s (default 1e-4; half the model's critical step if that is smaller)")->check(CLI::PositiveNumber);
   cmd->add_option("--volume-modulus", args->volume_modulus, "Pa; 0 leaves the volume pass out (default 20000)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");

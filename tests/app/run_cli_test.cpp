@@ -140,7 +140,7 @@ TEST(RunCli, GlBackendRunsOrFailsLoudlyNeverFallsBackToCpu) {
   if (r.exit_code == 0) {
     const auto j = nlohmann::json::parse(test::slurp(dir / "out" / "forces.json"));
     EXPECT_EQ(j["meta"]["backend"], "gl");
-    // Each blow-up check is a GPU sync: gl checks every 10 ticks by default.
+    // Each blow-up check is a GPU sync: checks run every 10 ticks by default.
     EXPECT_EQ(j["meta"]["stability"]["check_interval_ticks"], 10);
   } else {
     EXPECT_EQ(r.exit_code, 6) << r.err;  // ErrorKind::Backend
