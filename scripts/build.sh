@@ -5,6 +5,9 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ORGANSIM_BUILD_DIR:-$root/build}
 export CCACHE_BASEDIR=$root
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=${ORGANSIM_BUILD_TYPE:-Release} "$@" >/dev/null
+# Warnings are errors by default (Debian 12's gcc 12 builds clean), so the
+# demo and the test command share one configuration and one build.
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=${ORGANSIM_BUILD_TYPE:-Release} \
+  -DORGANSIM_WERROR=${ORGANSIM_WERROR:-ON} "$@" >/dev/null
 # CGAL's Mesh_3 translation unit needs ~4 GB: two jobs fit in 24 GB.
 cmake --build "$build" -j "${ORGANSIM_JOBS:-2}"

@@ -3,6 +3,6 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 bash "$root/scripts/setup.sh"
-bash "$root/scripts/build.sh" -DORGANSIM_WERROR=ON
+bash "$root/scripts/build.sh"
 cd "${ORGANSIM_BUILD_DIR:-$root/build}"
 ctest --output-on-failure -j "${ORGANSIM_TEST_JOBS:-2}" --timeout 900
