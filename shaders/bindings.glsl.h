@@ -32,7 +32,7 @@
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
-#define ORGANSIM_GL_U_DAMPING 1       // float 1 - alpha dt (viscous drag in Verlet form)
+#define ORGANSIM_GL_U_DAMPING 1       // float alpha dt (viscous drag in Verlet form: d *= 1 - alpha dt)
 #define ORGANSIM_GL_U_GRAVITY 2       // vec3 g, m/s^2
 #define ORGANSIM_GL_U_TOOL_CENTER 3   // vec3 tool centre during this step, m
 #define ORGANSIM_GL_U_TOOL_ACTIVE 4   // int: 1 when the tool acts in this step
@@ -41,5 +41,6 @@
 #define ORGANSIM_GL_U_REDUCE 7        // int: 1 when this step writes reaction partials
 #define ORGANSIM_GL_U_NPARTIAL 8      // int: partials to sum (reduce kernel)
 #define ORGANSIM_GL_U_SLOT 9          // int: ring slot of this tick (reduce: reaction; step: status)
+#define ORGANSIM_GL_U_DT2 10          // float dt^2, s^2 (rounded once from double)
 
 #endif

@@ -225,7 +225,8 @@ Reaction GlBackend::tick(const TickRequest& request) {
   const GLuint program = step_.id();
   glUseProgram(program);
   glProgramUniform1f(program, ORGANSIM_GL_U_DT, static_cast<float>(request.dt));
-  glProgramUniform1f(program, ORGANSIM_GL_U_DAMPING, static_cast<float>(1.0 - model_.viscous_damping * request.dt));
+  glProgramUniform1f(program, ORGANSIM_GL_U_DAMPING, static_cast<float>(model_.viscous_damping * request.dt));
+  glProgramUniform1f(program, ORGANSIM_GL_U_DT2, static_cast<float>(request.dt * request.dt));
   const bool tool_acts = tool_.present && request.tool_active;
   if (tool_.present) glProgramUniform1i(program, ORGANSIM_GL_U_TOOL_ACTIVE, tool_acts ? 1 : 0);
   const int slot = static_cast<int>(ticks_ % kSlots);

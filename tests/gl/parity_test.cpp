@@ -8,14 +8,14 @@
 //   coordinates to ~4e-9 m (4e-8 of the 0.12 m diagonal) and each step rounds
 //   x_{t+1} = x_t + d once more; as the GL state keeps d = x_t - x_{t-1}
 //   itself, those roundings do not feed the velocity, so they random-walk:
-//   ~sqrt(1000) x 4e-8 ~ 1e-6. Measured: 5e-7 (push, pull), 2.7e-6 (lean
+//   ~sqrt(1000) x 4e-8 ~ 1e-6. Measured: 5e-7 (push, pull), 1.2e-6 (lean
 //   cantilever, larger motion). A wrong force term moves points by
 //   millimetres (1e-2 of the diagonal); storing x_{t-1} instead of d gives
 //   ~1e-3 (the CPU float path does, measured 0.6-1.5e-3 on these scenes).
 // - tool force, 1e-4 of the peak reaction: each contact's force is
 //   k_c x penetration, so a position error e changes it by k_c e: with
 //   e ~ 1e-7 m, k_c = 200 N/m against a ~1.4 N peak that is ~1e-5 per
-//   contact. Measured: 5-7e-6.
+//   contact. Measured: 5-6e-6.
 #include <gtest/gtest.h>
 
 #include <functional>
