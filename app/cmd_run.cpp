@@ -1,6 +1,8 @@
 // `organsim run SCENARIO.json [-o OUTDIR] [--backend cpu|gl] [--plan]`
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -119,6 +121,24 @@ std::vector<std::unique_ptr<RunObserver>> make_observers(const Scenario& s, cons
   return out;
 }
 
+// Lists what the run wrote, so a user sees the frames, video and contact
+// sheet next to the force log without looking.
+void print_output_files(std::ostream& out, const fs::path& outdir) {
+  std::vector<fs::directory_entry> entries;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(outdir, ec)) entries.push_back(e);
+  std::sort(entries.begin(), entries.end(),
+            [](const auto& a, const auto& b) { return a.path().filename() < b.path().filename(); });
+  for (const auto& e : entries) {
+    if (e.is_directory()) {
+      const auto n = std::distance(fs::directory_iterator(e.path(), ec), fs::directory_iterator());
+      out << "          " << e.path().filename().string() << "/ (" << n << " files)\n";
+    } else {
+      out << "          " << e.path().filename().string() << "\n";
+    }
+  }
+}
+
 void run_command(const RunArgs& args) {
   Scenario s = load_scenario(args.scenario);
   BackendSelection selection;
@@ -213,6 +233,7 @@ void run_command(const RunArgs& args) {
   }
   if (!result.forces_path.empty()) std::cout << "force log: " << result.forces_path.string() << "\n";
   std::cout << "outputs:  " << outdir.string() << "\n";
+  print_output_files(std::cout, outdir);
 }
 
 const bool registered = register_command("run", 20, [](CLI::App& root) {

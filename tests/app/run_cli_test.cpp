@@ -55,6 +55,8 @@ TEST(RunCli, WritesForcesJsonWithOneSamplePerTickAndExitsZero) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The command says where its outputs are.
   EXPECT_NE(r.out.find((dir / "out" / "forces.json").string()), std::string::npos) << r.out;
+  // ...and lists what it wrote there (forces.png comes with the force log).
+  EXPECT_NE(r.out.find("\n          forces.png\n"), std::string::npos) << r.out;
 
   const auto j = nlohmann::json::parse(test::slurp(dir / "out" / "forces.json"));
   EXPECT_EQ(j["samples"]["t"].size(), 50u);  // 0.05 s / 1 ms
