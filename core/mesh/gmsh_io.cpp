@@ -50,6 +50,20 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
     if (type < 1 || type >= static_cast<int64_t>(std::size(counts))) in.fail("unsupported element type " + std::to_string(type));
     return counts[type];
   };
+  // One element's node tags; tets (type 4) are kept, other types read past.
+  const auto read_element_nodes = [&](int64_t type) {
+    const int count = nodes_of_type(type);
+    std::array<int64_t, 4> tet{};
+    const int line = in.line();
+    for (int k = 0; k < count; ++k) {
+      const int64_t node = in.next_int("an element node");
+      if (type == 4) tet[k] = node;
+    }
+    if (type == 4) {
+      tet_tags.push_back(tet);
+      tet_lines.push_back(line);
+    }
+  };
 
   while (!in.at_end()) {
     const std::string section(in.next("a section"));
@@ -87,17 +101,7 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
         const int64_t type = in.next_int("an element type");
         const int64_t ntags = in.next_int("the element's tag count");
         for (int64_t t = 0; t < ntags; ++t) in.next_int("an element tag");
-        const int count = nodes_of_type(type);
-        std::array<int64_t, 4> tet{};
-        const int line = in.line();
-        for (int k = 0; k < count; ++k) {
-          const int64_t node = in.next_int("an element node");
-          if (type == 4) tet[k] = node;
-        }
-        if (type == 4) {
-          tet_tags.push_back(tet);
-          tet_lines.push_back(line);
-        }
+        read_element_nodes(type);
       }
       expect(in, "$EndElements");
     } else if (section == "$Elements") {
@@ -110,19 +114,9 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
         in.next_int("the entity tag");
         const int64_t type = in.next_int("the element type");
         const int64_t n = in.next_int("the block's element count");
-        const int count = nodes_of_type(type);
         for (int64_t e = 0; e < n; ++e) {
           in.next_int("an element tag");
-          std::array<int64_t, 4> tet{};
-          const int line = in.line();
-          for (int k = 0; k < count; ++k) {
-            const int64_t node = in.next_int("an element node");
-            if (type == 4) tet[k] = node;
-          }
-          if (type == 4) {
-            tet_tags.push_back(tet);
-            tet_lines.push_back(line);
-          }
+          read_element_nodes(type);
         }
       }
       expect(in, "$EndElements");
