@@ -54,7 +54,8 @@ TetMesh Mesh3Domain::mesh(const Mesh3Criteria& c) const {
   // Exudation without an explicit limit stops after as much wall-clock time
   // as refinement took, so the same input gave different meshes from run to
   // run; time_limit = 0 means no limit: it runs to completion, deterministic.
-  const Complex complex = c.exude ? CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(),
+  const Complex complex = c.exude ? CGAL::make_mesh_3<Complex>(*impl_->domain, criteria,
+                                                               perturb(time_limit = 0, sliver_bound = 10),
                                                                exude(time_limit = 0))
                                   : CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(), no_exude());
 
