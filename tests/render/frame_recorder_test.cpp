@@ -41,14 +41,7 @@ PressRun run_press(const std::string& name) {
   // shared run needs a folder per process or they delete each other's frames.
   run.outdir = fs::path(ORGANSIM_TEST_TMP) / (name + "_" + std::to_string(::getpid()));
   fs::remove_all(run.outdir);
-  const TetMesh mesh = make_box_tet_mesh(Vec3(-0.1, -0.1, 0), Vec3(0.1, 0.1, kTop), 10, 10, 2);
-  ModelOptions options;
-  FixedSelector bottom;
-  bottom.kind = FixedSelector::Kind::Box;
-  bottom.min = Vec3(-1, -1, -1e-3);
-  bottom.max = Vec3(1, 1, 1e-3);
-  options.fixed.push_back(bottom);
-  run.model = build_model(mesh, Material{}, options, "slab");
+  run.model = testing::pressed_slab_model(10, kTop);
 
   // From 5 mm above the top to 8 mm into it over 0.1 s, then held.
   run.tool.radius = kRadius;

@@ -9,6 +9,7 @@
 #include "core/gl/gl_backend.h"
 #include "core/model/model.h"
 #include "core/render/frame_recorder.h"
+#include "tests/render/render_test_util.h"
 
 namespace organsim {
 namespace {
@@ -40,14 +41,7 @@ cv::Mat first_frame(const fs::path& outdir) { return cv::imread((outdir / "frame
 
 TEST(GlBackendFrames, DrawingFromTheSimulationBufferMatchesTheUploadPath) {
   const double top = 0.04, radius = 0.015;
-  const TetMesh mesh = make_box_tet_mesh(Vec3(-0.1, -0.1, 0), Vec3(0.1, 0.1, top), 8, 8, 2);
-  ModelOptions options;
-  FixedSelector bottom;
-  bottom.kind = FixedSelector::Kind::Box;
-  bottom.min = Vec3(-1, -1, -1e-3);
-  bottom.max = Vec3(1, 1, 1e-3);
-  options.fixed.push_back(bottom);
-  const Model model = build_model(mesh, Material{}, options, "slab");
+  const Model model = testing::pressed_slab_model(8, top);
   ToolSpec tool;
   tool.radius = radius;
   tool.contact_stiffness = 500;

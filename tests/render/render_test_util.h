@@ -6,9 +6,23 @@
 #include <vector>
 
 #include "core/mesh/tet_mesh.h"
+#include "core/model/model.h"
 #include "core/render/camera.h"
 
 namespace organsim::testing {
+
+// A 20 x 20 cm slab of height `top` (m), n x n x 2 cells, held at its base:
+// the model the frame tests press a tool into.
+inline Model pressed_slab_model(int n, double top) {
+  const TetMesh mesh = make_box_tet_mesh(Vec3(-0.1, -0.1, 0), Vec3(0.1, 0.1, top), n, n, 2);
+  ModelOptions options;
+  FixedSelector bottom;
+  bottom.kind = FixedSelector::Kind::Box;
+  bottom.min = Vec3(-1, -1, -1e-3);
+  bottom.max = Vec3(1, 1, 1e-3);
+  options.fixed.push_back(bottom);
+  return build_model(mesh, Material{}, options, "slab");
+}
 
 // UV sphere surface, outward counter-clockwise.
 inline TriangleMesh uv_sphere(const Vec3& center, double radius, int slices = 32, int stacks = 16) {
