@@ -77,6 +77,11 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
       << "), reaction latency " << backend.reaction_latency_ticks() << " ticks\n";
   out << "passes per step:\n";
   for (const PassInfo& p : plan.passes) out << "  - " << p.name << ": " << p.detail << "\n";
+  if (s.events.any()) {
+    out << "between ticks:\n  - topology: " << s.events.cuts.size() << " cut" << (s.events.cuts.size() == 1 ? "" : "s");
+    if (s.events.tear) out << ", tear past strain " << s.events.tear->strain;
+    out << " (faces separated, points split, backend rebuilt, dt_crit checked; see docs/topology.md)\n";
+  }
   out << "left out of this scene:\n";
   int32_t left_out = 0;
   auto note = [&](bool absent, const std::string& text) {
@@ -88,6 +93,7 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
   note(!s.tool, "no tool pass (no tool in the scenario)");
   note(!model.has_gravity(), "no gravity pass (gravity = [0, 0, 0])");
   note(!s.outputs.wants_rendering(), "no renderer (no outputs.frames)");
+  note(!s.events.any(), "no topology pass (no events in the scenario)");
   if (left_out == 0) out << "  (nothing)\n";
   out << "buffers:\n";
   size_t total = 0;
@@ -199,6 +205,7 @@ void run_command(const RunArgs& args) {
 
   RunOptions options;
   options.outdir = outdir;
+  options.allow_unstable = args.allow_unstable;  // also after each topology change
   options.observers.push_back(&monitor);  // first: nothing else sees a blown-up state
   for (auto& o : observers) options.observers.push_back(o.get());
   options.meta_extra = {

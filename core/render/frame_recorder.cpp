@@ -173,6 +173,8 @@ void FrameRecorder::topology_changed(const Model& model) {
   impl_->renderer->set_faces(extract_boundary_faces(model.tet_points), model.npoint());
 }
 
+void FrameRecorder::on_topology_changed(const Model& next, Backend& /*backend*/) { topology_changed(next); }
+
 void FrameRecorder::on_start(const Model& model, Backend& backend) {
   Impl& s = *impl_;
   // Created here, not in the constructor, so `--plan` and scenes that fail

@@ -34,6 +34,8 @@ class FrameRecorder : public RunObserver {
   void on_start(const Model& model, Backend& backend) override;
   void on_tick(const Model& model, Backend& backend, const TickInfo& info) override;
   void on_finish(const Model& model, Backend& backend) override;
+  // Re-extracts the boundary, which now includes the faces a cut opened.
+  void on_topology_changed(const Model& next, Backend& backend) override;
 
   // Recomputes the boundary surface from model.tet_points; call after the
   // topology changed (cuts, removed tets).

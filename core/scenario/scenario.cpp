@@ -9,6 +9,7 @@
 
 namespace organsim {
 
+using scenario_detail::parse_events;
 using scenario_detail::parse_outputs;
 using scenario_detail::parse_tool;
 
@@ -180,6 +181,7 @@ Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& ba
   if (const auto* t = r.get("tool")) s.tool = parse_tool(*t, r.at("tool"));
   if (const auto* b = r.get("backend")) s.backend = parse_backend(*b, r.at("backend"));
   if (const auto* o = r.get("outputs")) s.outputs = parse_outputs(*o, r.at("outputs"));
+  if (const auto* e = r.get("events")) s.events = parse_events(*e, r.at("events"));
   r.finish();
   return s;
 }

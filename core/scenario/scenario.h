@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/model/material.h"
+#include "core/scenario/events.h"
 #include "core/scenario/outputs.h"
 #include "core/sim/tool.h"
 #include "core/util/vec.h"
@@ -63,6 +64,7 @@ struct Scenario {
   std::optional<ToolDef> tool;
   BackendDef backend;
   OutputsDef outputs;
+  EventsDef events;  // empty: no topology machinery at all
 };
 
 // Parses `j`; relative paths are resolved against `base_dir`; `source` names

@@ -7,5 +7,6 @@ namespace organsim::scenario_detail {
 
 ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at);
 OutputsDef parse_outputs(const nlohmann::json& j, const JsonPath& at);
+EventsDef parse_events(const nlohmann::json& j, const JsonPath& at);
 
 }  // namespace organsim::scenario_detail

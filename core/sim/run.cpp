@@ -3,7 +3,12 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <iostream>
+#include <memory>
+#include <optional>
 
+#include "core/stability/critical_step.h"
+#include "core/topology/run_events.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -70,6 +75,20 @@ bool starts_at_or_after(double tick_start, double event_time, double dt) {
   return tick_start >= event_time - 0.5 * dt;
 }
 
+// dt_crit of the Model a topology change made: the run's dt must still be
+// stable (a cut should not lower it: DESIGN.md section 5; this checks it).
+double check_step_after_change(const Model& next, const Scenario& s, double t, bool allow_unstable) {
+  const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
+  const StabilityReport report = estimate_critical_step(next, critical_step_options(next, tool));
+  try {
+    const std::string warning = check_time_step(report, s.time.dt, s.time.substeps, allow_unstable);
+    if (!warning.empty()) std::cerr << "organsim: after the topology change at t = " << t << " s: " << warning << "\n";
+  } catch (const Error& e) {
+    throw Error(e.kind(), "after the topology change at t = " + std::to_string(t) + " s: " + e.what());
+  }
+  return report.dt_crit;
+}
+
 }  // namespace
 
 RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& backend,
@@ -91,6 +110,14 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   if (pull) positions.reserve(static_cast<size_t>(model.npoint()));
   bool grasped = false, released = false;
 
+  // Topology changes: only for a scenario with events. `current` is the
+  // Model the backend steps now; versions after `model` are owned here.
+  std::optional<TopologyEvents> topology;
+  if (scenario.events.any()) topology.emplace(scenario.events, model);
+  std::unique_ptr<Model> owned;
+  const Model* current = &model;
+  std::vector<Vec3> event_positions;
+
   TickRequest request;
   request.dt = time.dt;
   request.substeps = time.substeps;
@@ -110,9 +137,22 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
         request.tool_from = tool->position_at(t0);
         request.tool_to = tool->position_at(t1);
       }
+      if (topology && topology->active(t0, t1)) {
+        backend.positions(event_positions);
+        auto next = std::make_unique<Model>();
+        if (topology->before_tick(t0, t1, *current, event_positions, *next)) {
+          const auto rebuild_start = Clock::now();
+          backend.rebuild(*next);
+          topology->changed(*current, *next, seconds_since(rebuild_start),
+                            check_step_after_change(*next, scenario, t0, options.allow_unstable));
+          for (RunObserver* o : options.observers) o->on_topology_changed(*next, backend);
+          owned = std::move(next);  // the previous version is no longer referenced
+          current = owned.get();
+        }
+      }
       if (pull && !grasped && starts_at_or_after(t0, tool->grasp_time, time.dt)) {
         backend.positions(positions);
-        const Attachment a = select_grasp(model, positions, request.tool_from, tool->grasp_radius);
+        const Attachment a = select_grasp(*current, positions, request.tool_from, tool->grasp_radius);
         result.grasped_points = static_cast<int32_t>(a.points.size());
         backend.attach(a);
         grasped = true;
@@ -135,10 +175,10 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       info.tool_center = request.tool_to;
       info.tool_active = request.tool_active;
       info.reaction = r;
-      for (RunObserver* o : options.observers) o->on_tick(model, backend, info);
+      for (RunObserver* o : options.observers) o->on_tick(*current, backend, info);
     }
     finish_called = true;
-    for (RunObserver* o : options.observers) o->on_finish(model, backend);
+    for (RunObserver* o : options.observers) o->on_finish(*current, backend);
     result.meta.completed = true;
   } catch (const std::exception& e) {
     result.meta.completed = false;
@@ -152,13 +192,18 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   result.meta.extra["step_seconds"] = step_seconds;
   result.meta.extra["steps"] = steps;
   if (pull) result.meta.extra["grasped_points"] = result.grasped_points;
+  if (topology) {
+    result.meta.extra["events"] = topology->log();
+    result.meta.extra["final_points"] = current->npoint();
+    result.meta.extra["final_springs"] = current->nspring();
+  }
 
   if (failure) {
     // Keep what was recorded, say why it stopped, then let the caller report it.
     if (!finish_called) {
       for (RunObserver* o : options.observers) {
         try {
-          o->on_finish(model, backend);
+          o->on_finish(*current, backend);
         } catch (...) {
           // The first error is the one to report.
         }

@@ -25,6 +25,9 @@ struct RunOptions {
   std::vector<RunObserver*> observers;  // called in this order; not owned
   // Extra entries for the log's meta (mesh source, meshing time, ...).
   nlohmann::json meta_extra = nlohmann::json::object();
+  // After a topology change dt_crit is estimated again; a dt above it stops
+  // the run with Error(Numerical) unless this is set (then it only warns).
+  bool allow_unstable = false;
 };
 
 struct RunResult {
@@ -36,7 +39,9 @@ struct RunResult {
 
 // Runs the scenario's timeline on `backend` (built from `model`). If a tick or
 // an observer throws, the force log is still written (valid JSON with
-// "completed": false and the reason) and the error is rethrown.
+// "completed": false and the reason) and the error is rethrown. With
+// scenario.events, the loop owns the Model versions that topology changes
+// make after `model` (meta.events lists the changes).
 RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& backend,
                        const RunOptions& options);
 

@@ -20,6 +20,11 @@ class RunObserver {
   virtual ~RunObserver() = default;
   virtual void on_start(const Model& /*model*/, Backend& /*backend*/) {}
   virtual void on_tick(const Model& model, Backend& backend, const TickInfo& info) = 0;
+  // A topology change (cut, tear) replaced the Model between two ticks; the
+  // backend is already rebuilt from `next`, which keeps the old point ids and
+  // appends copies (next.origin). Later calls pass `next`; the old Model is
+  // freed after this returns, so drop any reference to it here.
+  virtual void on_topology_changed(const Model& /*next*/, Backend& /*backend*/) {}
   // Called once after the last tick, or after an error stopped the run.
   virtual void on_finish(const Model& /*model*/, Backend& /*backend*/) {}
 };

@@ -136,6 +136,14 @@ void BlowupMonitor::on_start(const Model& model, Backend& backend) {
   energy_floor_ = 0.5 * model.total_mass() * v * v;
 }
 
+void BlowupMonitor::on_topology_changed(const Model& next, Backend& /*backend*/) {
+  for (auto* x : {&x_start_, &x_prev_, &x_}) {
+    const size_t old = x->size();
+    x->resize(static_cast<size_t>(next.npoint()));
+    for (size_t i = old; i < x->size(); ++i) (*x)[i] = (*x)[static_cast<size_t>(next.origin[i])];
+  }
+}
+
 std::optional<BlowupFinding> BlowupMonitor::check_energy(const Model& model, double seconds) const {
   if (!(seconds > 0)) return std::nullopt;
   double ke = 0, gravity_work = 0, top = 0;

@@ -65,6 +65,9 @@ class BlowupMonitor final : public RunObserver {
   BlowupMonitor(BlowupMonitorOptions options, BlowupContext context);
   void on_start(const Model& model, Backend& backend) override;
   void on_tick(const Model& model, Backend& backend, const TickInfo& info) override;
+  // Copies of split points start from their origin's recorded positions, so
+  // the energy budget (gravity work from the start) carries on unchanged.
+  void on_topology_changed(const Model& next, Backend& backend) override;
 
   int64_t checks() const { return checks_; }
   // The full message of a finding at simulated time t (what on_tick throws).

@@ -1,0 +1,50 @@
+#pragma once
+// The scenario's `events` section: topology changes during a run (cuts,
+// tears, sutures). Parsed and validated by parse_scenario(); applied between
+// ticks by the run loop (core/topology/). Documented field by field in
+// docs/scenarios.md. SI units.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/util/vec.h"
+
+namespace organsim {
+
+// A blade: the straight cutting edge from `a` to `b` at time `t`.
+struct BladeKeyframe {
+  double t = 0;      // s
+  Vec3 a{0, 0, 0};   // m
+  Vec3 b{0, 0, 0};   // m
+};
+
+// `cut`: the blade moves through its keyframes (linear interpolation); the
+// material separates where it sweeps between the first and the last.
+struct CutEvent {
+  std::string name;                     // for sutures along it and the log
+  std::vector<BladeKeyframe> keyframes;  // sorted by strictly increasing t, at least two
+
+  double start() const { return keyframes.front().t; }
+  double end() const { return keyframes.back().t; }
+  // Blade ends at time t, clamped to the keyframes' span.
+  void blade_at(double t, Vec3& a, Vec3& b) const;
+};
+
+// `tear`: from `start` on, springs strained past `strain` for `ticks`
+// consecutive ticks separate a face; at most `max_per_tick` faces per tick.
+struct TearEvent {
+  double start = 0;            // s
+  double strain = 0.5;         // (L - r) / r, dimensionless
+  int32_t ticks = 3;
+  int32_t max_per_tick = 4;
+};
+
+struct EventsDef {
+  std::vector<CutEvent> cuts;
+  std::optional<TearEvent> tear;
+
+  bool any() const { return !cuts.empty() || tear.has_value(); }
+};
+
+}  // namespace organsim
