@@ -23,6 +23,7 @@
 #include "core/render/frame_cost.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
+#include "core/topology/change_cost.h"
 #include "core/util/error.h"
 #include "meshing/mesh_surface.h"
 
@@ -176,6 +177,7 @@ void run_bench(const BenchArgs& args) {
 
   std::vector<Row> rows;
   std::vector<FrameRow> frame_rows;
+  std::vector<std::pair<int32_t, ChangeCost>> change_rows;  // points, cost of one local cut
   std::string frames_unavailable;
   std::vector<std::pair<std::string, std::string>> unavailable;  // backend, reason
   std::vector<Vec3> positions;
@@ -233,6 +235,7 @@ void run_bench(const BenchArgs& args) {
       row.check_ms = measure_check_ms(model, *backend);
       rows.push_back(row);
     }
+    change_rows.emplace_back(model.npoint(), measure_change_cost(model));
     if (args.frames) {
       try {
         frame_rows.push_back({model.npoint(), measure_frame_cost(model)});
@@ -281,6 +284,13 @@ void run_bench(const BenchArgs& args) {
                              {"video_ms", c.video_ms}, {"run_loop_ms", c.run_loop_ms()}});
     }
     if (!frames_unavailable.empty()) j["frames_unavailable"] = frames_unavailable;
+    j["topology_change"] = nlohmann::json::array();
+    for (const auto& [points, c] : change_rows) {
+      j["topology_change"].push_back({{"points", points}, {"faces_separated", c.faces_separated},
+                                      {"points_added", c.points_added}, {"detect_ms", c.detect_ms},
+                                      {"model_ms", c.model_ms}, {"backend_rebuild_ms", c.backend_ms},
+                                      {"dt_crit_ms", c.dt_crit_ms}, {"total_ms", c.total_ms()}});
+    }
     j["unavailable"] = nlohmann::json::array();
     for (const auto& [b, why] : unavailable) j["unavailable"].push_back({{"backend", b}, {"reason", why}});
     std::cout << j.dump(2) << "\n";
@@ -350,6 +360,15 @@ void run_bench(const BenchArgs& args) {
     }
   }
   if (!frames_unavailable.empty()) std::cout << "\nframes: not measured: " << frames_unavailable << "\n";
+
+  std::cout << "\none topology change (a local cut through the model's middle, cpu double, 1 thread), median ms:\n";
+  std::cout << "   points  faces  copies  detect  split+model  backend rebuild  dt_crit  total\n";
+  for (const auto& [points, c] : change_rows) {
+    std::cout << std::setw(9) << points << std::setw(7) << c.faces_separated << std::setw(8) << c.points_added
+              << std::setw(8) << fixed(c.detect_ms, 2) << std::setw(13) << fixed(c.model_ms, 2) << std::setw(17)
+              << fixed(c.backend_ms, 2) << std::setw(9) << fixed(c.dt_crit_ms, 1) << std::setw(7)
+              << fixed(c.total_ms(), 1) << "\n";
+  }
 }
 
 std::vector<std::string> split_list(const std::string& s) {
