@@ -75,18 +75,15 @@ bool starts_at_or_after(double tick_start, double event_time, double dt) {
   return tick_start >= event_time - 0.5 * dt;
 }
 
-// dt_crit of the Model a topology change made: the run's dt must still be
-// stable (a cut should not lower it: DESIGN.md section 5; this checks it).
-double check_step_after_change(const Model& next, const Scenario& s, double t, bool allow_unstable) {
-  const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
-  const StabilityReport report = estimate_critical_step(next, critical_step_options(next, tool));
+// After a topology change the run's dt must still be below dt_crit of the
+// new Model (a cut should not lower it, DESIGN.md section 5; this checks it).
+void check_step_after_change(const StabilityReport& report, const Scenario& s, double t, bool allow_unstable) {
   try {
     const std::string warning = check_time_step(report, s.time.dt, s.time.substeps, allow_unstable);
     if (!warning.empty()) std::cerr << "organsim: after the topology change at t = " << t << " s: " << warning << "\n";
   } catch (const Error& e) {
     throw Error(e.kind(), "after the topology change at t = " + std::to_string(t) + " s: " + e.what());
   }
-  return report.dt_crit;
 }
 
 }  // namespace
@@ -143,11 +140,18 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
         if (topology->before_tick(t0, t1, *current, event_positions, *next)) {
           const auto rebuild_start = Clock::now();
           backend.rebuild(*next);
-          topology->changed(*current, *next, seconds_since(rebuild_start),
-                            check_step_after_change(*next, scenario, t0, options.allow_unstable));
-          for (RunObserver* o : options.observers) o->on_topology_changed(*next, backend);
-          owned = std::move(next);  // the previous version is no longer referenced
+          const double rebuild_seconds = seconds_since(rebuild_start);
+          // From here the backend steps `next`; the previous version lives
+          // until the end of this block (the log compares the two).
+          const std::unique_ptr<Model> previous_owned = std::move(owned);
+          const Model& previous = *current;
+          owned = std::move(next);
           current = owned.get();
+          for (RunObserver* o : options.observers) o->on_topology_changed(*current, backend);
+          const ToolSpec* tool_spec = scenario.tool ? &scenario.tool->spec : nullptr;
+          const StabilityReport report = estimate_critical_step(*current, critical_step_options(*current, tool_spec));
+          topology->changed(previous, *current, rebuild_seconds, report.dt_crit);
+          check_step_after_change(report, scenario, t0, options.allow_unstable);
         }
       }
       if (pull && !grasped && starts_at_or_after(t0, tool->grasp_time, time.dt)) {

@@ -9,7 +9,9 @@
 
 #include "core/sim/cpu_backend.h"
 #include "core/sim/run.h"
+#include "core/stability/critical_step.h"
 #include "core/util/atomic_file.h"
+#include "core/util/error.h"
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
@@ -151,6 +153,38 @@ TEST(TopologyRun, ThreadedRunIsBitIdenticalToSingleThreadedAcrossCuts) {
   }
   ASSERT_EQ(finals[0].size(), finals[1].size());
   for (size_t i = 0; i < finals[0].size(); ++i) ASSERT_EQ(finals[0][i], finals[1][i]) << "point " << i;
+}
+
+TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {
+  // run_scenario leaves the check before a run to its caller, so a dt 1.5 x
+  // dt_crit gets as far as the first change, at the first tick (before any
+  // step could blow up); the check after the change must refuse it.
+  Scenario s = hanging_block();
+  s.events.cuts[0].keyframes[0].t = 0.0;
+  s.events.cuts[0].keyframes[1].t = 0.001;
+  const Model model = block_model(s);
+  s.time.dt = 1.5 * estimate_critical_step(model).dt_crit;
+  s.time.substeps = 1;
+  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  RunOptions options;
+  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "topology_dt_check";
+  try {
+    run_scenario(s, model, *backend, options);
+    ADD_FAILURE() << "ran with dt above dt_crit after a change";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Numerical);
+    EXPECT_NE(std::string(e.what()).find("after the topology change at t = 0"), std::string::npos) << e.what();
+  }
+  // The log is still written, with the change and the dt_crit that refused it.
+  const auto log = nlohmann::json::parse(read_text_file(options.outdir / "forces.json"));
+  EXPECT_EQ(log["meta"]["completed"], false);
+  ASSERT_EQ(log["meta"]["events"].size(), 1u);
+  EXPECT_LT(log["meta"]["events"][0]["dt_crit"].get<double>(), s.time.dt);
+  // With allow_unstable the run goes on (and only warns).
+  auto again = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  options.allow_unstable = true;
+  s.time.duration = 0.002;
+  EXPECT_NO_THROW(run_scenario(s, model, *again, options));
 }
 
 }  // namespace
