@@ -7,9 +7,9 @@
 namespace organsim {
 
 void count_spring_changes(const Model& previous, const Model& next, ChangeCounts& counts) {
-  std::vector<Edge> a = previous.spring_ends, b = next.spring_ends;
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
+  // Spring ends are sorted in every Model version (build_model, rebuild_model).
+  const std::vector<Edge>& a = previous.spring_ends;
+  const std::vector<Edge>& b = next.spring_ends;
   std::vector<Edge> only;
   std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(only));
   counts.springs_added = static_cast<int32_t>(only.size());
@@ -76,7 +76,6 @@ bool TopologyEditor::separate(const Model& current, const std::vector<int32_t>& 
     fresh = std::move(kept);
     if (fresh.empty()) return false;
   }
-  separated_count_ += static_cast<int32_t>(fresh.size());
   counts.faces_separated = static_cast<int32_t>(fresh.size());
   // Faces separated inside the material with every point still whole (at a
   // blade's tip) change no Model: they open once a later cut frees a point.

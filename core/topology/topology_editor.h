@@ -30,7 +30,6 @@ class TopologyEditor {
 
   const TetFaces& faces() const { return faces_; }
   const std::vector<uint8_t>& separated() const { return separated_; }  // (nface)
-  int32_t separated_count() const { return separated_count_; }
 
   // Marks `faces` (face ids; already separated ones are skipped) separated
   // and splits their points. When a point was split, builds the next Model
@@ -46,7 +45,6 @@ class TopologyEditor {
 
   TetFaces faces_;
   std::vector<uint8_t> separated_;
-  int32_t separated_count_ = 0;
 };
 
 }  // namespace organsim

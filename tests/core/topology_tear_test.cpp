@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <optional>
 
 #include "core/mesh/mesh_io.h"
 #include "core/sim/cpu_backend.h"
@@ -65,30 +64,24 @@ TEST(Tear, SeparatesAfterTheStatedTicksAboveTheThresholdAndAlwaysTheSameFaces) {
   }
 }
 
-struct LastModel final : RunObserver {
-  std::optional<Model> last;
-  void on_tick(const Model&, Backend&, const TickInfo&) override {}
-  void on_topology_changed(const Model& next, Backend&) override { last = next; }
-};
-
 TEST(Tear, BarTearScenarioComesApartInTwo) {
   const fs::path file = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "bar_tear.json";
   const Scenario s = load_scenario(file);
   ASSERT_TRUE(s.events.tear.has_value());
   const Model model = build_model(read_tet_mesh(s.mesh.path), s.material, model_options(s), "bar");
   auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
-  LastModel last;
+  testing::TopologyRecorder recorder;
   RunOptions options;
   options.outdir = fs::path(ORGANSIM_TEST_TMP) / "bar_tear";
-  options.observers = {&last};
+  options.observers = {&recorder};
   const RunResult result = run_scenario(s, model, *backend, options);
   ASSERT_TRUE(result.meta.completed);
-  ASSERT_TRUE(last.last.has_value());
-  EXPECT_EQ(testing::topology_problems(*last.last), "");
+  ASSERT_TRUE(recorder.last.has_value());
+  EXPECT_EQ(testing::topology_problems(*recorder.last), "");
   int32_t components = 0;
-  testing::point_components(*last.last, &components);
+  testing::point_components(*recorder.last, &components);
   EXPECT_GE(components, 2);
-  EXPECT_NEAR(last.last->total_mass(), model.total_mass(), 1e-12 * model.total_mass());
+  EXPECT_NEAR(recorder.last->total_mass(), model.total_mass(), 1e-12 * model.total_mass());
   // Once torn the grasper pulls nothing: the force at the end of the pull is
   // a small fraction of its peak before the tear.
   double peak = 0;

@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 
 #include "core/mesh/boundary.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model.h"
+#include "core/sim/run_observer.h"
 
 namespace organsim::testing {
 
@@ -108,5 +110,24 @@ inline std::vector<int32_t> point_components(const Model& m, int32_t* count) {
   if (count) *count = next;
   return label;
 }
+
+// Watches a run with topology events: counts the changes, keeps a copy of
+// the last Model version (the run loop frees its versions when it returns)
+// and, with keep_positions, the positions after every tick.
+struct TopologyRecorder final : RunObserver {
+  bool keep_positions = false;
+  std::vector<std::vector<Vec3>> x;  // per tick (ntick x npoint of that tick)
+  std::optional<Model> last;
+  int changes = 0;
+  void on_tick(const Model&, Backend& backend, const TickInfo&) override {
+    if (!keep_positions) return;
+    x.emplace_back();
+    backend.positions(x.back());
+  }
+  void on_topology_changed(const Model& next, Backend&) override {
+    ++changes;
+    last = next;
+  }
+};
 
 }  // namespace organsim::testing
