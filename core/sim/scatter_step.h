@@ -6,7 +6,6 @@
 // the same model and precision as the real step and prints the speedup.
 // Same physics and state as the CPU backend (displacement u and step
 // increment d, DESIGN.md section 2).
-#include <memory>
 #include <vector>
 
 #include "core/model/model.h"
