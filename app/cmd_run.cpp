@@ -227,6 +227,8 @@ void run_command(const RunArgs& args) {
   std::cout << "done:     " << result.samples.size() << " ticks in " << std::setprecision(3)
             << result.meta.wall_seconds << " s wall, " << std::setprecision(4) << result.meta.steps_per_second
             << " steps/s, peak tool force " << peak << " N\n";
+  std::cout << "real time: " << std::setprecision(3) << result.meta.real_time_factor
+            << "x (simulated seconds per wall second, checks and outputs included; >= 1 keeps up with the clock)\n";
   if (s.tool && s.tool->spec.mode == ToolMode::Pull) {
     std::cout << "grasp:    " << result.grasped_points << " points attached"
               << (result.grasped_points == 0 ? " (none within grasp_radius: the tool pulled nothing)" : "") << "\n";

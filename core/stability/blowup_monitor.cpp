@@ -29,7 +29,6 @@ std::string kind_name(BlowupFinding::Kind k) {
 bool any_spring_beyond(const Model& model, const std::vector<Vec3>& x, double bound) {
   const double c = (1 + bound) * (1 + bound);
   int found = 0;
-#pragma omp parallel for reduction(| : found) schedule(static)
   for (int32_t s = 0; s < model.nspring(); ++s) {
     const auto [a, b] = model.spring_ends[s];
     const double r = model.spring_rest[s];
@@ -41,7 +40,6 @@ bool any_spring_beyond(const Model& model, const std::vector<Vec3>& x, double bo
 // V < -bound V_r for some tet (rest volumes are positive).
 bool any_tet_beyond(const Model& model, const std::vector<Vec3>& x, double bound) {
   int found = 0;
-#pragma omp parallel for reduction(| : found) schedule(static)
   for (int32_t t = 0; t < model.ntet(); ++t) {
     const Tet& p = model.tet_points[t];
     found |= signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) < -bound * model.tet_rest_volume[t];
@@ -80,9 +78,10 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
     }
   }
   // The worst spring, if any is beyond the bound. A quick pass first, on
-  // squared lengths (no square root or division) and on all threads: a check
-  // that finds nothing, the usual case, costs a few percent of the steps
-  // between checks (organsim bench).
+  // squared lengths (no square root or division): a check that finds
+  // nothing, the usual case, then costs a few percent of the steps between
+  // checks (organsim bench). One thread on purpose: on a loaded machine a
+  // parallel region here costs far more than it saves.
   int32_t worst = -1;
   double worst_strain = options.max_strain;
   if (any_spring_beyond(model, x, options.max_strain)) {
