@@ -142,6 +142,16 @@ class CpuBackend final : public Backend {
                               m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
     if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
     plan.dispatches_per_step = 1;
+    if (fast_) {
+      // The avx512 kernel's own packing replaces the generic streams above.
+      plan.buffers.clear();
+      plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
+                              fast_->bytes()});
+      if (m.has_volume())
+        plan.passes[1].detail = std::to_string(m.ntet()) +
+                                " tets evaluated once, 16 per batch, into 2 fixed force slices (avx512 kernel)";
+      plan.passes.back().detail = "position Verlet, fused with springs and the tet forces (16 float lanes, avx512 kernel)";
+    }
     plan.syncs_per_step = 0;
     return plan;
   }

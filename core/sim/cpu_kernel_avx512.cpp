@@ -19,6 +19,10 @@ namespace organsim {
 namespace {
 
 constexpr int32_t kLanes = 16;  // floats per 512-bit register
+// Tets are split into this many fixed slices, each summed into its own force
+// array: the threads share the slices, and the per-point total adds the
+// slices in order, so results do not depend on the thread count.
+constexpr int kSlices = 2;
 
 // 64-byte aligned storage: whole-register loads and stores of records and lanes.
 template <class T>
@@ -48,14 +52,21 @@ struct Avx512FloatKernel::Data {
   bool volume = false, gravity = false;
   AlignedVector<float> rest[3], mass, inv_mass;  // (npad)
   AlignedVector<float> u[2][3], d[2][3];         // state, double-buffered (npad)
-  AlignedVector<float> rec[2];                   // (x, y, z, 0, dx, dy, dz, 0) per point, double-buffered (8 npad)
+  // (x, y, z, 0, dx, dy, dz, 0) per point, double-buffered (8 (npad + 16));
+  // the record at npad stays zero: padding tets point at it.
+  AlignedVector<float> rec[2];
   int cur = 0;                                   // which buffer holds step t
-  std::vector<int32_t> spring_offset, tet_offset;  // first entry of each chunk (nchunk)
-  std::vector<int32_t> spring_width, tet_width;    // slots per group of 16 (nchunk x groups)
-  AlignedVector<int32_t> spring_other;             // per entry; padding points at itself
+  std::vector<int32_t> spring_offset;            // first entry of each chunk (nchunk)
+  std::vector<int32_t> spring_width;             // slots per group of 16 (nchunk x groups)
+  AlignedVector<int32_t> spring_other;           // per entry; padding points at itself
   AlignedVector<float> spring_rest, spring_k, spring_d;
-  AlignedVector<int32_t> tet_a, tet_b, tet_c;      // per entry; padding points at itself
-  AlignedVector<float> tet_k36, tet_det_rest;      // k_v / 36 and 6 V_r as the kernel computes it
+  // Tets, each evaluated once, 16 per batch: lane j of batch b of a slice is
+  // tet j * nbatch + b of that slice (sorted by lowest vertex), so the 16
+  // lanes lie in 16 distant parts of the mesh and rarely share a vertex.
+  AlignedVector<int32_t> tet_v[4];               // vertices per batch lane; padding lanes: npad
+  AlignedVector<float> tet_k36, tet_det_rest;    // k_v / 36 and 6 V_r as the kernel computes it
+  int32_t slice_begin[kSlices + 1] = {};         // batches of each slice
+  AlignedVector<float> tet_force[kSlices];       // (x, y, z, 0) per point, zero between steps (4 (npad + 16))
 };
 
 Avx512FloatKernel::Avx512FloatKernel() : data_(std::make_unique<Data>()) {}
@@ -66,9 +77,9 @@ int32_t Avx512FloatKernel::nchunk() const { return data_->nchunk; }
 size_t Avx512FloatKernel::bytes() const {
   const Data& D = *data_;
   const size_t n = static_cast<size_t>(D.npad);
-  return n * sizeof(float) * (3 + 2 + 12 + 16) +
+  return n * sizeof(float) * (3 + 2 + 12 + 16 + 4 * kSlices) +
          D.spring_other.size() * (sizeof(int32_t) + 3 * sizeof(float)) +
-         D.tet_a.size() * (3 * sizeof(int32_t) + 2 * sizeof(float));
+         D.tet_k36.size() * (4 * sizeof(int32_t) + 2 * sizeof(float));
 }
 
 void Avx512FloatKernel::get_point(int32_t p, float u[3], float d[3]) const {
@@ -156,6 +167,44 @@ using V = __m512;
   }
 }
 
+// Adds lane l of (x, y, z) to the 16-byte force of point q[l], lane by lane
+// in order (so a point twice in one batch is still right).
+template <int Quarter>
+[[gnu::always_inline]] inline void add_quarter(float* force, const int32_t* q, const V (&r)[4]) {
+  for (int i = 0; i < 4; ++i) {
+    float* f = force + 4 * static_cast<size_t>(q[4 * Quarter + i]);
+    _mm_store_ps(f, _mm_add_ps(_mm_load_ps(f), _mm512_extractf32x4_ps(r[i], Quarter)));
+  }
+}
+[[gnu::always_inline]] inline void scatter_add(float* force, const int32_t* q, V x, V y, V z) {
+  // The inverse of gather3: quarter k of r[i] is (x, y, z, 0) of lane 4k + i.
+  const V zero = _mm512_setzero_ps();
+  const V u0 = _mm512_unpacklo_ps(x, y), u1 = _mm512_unpackhi_ps(x, y);
+  const V u2 = _mm512_unpacklo_ps(z, zero), u3 = _mm512_unpackhi_ps(z, zero);
+  const V r[4] = {_mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(3, 2, 3, 2)),
+                  _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(3, 2, 3, 2))};
+  add_quarter<0>(force, q, r);
+  add_quarter<1>(force, q, r);
+  add_quarter<2>(force, q, r);
+  add_quarter<3>(force, q, r);
+}
+
+// Adds the 16-byte forces of 16 consecutive points to (fx, fy, fz) and clears them.
+[[gnu::always_inline]] inline void take_forces(float* force, V& fx, V& fy, V& fz) {
+  const V l0 = _mm512_load_ps(force), l1 = _mm512_load_ps(force + 16), l2 = _mm512_load_ps(force + 32),
+          l3 = _mm512_load_ps(force + 48);
+  const __m512i ix = _mm512_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28, 0, 4, 8, 12, 16, 20, 24, 28);
+  auto component = [&](int k) {
+    const __m512i idx = _mm512_add_epi32(ix, _mm512_set1_epi32(k));
+    return _mm512_shuffle_f32x4(_mm512_permutex2var_ps(l0, idx, l1), _mm512_permutex2var_ps(l2, idx, l3),
+                                _MM_SHUFFLE(1, 0, 1, 0));
+  };
+  fx = _mm512_add_ps(fx, component(0));
+  fy = _mm512_add_ps(fy, component(1));
+  fz = _mm512_add_ps(fz, component(2));
+  for (int i = 0; i < 4; ++i) _mm512_store_ps(force + 16 * i, _mm512_setzero_ps());
+}
+
 // 1/|l| for |l|^2 = len2 > 0, 0 otherwise (padding, coincident ends): the
 // 14-bit estimate and one Newton step, ~1 ulp; the rest lengths are computed
 // by this same function, so the rest state is force-free.
@@ -222,24 +271,8 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
     }
 
     if constexpr (Volume) {
-      // f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
-      const int32_t tet_width = D.tet_width[c * D.groups + g];
-      for (int32_t j = 0, e = D.tet_offset[c] + g * kLanes; j < tet_width; ++j, e += D.chunk) {
-        V ax, ay, az, bx, by, bz, cx, cy, cz;
-        gather3(rec, &D.tet_a[e], ax, ay, az);
-        gather3(rec, &D.tet_b[e], bx, by, bz);
-        gather3(rec, &D.tet_c[e], cx, cy, cz);
-        ax = _mm512_sub_ps(ax, px), ay = _mm512_sub_ps(ay, py), az = _mm512_sub_ps(az, pz);
-        bx = _mm512_sub_ps(bx, px), by = _mm512_sub_ps(by, py), bz = _mm512_sub_ps(bz, pz);
-        cx = _mm512_sub_ps(cx, px), cy = _mm512_sub_ps(cy, py), cz = _mm512_sub_ps(cz, pz);
-        const V det = det6(ax, ay, az, bx, by, bz, cx, cy, cz);
-        const V s = _mm512_mul_ps(_mm512_load_ps(&D.tet_k36[e]), _mm512_sub_ps(_mm512_load_ps(&D.tet_det_rest[e]), det));
-        const V ex = _mm512_sub_ps(cx, ax), ey = _mm512_sub_ps(cy, ay), ez = _mm512_sub_ps(cz, az);  // c - a
-        const V hx = _mm512_sub_ps(bx, ax), hy = _mm512_sub_ps(by, ay), hz = _mm512_sub_ps(bz, az);  // b - a
-        fx = _mm512_fmadd_ps(s, _mm512_fmsub_ps(ey, hz, _mm512_mul_ps(ez, hy)), fx);
-        fy = _mm512_fmadd_ps(s, _mm512_fmsub_ps(ez, hx, _mm512_mul_ps(ex, hz)), fy);
-        fz = _mm512_fmadd_ps(s, _mm512_fmsub_ps(ex, hy, _mm512_mul_ps(ey, hx)), fz);
-      }
+      // Volume forces, summed per slice by tet_slice(); slices in order.
+      for (int sl = 0; sl < kSlices; ++sl) take_forces(&D.tet_force[sl][4 * static_cast<size_t>(p0)], fx, fy, fz);
     }
 
     if constexpr (Tool != kNoTool) {
@@ -307,15 +340,60 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
   }
 }
 
+// Volume forces of one slice's tets into its force array:
+// f_i = k_v (V_r - V) dV/dx_i with V = e1 . (e2 x e3) / 6, e_i = x_i - x_0,
+// so dV/dx_1 = e2 x e3 / 6 (and cyclically) and f_0 = -(f_1 + f_2 + f_3).
+void tet_slice(Avx512FloatKernel::Data& D, int slice) {
+  const float* rec = D.rec[D.cur].data();
+  float* force = D.tet_force[slice].data();
+  for (int32_t b = D.slice_begin[slice]; b < D.slice_begin[slice + 1]; ++b) {
+    const size_t e = static_cast<size_t>(b) * kLanes;
+    V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
+    gather3(rec, &D.tet_v[0][e], x0, y0, z0);
+    gather3(rec, &D.tet_v[1][e], x1, y1, z1);
+    gather3(rec, &D.tet_v[2][e], x2, y2, z2);
+    gather3(rec, &D.tet_v[3][e], x3, y3, z3);
+    x1 = _mm512_sub_ps(x1, x0), y1 = _mm512_sub_ps(y1, y0), z1 = _mm512_sub_ps(z1, z0);
+    x2 = _mm512_sub_ps(x2, x0), y2 = _mm512_sub_ps(y2, y0), z2 = _mm512_sub_ps(z2, z0);
+    x3 = _mm512_sub_ps(x3, x0), y3 = _mm512_sub_ps(y3, y0), z3 = _mm512_sub_ps(z3, z0);
+    const V det = det6(x1, y1, z1, x2, y2, z2, x3, y3, z3);
+    const V s = _mm512_mul_ps(_mm512_load_ps(&D.tet_k36[e]), _mm512_sub_ps(_mm512_load_ps(&D.tet_det_rest[e]), det));
+    auto cross_scaled = [&](V ax, V ay, V az, V bx, V by, V bz, V& fx, V& fy, V& fz) {
+      fx = _mm512_mul_ps(s, _mm512_fmsub_ps(ay, bz, _mm512_mul_ps(az, by)));
+      fy = _mm512_mul_ps(s, _mm512_fmsub_ps(az, bx, _mm512_mul_ps(ax, bz)));
+      fz = _mm512_mul_ps(s, _mm512_fmsub_ps(ax, by, _mm512_mul_ps(ay, bx)));
+    };
+    V f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z;
+    cross_scaled(x2, y2, z2, x3, y3, z3, f1x, f1y, f1z);  // e2 x e3
+    cross_scaled(x3, y3, z3, x1, y1, z1, f2x, f2y, f2z);  // e3 x e1
+    cross_scaled(x1, y1, z1, x2, y2, z2, f3x, f3y, f3z);  // e1 x e2
+    const V zero = _mm512_setzero_ps();
+    const V f0x = _mm512_sub_ps(zero, _mm512_add_ps(_mm512_add_ps(f1x, f2x), f3x));
+    const V f0y = _mm512_sub_ps(zero, _mm512_add_ps(_mm512_add_ps(f1y, f2y), f3y));
+    const V f0z = _mm512_sub_ps(zero, _mm512_add_ps(_mm512_add_ps(f1z, f2z), f3z));
+    scatter_add(force, &D.tet_v[0][e], f0x, f0y, f0z);
+    scatter_add(force, &D.tet_v[1][e], f1x, f1y, f1z);
+    scatter_add(force, &D.tet_v[2][e], f2x, f2y, f2z);
+    scatter_add(force, &D.tet_v[3][e], f3x, f3y, f3z);
+  }
+}
+
 template <bool Volume, bool Gravity, int Tool>
 void step_all(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
               std::vector<ChunkReaction>& partial) {
   const int32_t nchunk = D.nchunk;
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int32_t c = 0; c < nchunk; ++c) {
-    ChunkReaction r;
-    chunk_step<Volume, Gravity, Tool>(D, in, c, r);
-    if constexpr (Tool != kNoTool) partial[c] = r;
+#pragma omp parallel num_threads(threads)
+  {
+    if constexpr (Volume) {
+#pragma omp for schedule(static)
+      for (int sl = 0; sl < kSlices; ++sl) tet_slice(D, sl);
+    }
+#pragma omp for schedule(static)
+    for (int32_t c = 0; c < nchunk; ++c) {
+      ChunkReaction r;
+      chunk_step<Volume, Gravity, Tool>(D, in, c, r);
+      if constexpr (Tool != kNoTool) partial[c] = r;
+    }
   }
 }
 
@@ -394,7 +472,7 @@ void Avx512FloatKernel::pack(const Model& model) {
       std::fill(D.u[b][k].begin() + std::min(old_npoint, D.npoint), D.u[b][k].end(), 0.f);
       std::fill(D.d[b][k].begin() + std::min(old_npoint, D.npoint), D.d[b][k].end(), 0.f);
     }
-    D.rec[b].assign(8 * n, 0.f);
+    D.rec[b].assign(8 * (n + kLanes), 0.f);
   }
   // The other buffer (overwritten by the next step) holds the rest records
   // while the rest lengths and volumes are computed from them.
@@ -404,14 +482,11 @@ void Avx512FloatKernel::pack(const Model& model) {
 
   // Slots per group of 16 lanes: the widest point of the group.
   D.spring_width.assign(static_cast<size_t>(D.nchunk) * D.groups, 0);
-  D.tet_width.assign(D.spring_width.size(), 0);
   for (int32_t p = 0; p < D.npoint; ++p) {
     const size_t g = static_cast<size_t>(p / D.chunk) * D.groups + (p % D.chunk) / kLanes;
     D.spring_width[g] = std::max(D.spring_width[g], L.springs.count[p]);
-    D.tet_width[g] = std::max(D.tet_width[g], L.tets.count[p]);
   }
   D.spring_offset.assign(L.springs.chunk_offset.begin(), L.springs.chunk_offset.end());
-  D.tet_offset.assign(L.tets.chunk_offset.begin(), L.tets.chunk_offset.end());
 
   // Per-slot streams; padding slots point at their own point with zero
   // stiffness (a zero-length spring and a flat tet add nothing). Rest lengths
@@ -440,32 +515,49 @@ void Avx512FloatKernel::pack(const Model& model) {
     _mm512_store_ps(&D.spring_rest[e0], _mm512_mul_ps(len2, inv_length(len2)));
   }
 
-  const size_t nt = D.volume ? L.tets.item.size() : 0;
-  for (auto* v : {&D.tet_a, &D.tet_b, &D.tet_c}) v->resize(nt);
-  D.tet_k36.assign(nt, 0.f);
-  D.tet_det_rest.assign(nt, 0.f);
-  for (size_t e = 0; e < nt; ++e) {
-    const int32_t t = L.tets.item[e];
-    const auto& o = L.tet_others[e];
-    const int32_t p = point_of_entry(L.tets, D.chunk, static_cast<int32_t>(e));
-    D.tet_a[e] = t < 0 ? p : o[0];
-    D.tet_b[e] = t < 0 ? p : o[1];
-    D.tet_c[e] = t < 0 ? p : o[2];
-    if (t >= 0) D.tet_k36[e] = static_cast<float>(model.tet_k[t] / 36);
+  // Tets in batches of 16 (see Data): sorted by lowest vertex for locality,
+  // cut into kSlices equal runs, each run dealt out to 16 lanes.
+  std::vector<int32_t> order;
+  if (D.volume) {
+    order.resize(model.ntet());
+    for (int32_t t = 0; t < model.ntet(); ++t) order[t] = t;
+    auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
+    std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
   }
-  for (size_t e0 = 0; e0 < nt; e0 += kLanes) {
-    const int32_t p0 = point_of_entry(L.tets, D.chunk, static_cast<int32_t>(e0));
-    const V px = _mm512_load_ps(&D.rest[0][p0]), py = _mm512_load_ps(&D.rest[1][p0]),
-            pz = _mm512_load_ps(&D.rest[2][p0]);
-    V ax, ay, az, bx, by, bz, cx, cy, cz;
-    gather3(rec, &D.tet_a[e0], ax, ay, az);
-    gather3(rec, &D.tet_b[e0], bx, by, bz);
-    gather3(rec, &D.tet_c[e0], cx, cy, cz);
-    const V det = det6(_mm512_sub_ps(ax, px), _mm512_sub_ps(ay, py), _mm512_sub_ps(az, pz), _mm512_sub_ps(bx, px),
-                       _mm512_sub_ps(by, py), _mm512_sub_ps(bz, pz), _mm512_sub_ps(cx, px), _mm512_sub_ps(cy, py),
-                       _mm512_sub_ps(cz, pz));
+  const int32_t nt = static_cast<int32_t>(order.size());
+  std::vector<int32_t> batches(kSlices);
+  D.slice_begin[0] = 0;
+  for (int sl = 0; sl < kSlices; ++sl) {
+    const int32_t count = (nt * (sl + 1)) / kSlices - (nt * sl) / kSlices;
+    batches[sl] = (count + kLanes - 1) / kLanes;
+    D.slice_begin[sl + 1] = D.slice_begin[sl] + batches[sl];
+  }
+  const size_t lanes = static_cast<size_t>(D.slice_begin[kSlices]) * kLanes;
+  for (auto& v : D.tet_v) v.assign(lanes, D.npad);  // padding lanes: the zero record at npad
+  D.tet_k36.assign(lanes, 0.f);
+  D.tet_det_rest.assign(lanes, 0.f);
+  for (int sl = 0; sl < kSlices; ++sl) {
+    const int32_t first = (nt * sl) / kSlices, count = (nt * (sl + 1)) / kSlices - first;
+    for (int32_t i = 0; i < count; ++i) {
+      const int32_t lane = i / batches[sl], batch = D.slice_begin[sl] + i % batches[sl];
+      const size_t e = static_cast<size_t>(batch) * kLanes + lane;
+      const int32_t t = order[first + i];
+      for (int k = 0; k < 4; ++k) D.tet_v[k][e] = model.tet_points[t][k];
+      D.tet_k36[e] = static_cast<float>(model.tet_k[t] / 36);
+    }
+  }
+  for (size_t e0 = 0; e0 < lanes; e0 += kLanes) {
+    V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
+    gather3(rec, &D.tet_v[0][e0], x0, y0, z0);
+    gather3(rec, &D.tet_v[1][e0], x1, y1, z1);
+    gather3(rec, &D.tet_v[2][e0], x2, y2, z2);
+    gather3(rec, &D.tet_v[3][e0], x3, y3, z3);
+    const V det = det6(_mm512_sub_ps(x1, x0), _mm512_sub_ps(y1, y0), _mm512_sub_ps(z1, z0), _mm512_sub_ps(x2, x0),
+                       _mm512_sub_ps(y2, y0), _mm512_sub_ps(z2, z0), _mm512_sub_ps(x3, x0), _mm512_sub_ps(y3, y0),
+                       _mm512_sub_ps(z3, z0));
     _mm512_store_ps(&D.tet_det_rest[e0], det);
   }
+  for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0.f);
   for (int32_t p = 0; p < D.npad; ++p) write_record(D, D.cur, p);
 }
 
