@@ -1,16 +1,18 @@
 // `organsim mesh INPUT -o OUTPUT`: tetrahedralise a closed surface with CGAL
 // Mesh_3 (or read a tet mesh), report counts, quality and the springs-per-point
-// histogram, and write .mesh or .vtk. Sizes in metres.
-#include <algorithm>
-#include <cctype>
+// histogram, and write .mesh, .vtk or .vtu. Input in other units is scaled to
+// metres first (--scale, --units); every size reported or written is in metres.
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "app/command.h"
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/mesh_stats.h"
+#include "core/mesh/units.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 #include "meshing/mesh_surface.h"
 
 namespace organsim::app {
@@ -20,29 +22,51 @@ struct MeshArgs {
   std::string input;
   std::string output;
   MeshOptions options;
+  double scale = 1.0;
+  std::string units;
   bool json = false;
 };
 
-void run_mesh(const MeshArgs& args) {
-  std::string ext = std::filesystem::path(args.output).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext != ".mesh" && ext != ".vtk") {
-    throw Error(ErrorKind::Usage, args.output + ": output must end in .mesh (medit) or .vtk (VTK legacy)");
+// Metres per input unit, from --scale or --units (exclusive on the command line).
+double input_scale(const MeshArgs& args) {
+  if (!args.units.empty()) return *metres_per_unit(args.units);
+  if (!(args.scale > 0) || !std::isfinite(args.scale)) {
+    throw Error(ErrorKind::Usage, "--scale must be a positive number (metres per input unit), got " + format_number(args.scale));
   }
+  return args.scale;
+}
+
+void run_mesh(const MeshArgs& args) {
+  if (!is_tet_mesh_output_path(args.output)) {
+    throw Error(ErrorKind::Usage, args.output + ": output must end in .mesh (medit), .vtk (VTK legacy) or .vtu (VTK XML)");
+  }
+  const double scale = input_scale(args);
   TetMesh mesh;
   MeshReport report;
   if (is_tet_mesh_path(args.input)) {
     const auto start = std::chrono::steady_clock::now();
     mesh = read_tet_mesh(args.input);
+    scale_points(mesh.points, scale);
     report = describe_tet_mesh(mesh);
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.notes.push_back(args.input + " is a tet mesh: read and converted, not remeshed");
   } else if (is_surface_path(args.input)) {
-    mesh = mesh_surface_file(args.input, args.options, &report);
+    // Scaled first, so that --cell-size and --facet-distance are metres of the scaled surface.
+    TriangleMesh surface = read_surface(args.input);
+    scale_points(surface.points, scale);
+    mesh = mesh_surface(surface, args.options, args.input, &report);
   } else {
     throw input_error(args.input, "unknown extension '" + std::filesystem::path(args.input).extension().string() +
-                                      "', expected a surface (.off .obj .stl .ply) or a tet mesh (.mesh .vtk .msh)");
+                                      "', expected a surface (.off .obj .stl .ply .vtp, .vtk polydata) or a tet "
+                                      "mesh (.mesh .msh .vtu, .vtk unstructured grid)");
   }
+  if (scale != 1.0) {
+    report.notes.insert(report.notes.begin(), "input scaled by " + format_number(scale) +
+                                                  (args.units.empty() ? " (--scale)" : " (--units " + args.units + ")") +
+                                                  " before meshing");
+  }
+  report.notes.push_back("sizes in metres: the mesh spans " + describe_extent(mesh.points) + ", volume " +
+                         format_number(tet_mesh_volume(mesh)) + " m^3");
   write_tet_mesh(args.output, mesh);
   if (args.json) {
     nlohmann::json j = mesh_report_json(report);
@@ -58,9 +82,17 @@ const bool registered = register_command("mesh", 10, [](CLI::App& root) {
   auto args = std::make_shared<MeshArgs>();
   CLI::App* cmd = root.add_subcommand(
       "mesh", "Tetrahedralise a closed triangle surface (CGAL Mesh_3) or convert a tet mesh; sizes in metres");
-  cmd->add_option("input", args->input, "closed surface (.off .obj .stl .ply) or tet mesh (.mesh .vtk .msh)")
+  cmd->add_option("input", args->input,
+                  "closed surface (.off .obj .stl .ply .vtp, .vtk polydata) or tet mesh (.mesh .msh .vtu, .vtk "
+                  "unstructured grid)")
       ->required();
-  cmd->add_option("-o,--output", args->output, "tet mesh to write: .mesh (medit) or .vtk (VTK legacy)")->required();
+  cmd->add_option("-o,--output", args->output, "tet mesh to write, in metres: .mesh (medit), .vtk (VTK legacy) or .vtu (VTK XML)")
+      ->required();
+  auto* scale = cmd->add_option("--scale", args->scale,
+                                "metres per input unit: coordinates are multiplied by it before meshing (default 1)");
+  cmd->add_option("--units", args->units, "input length unit, shorthand for --scale: mm (0.001), cm (0.01) or m")
+      ->check(CLI::IsMember({"mm", "cm", "m"}))
+      ->excludes(scale);
   auto* target = cmd->add_option("--target-points", args->options.target_points,
                                  "aim for this many points (within 10 %); searches the cell size");
   auto* cell = cmd->add_option("--cell-size", args->options.cell_size,

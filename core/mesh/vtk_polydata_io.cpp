@@ -81,7 +81,7 @@ TriangleMesh read_vtk_polydata(std::string_view bytes, const std::string& source
 }
 
 void write_vtk_polydata(std::ostream& out, const TriangleMesh& mesh) {
-  out << "# vtk DataFile Version 3.0\norgansim surface, metres\nASCII\nDATASET POLYDATA\n";
+  out << "# vtk DataFile Version 3.0\norgansim surface\nASCII\nDATASET POLYDATA\n";
   out << "POINTS " << mesh.points.size() << " double\n";
   for (const Vec3& p : mesh.points) {
     write_point(out, p);

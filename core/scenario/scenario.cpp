@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "core/mesh/units.h"
 #include "core/scenario/scenario_sections.h"
 #include "core/util/atomic_file.h"
 
@@ -42,6 +43,13 @@ MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::files
     mesh.path = resolve(*tet, base_dir);
   }
   if (auto s = r.number("scale")) mesh.scale = require_positive(*s, r.at("scale"));
+  if (auto u = r.string("units")) {
+    if (r.has("scale")) throw at.error("give \"units\" or \"scale\", not both");
+    const auto metres = metres_per_unit(*u);
+    if (!metres) throw r.at("units").error("expected \"mm\", \"cm\" or \"m\" (got \"" + *u + "\")");
+    mesh.units = *u;
+    mesh.scale = *metres;
+  }
   if (const nlohmann::json* o = r.get("options")) {
     const JsonPath oat = r.at("options");
     if (mesh.kind != MeshDef::Kind::Surface) throw oat.error("meshing options apply only to a \"surface\" mesh");

@@ -23,6 +23,7 @@ struct MeshDef {
   enum class Kind { Surface, Tet } kind = Kind::Tet;
   std::filesystem::path path;  // resolved against the scenario file's folder
   double scale = 1.0;          // coordinates are multiplied by this (e.g. 0.001 for mm input)
+  std::string units = "m";     // the file's length unit as given ("mm", "cm", "m"); scale follows from it
   // Surface meshing options (Kind::Surface only), in metres after scaling.
   std::optional<int32_t> target_points;
   std::optional<double> cell_size;       // m
