@@ -51,8 +51,16 @@ struct ContactSheetDef {
   int32_t columns = 3;  // grid columns, >= 1
 };
 
+// OUTDIR/vtk/state_00000.vtu ... and OUTDIR/states.pvd: the model's state as a
+// ParaView time series (docs/scenarios.md lists the arrays).
+struct VtkSeriesDef {
+  double rate = 30.0;         // states per simulated second, > 0
+  bool surface_only = false;  // boundary triangles as .vtp (smaller, for long runs) instead of the tets
+};
+
 struct OutputsDef {
   bool forces = true;  // OUTDIR/forces.json
+  std::optional<VtkSeriesDef> vtk;
   std::optional<FramesDef> frames;
   std::optional<VideoDef> video;
   std::optional<ContactSheetDef> contact_sheet;
