@@ -147,5 +147,36 @@ TEST(VtkSeries, PushedBlockHasFixedBaseAndToolForceEqualToTheLoggedReaction) {
   EXPECT_NEAR(-last.force_z, logged_z, 0.02 * logged_z);
 }
 
+TEST(VtkSeries, SurfaceOnlyStatesHoldTheBoundaryWithTheUsersPointNumbers) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "vtk_series" / "surface";
+  fs::remove_all(dir);
+  const nlohmann::json extra = nlohmann::json::parse(R"({"time": {"duration": 0.02}, "outputs": {"vtk": {"surface_only": true}}})");
+  const auto run = run_organsim("run " + scenario_in(dir, extra).string() + " -o " + (dir / "out").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string out = testing::run_vtk_python(R"(
+import xml.etree.ElementTree as ET
+rr = vtk.vtkXMLUnstructuredGridReader(); rr.SetFileName('box.vtu'); rr.Update(); rest = rr.GetOutput()
+files = [ds.get('file') for ds in ET.parse('out/states.pvd').getroot().iter('DataSet')]
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName('out/' + files[-1]); r.Update(); g = r.GetOutput()
+ids = g.GetPointData().GetArray('point_id'); disp = g.GetPointData().GetArray('displacement')
+err = max(abs(g.GetPoint(i)[c] - disp.GetTuple3(i)[c] - rest.GetPoint(int(ids.GetValue(i)))[c])
+          for i in range(g.GetNumberOfPoints()) for c in range(3))
+edges = vtk.vtkFeatureEdges(); edges.SetInputData(g); edges.BoundaryEdgesOn(); edges.NonManifoldEdgesOn()
+edges.FeatureEdgesOff(); edges.ManifoldEdgesOff(); edges.Update()
+print(len(files), files[-1], g.GetNumberOfPoints(), g.GetNumberOfPolys(), err, edges.GetOutput().GetNumberOfCells())
+)", dir);
+  std::istringstream in(out);
+  size_t nfiles = 0, points = 0, polys = 0, open_edges = 1;
+  std::string last;
+  double rest_error = 1;
+  in >> nfiles >> last >> points >> polys >> rest_error >> open_edges;
+  EXPECT_EQ(nfiles, 3u);  // t = 0, 0.01, 0.02
+  EXPECT_EQ(last, "vtk/state_00002.vtp");
+  EXPECT_EQ(points, 66u);   // 75 points less the 3 x 3 x 1 inside
+  EXPECT_EQ(polys, 128u);   // 64 boundary squares, 2 triangles each
+  EXPECT_LT(rest_error, 1e-12);  // Float64 positions: round-off only
+  EXPECT_EQ(open_edges, 0u);     // VTK finds the surface closed and manifold
+}
+
 }  // namespace
 }  // namespace organsim
