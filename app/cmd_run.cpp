@@ -13,6 +13,7 @@
 #include "app/run_observers.h"
 #include "app/scenario_mesh.h"
 #include "core/sim/run.h"
+#include "core/sim/settle.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
@@ -197,6 +198,15 @@ void run_command(const RunArgs& args) {
   monitor_context.stability = stability;
   BlowupMonitor monitor(monitor_options, monitor_context);
 
+  // Start at rest under gravity (time.settle): the run begins from equilibrium.
+  nlohmann::json settle_meta = nullptr;
+  if (s.time.settle > 0) {
+    const SettleResult settled = settle(model, {s.time.settle, s.time.dt, s.time.substeps, selection.threads});
+    backend->set_state(settled.positions, settled.positions);
+    std::cout << "settle:   " << describe(settled) << "\n";
+    settle_meta = to_json(settled);
+  }
+
   RunOptions options;
   options.outdir = outdir;
   options.observers.push_back(&monitor);  // first: nothing else sees a blown-up state
@@ -209,6 +219,7 @@ void run_command(const RunArgs& args) {
       {"model_seconds", model_seconds},
       {"tool", s.tool ? (s.tool->spec.mode == ToolMode::Push ? "push" : "pull") : "none"},
   };
+  options.meta_extra["settle"] = settle_meta;
   options.meta_extra["dt_crit"] = stability.dt_crit;
   options.meta_extra["stability"] = to_json(stability);
   options.meta_extra["stability"]["check_interval_ticks"] = check_interval;

@@ -141,6 +141,7 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
     if (*v < 1 || *v > 1'000'000) throw r.at("substeps").error("expected an integer >= 1 (got " + std::to_string(*v) + ")");
     t.substeps = static_cast<int32_t>(*v);
   }
+  if (auto v = r.number("settle")) t.settle = require_non_negative(*v, r.at("settle"));
   r.finish();
   if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");
   return t;

@@ -36,6 +36,7 @@ struct TimeDef {
   double duration = 1.0;   // s
   double dt = 1e-4;        // s, integration step
   int32_t substeps = 10;   // steps per tick
+  double settle = 0;       // s before t = 0 to come to rest under gravity, no tool (0: start from the rest shape)
 
   double tick() const { return dt * substeps; }   // s
   int64_t ticks() const;                         // ceil(duration / tick)

@@ -147,6 +147,40 @@ TEST(VtkSeries, PushedBlockHasFixedBaseAndToolForceEqualToTheLoggedReaction) {
   EXPECT_NEAR(-last.force_z, logged_z, 0.02 * logged_z);
 }
 
+TEST(VtkSeries, SettledRunStartsAtRestUnderGravity) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "vtk_series" / "settle";
+  fs::remove_all(dir);
+  const nlohmann::json extra = nlohmann::json::parse(R"({
+    "material": {"young_modulus": 3000},
+    "fixed": [{"plane": {"point": [0, 0, 0.001], "normal": [0, 0, -1]}}],
+    "time": {"duration": 0.03, "settle": 2.0}
+  })");
+  const auto run = run_organsim("run " + scenario_in(dir, extra).string() + " -o " + (dir / "out").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("settle:"), std::string::npos) << run.out;
+  std::ifstream log(dir / "out" / "forces.json");
+  const nlohmann::json meta = nlohmann::json::parse(log).at("meta");
+  ASSERT_TRUE(meta.at("settle").is_object()) << meta.dump();
+  EXPECT_TRUE(meta.at("settle").at("converged").get<bool>());
+  const double sag = meta.at("settle").at("max_displacement_m").get<double>();
+  EXPECT_GT(sag, 1e-4);
+  // The series starts sagged (state 0 already displaced by the sag) and the
+  // run moves nothing by more than 1 % of it: the largest displacement of
+  // each state, read by VTK.
+  const std::string out = testing::run_vtk_python(R"(
+import xml.etree.ElementTree as ET, math
+for ds in ET.parse('out/states.pvd').getroot().iter('DataSet'):
+    r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName('out/' + ds.get('file')); r.Update()
+    d = r.GetOutput().GetPointData().GetArray('displacement')
+    print(max(math.hypot(*d.GetTuple3(i)) for i in range(d.GetNumberOfTuples())))
+)", dir);
+  std::istringstream in(out);
+  std::vector<double> largest;
+  for (double v; in >> v;) largest.push_back(v);
+  ASSERT_EQ(largest.size(), 4u);  // t = 0, 0.01, 0.02, 0.03
+  for (double v : largest) EXPECT_NEAR(v, sag, 0.01 * sag);
+}
+
 TEST(VtkSeries, SurfaceOnlyStatesHoldTheBoundaryWithTheUsersPointNumbers) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "vtk_series" / "surface";
   fs::remove_all(dir);
