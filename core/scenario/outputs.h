@@ -28,6 +28,9 @@ struct FrameStyle {
   bool wireframe = false;                 // edges drawn over the shaded surface
   Colormap colormap = Colormap::None;     // spring strain or point displacement, with a legend
   std::array<double, 3> background{1.0, 1.0, 1.0};  // r, g, b in 0..1
+  // Top of the colour scale, kept for the whole run (m for displacement,
+  // dimensionless for strain); 0: estimated before the run from the tool's path.
+  double colormap_max = 0;
 };
 
 // OUTDIR/frames/frame_00000.png ...

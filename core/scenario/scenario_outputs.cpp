@@ -52,6 +52,7 @@ FrameStyle parse_style(const nlohmann::json& j, const JsonPath& at) {
     else if (*c == "displacement") s.colormap = Colormap::Displacement;
     else throw r.at("colormap").error("expected " + one_of({"none", "strain", "displacement"}) + " (got \"" + *c + "\")");
   }
+  if (auto m = r.number("colormap_max")) s.colormap_max = require_positive(*m, r.at("colormap_max"));
   if (const auto* b = r.get("background")) {
     const auto rgb = read_numbers(*b, r.at("background"), 3);
     for (size_t i = 0; i < 3; ++i) {
