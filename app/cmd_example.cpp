@@ -29,14 +29,11 @@ void run_example(const ExampleArgs& args) {
     throw Error(ErrorKind::Usage,
                 args.output + ": expected a surface file name ending in .off, .obj, .stl, .ply, .vtk or .vtp");
   }
-  TriangleMesh surface;
-  if (args.shape == "liver") surface = make_liver_surface(args.subdivisions);
-  else if (args.shape == "sphere") surface = make_sphere_surface(args.radius, args.subdivisions);
-  else surface = make_box_surface(Vec3(-0.05, -0.04, -0.03), Vec3(0.05, 0.04, 0.03));
+  TriangleMesh surface = make_example_surface(args.shape, args.subdivisions, args.radius);  // metres
+  const double volume = surface_volume(surface);
   const double metres = *metres_per_unit(args.units);
   scale_points(surface.points, 1.0 / metres);
   round_points(surface, 1e-6 / metres);  // micrometres: short files that read back exactly
-  const double volume = surface_volume(surface) * metres * metres * metres;
   write_surface(args.output, surface);
   std::cout << "wrote " << args.output << ": " << args.shape << ", " << surface.points.size() << " points, "
             << surface.faces.size() << " triangles, volume " << volume << " m^3, coordinates in " << args.units

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/command.h"
+#include "app/progress_line.h"
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/mesh_stats.h"
 #include "core/mesh/units.h"
@@ -22,8 +23,8 @@ struct MeshArgs {
   std::string input;
   std::string output;
   MeshOptions options;
-  double scale = 1.0;
-  std::string units;
+  double scale = 1.0;  // coordinates are multiplied by this (0.001 for a file in millimetres)
+  std::string units;   // or the unit named: mm, cm, m
   bool json = false;
 };
 
@@ -43,6 +44,7 @@ void run_mesh(const MeshArgs& args) {
   const double scale = input_scale(args);
   TetMesh mesh;
   MeshReport report;
+  ProgressLine line;  // the meshing stage on stderr, only when it is a terminal
   if (is_tet_mesh_path(args.input)) {
     const auto start = std::chrono::steady_clock::now();
     mesh = read_tet_mesh(args.input);
@@ -54,7 +56,9 @@ void run_mesh(const MeshArgs& args) {
     // Scaled first, so that --cell-size and --facet-distance are metres of the scaled surface.
     TriangleMesh surface = read_surface(args.input);
     scale_points(surface.points, scale);
-    mesh = mesh_surface(surface, args.options, args.input, &report);
+    MeshOptions options = args.options;
+    options.on_stage = [&line](const std::string& stage) { line.show("organsim mesh: " + stage); };
+    mesh = mesh_surface(surface, options, args.input, &report);
   } else {
     throw input_error(args.input, "unknown extension '" + std::filesystem::path(args.input).extension().string() +
                                       "', expected a surface (.off .obj .stl .ply .vtp, .vtk polydata) or a tet "
@@ -67,7 +71,9 @@ void run_mesh(const MeshArgs& args) {
   }
   report.notes.push_back("sizes in metres: the mesh spans " + describe_extent(mesh.points) + ", volume " +
                          format_number(tet_mesh_volume(mesh)) + " m^3");
+  line.show("organsim mesh: writing " + args.output);
   write_tet_mesh(args.output, mesh);
+  line.clear();
   if (args.json) {
     nlohmann::json j = mesh_report_json(report);
     j["input"] = args.input;
@@ -88,11 +94,6 @@ const bool registered = register_command("mesh", 10, [](CLI::App& root) {
       ->required();
   cmd->add_option("-o,--output", args->output, "tet mesh to write, in metres: .mesh (medit), .vtk (VTK legacy) or .vtu (VTK XML)")
       ->required();
-  auto* scale = cmd->add_option("--scale", args->scale,
-                                "metres per input unit: coordinates are multiplied by it before meshing (default 1)");
-  cmd->add_option("--units", args->units, "input length unit, shorthand for --scale: mm (0.001), cm (0.01) or m")
-      ->check(CLI::IsMember({"mm", "cm", "m"}))
-      ->excludes(scale);
   auto* target = cmd->add_option("--target-points", args->options.target_points,
                                  "aim for this many points (within 10 %); searches the cell size");
   auto* cell = cmd->add_option("--cell-size", args->options.cell_size,
@@ -102,6 +103,12 @@ const bool registered = register_command("mesh", 10, [](CLI::App& root) {
                   "max distance between the surface and the mesh boundary, m (default 0.1 h)");
   cmd->add_flag("--exude,!--no-exude", args->options.exude,
                 "sliver exudation: min dihedral angle ~0.3 -> ~10 deg, 1.3-3x the meshing time (default on)");
+  auto* scale = cmd->add_option("--scale", args->scale,
+                                "multiply the input's coordinates by this first, e.g. 0.001 for a file in millimetres "
+                                "(organsim works in metres)");
+  cmd->add_option("--units", args->units, "the input's length unit, shorthand for --scale: mm (0.001), cm (0.01) or m")
+      ->check(CLI::IsMember({"mm", "cm", "m"}))
+      ->excludes(scale);
   cmd->add_flag("--json", args->json, "print the report as JSON");
   cmd->callback([args] { run_mesh(*args); });
 });

@@ -69,9 +69,9 @@ std::string read_vtk_legacy_header(TokenReader& in, bool& binary) {
 int64_t vtk_index(double v) { return v >= 0 && v < 9.0e15 && v == std::floor(v) ? static_cast<int64_t>(v) : -1; }
 
 std::vector<Vec3> read_vtk_points(TokenReader& in, VtkValues& values) {
-  const int64_t n = in.next_int("the point count");
+  // Checked before 3 * n, which could overflow.
+  const int64_t n = in.checked_count(in.next_int("the point count"), 3, "points");
   const std::string type(in.next("the point data type"));
-  if (n < 0 || n > INT64_MAX / 3) in.fail("invalid point count " + std::to_string(n));
   const auto xyz = values.read(3 * n, type, "point coordinate");
   std::vector<Vec3> points;
   points.reserve(static_cast<size_t>(n));
@@ -129,12 +129,10 @@ void skip_vtk_field(TokenReader& in, VtkValues& values) {
   const int64_t arrays = in.next_int("the field array count");
   for (int64_t a = 0; a < arrays; ++a) {
     in.next("an array name");
-    const int64_t components = in.next_int("the component count");
-    const int64_t tuples = in.next_int("the tuple count");
+    // Each checked before their product, which could overflow.
+    const int64_t components = in.checked_count(in.next_int("the component count"), 1, "components");
+    const int64_t tuples = in.checked_count(in.next_int("the tuple count"), 1, "tuples");
     const std::string type(in.next("the array type"));
-    if (components < 0 || tuples < 0 || (tuples > 0 && components > INT64_MAX / 16 / tuples)) {
-      in.fail("field array of " + std::to_string(components) + " x " + std::to_string(tuples) + " values");
-    }
     values.read(components * tuples, type, "field value");
   }
 }
