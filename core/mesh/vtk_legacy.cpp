@@ -66,6 +66,12 @@ std::string read_vtk_legacy_header(TokenReader& in, bool& binary) {
   return std::string(in.next("the dataset type"));
 }
 
+std::string not_a_triangle(size_t polygon, size_t points) {
+  return "polygon " + std::to_string(polygon) + " has " + std::to_string(points) +
+         " points; not a triangle surface (expected 3 per polygon: triangulate it first, e.g. with ParaView's or "
+         "VTK's Triangulate filter)";
+}
+
 int64_t vtk_index(double v) { return v >= 0 && v < 9.0e15 && v == std::floor(v) ? static_cast<int64_t>(v) : -1; }
 
 std::vector<Vec3> read_vtk_points(TokenReader& in, VtkValues& values) {

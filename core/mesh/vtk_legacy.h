@@ -2,6 +2,7 @@
 // Internals shared by the VTK legacy readers (unstructured grid in vtk_io.cpp,
 // polydata in vtk_polydata_io.cpp): the header, numbers as ASCII tokens or
 // big-endian binary, and cell lists in the classic and the 5.1 layout.
+// vtk_index serves the XML reader (vtk_xml_read.cpp) too.
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,6 +41,9 @@ void skip_vtk_metadata(TokenReader& in);
 
 // Skips a FIELD block whose keyword was just read.
 void skip_vtk_field(TokenReader& in, VtkValues& values);
+
+// "polygon 3 has 4 points; not a triangle surface (...triangulate it first...)".
+std::string not_a_triangle(size_t polygon, size_t points);
 
 // Point ids as integers; anything that is not a representable whole number becomes -1.
 int64_t vtk_index(double v);

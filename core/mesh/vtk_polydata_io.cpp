@@ -44,11 +44,7 @@ TriangleMesh read_vtk_polydata(std::string_view bytes, const std::string& source
       if (keyword == "POLYGONS") {
         for (size_t c = 0; c < cells.size(); ++c) {
           const std::string name = "polygon " + std::to_string(c);
-          if (cells[c].size() != 3) {
-            in.fail(name + " has " + std::to_string(cells[c].size()) +
-                    " points; not a triangle surface (expected 3 per polygon: triangulate it first, e.g. "
-                    "with ParaView's or VTK's Triangulate filter)");
-          }
+          if (cells[c].size() != 3) in.fail(not_a_triangle(c, cells[c].size()));
           mesh.faces.push_back(checked_triangle(in, cells[c], mesh.points.size(), name));
         }
         have_polys = true;

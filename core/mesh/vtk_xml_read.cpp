@@ -14,7 +14,7 @@
 #include <optional>
 #include <vector>
 
-#include "core/mesh/mesh_io_detail.h"
+#include "core/mesh/vtk_legacy.h"  // vtk_index
 
 namespace organsim::mesh_io {
 
@@ -319,23 +319,21 @@ class VtkXmlReader {
     if (n == 0) return {};
     const auto offsets = values(parent, "offsets", n, 1);
     const XmlArray* c = find(parent, "connectivity");
-    const int64_t size = n == 0 ? 0 : index(offsets.back());
+    const int64_t size = n == 0 ? 0 : vtk_index(offsets.back());
     if (size < 0) fail(c ? c->begin : 0, "<" + std::string(parent) + "> offsets: last offset is not a valid count");
     const auto ids = values(parent, "connectivity", size, 1);
     std::vector<std::vector<int64_t>> cells;
     int64_t begin = 0;
     for (int64_t k = 0; k < n; ++k) {
-      const int64_t end = index(offsets[k]);
+      const int64_t end = vtk_index(offsets[k]);
       if (end < begin || end > size) fail("<" + std::string(parent) + "> cell " + std::to_string(k) + ": offsets not increasing");
       std::vector<int64_t> cell;
-      for (int64_t j = begin; j < end; ++j) cell.push_back(index(ids[j]));
+      for (int64_t j = begin; j < end; ++j) cell.push_back(vtk_index(ids[j]));
       cells.push_back(std::move(cell));
       begin = end;
     }
     return cells;
   }
-
-  static int64_t index(double v) { return v >= 0 && v < 9.0e15 && v == std::floor(v) ? static_cast<int64_t>(v) : -1; }
 
  private:
   void unpack(std::string_view data, const ScalarType& type, std::vector<double>& out, const XmlArray& a,
@@ -381,11 +379,7 @@ TriangleMesh read_vtp(std::string_view bytes, const std::string& source) {
   const auto polys = in.cells("Polys", in.piece_count("NumberOfPolys"));
   for (size_t k = 0; k < polys.size(); ++k) {
     const std::string what = "polygon " + std::to_string(k);
-    if (polys[k].size() != 3) {
-      in.fail(what + " has " + std::to_string(polys[k].size()) +
-                     " points; not a triangle surface (expected 3 per polygon: triangulate it first, e.g. with "
-                     "ParaView's or VTK's Triangulate filter)");
-    }
+    if (polys[k].size() != 3) in.fail(not_a_triangle(k, polys[k].size()));
     add(polys[k][0], polys[k][1], polys[k][2], what);
   }
   const auto strips = in.cells("Strips", in.piece_count("NumberOfStrips"));
@@ -410,7 +404,7 @@ TetMesh read_vtu(std::string_view bytes, const std::string& source) {
   const auto types = in.values("Cells", "types", ncell, 1);
   const auto npoint = static_cast<int64_t>(mesh.points.size());
   for (int64_t c = 0; c < ncell; ++c) {
-    const int64_t type = VtkXmlReader::index(types[c]);
+    const int64_t type = vtk_index(types[c]);
     if (type == 1 || type == 3 || type == 5) continue;  // vertices, lines, triangles: read past
     if (type != 10) {
       in.fail("cell " + std::to_string(c) + " has VTK type " + std::to_string(type) +
