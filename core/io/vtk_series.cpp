@@ -77,8 +77,8 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   std::vector<Tri> triangles;
   std::vector<Tet> tets;
   std::vector<int32_t> file_index(n, -1);
+  const std::vector<Tri> faces = def_.surface_only ? extract_boundary_faces(model.tet_points) : std::vector<Tri>{};
   if (def_.surface_only) {
-    const std::vector<Tri> faces = extract_boundary_faces(model.tet_points);
     std::vector<char> on_surface(n, 0);
     for (const Tri& f : faces) for (int32_t v : f) on_surface[static_cast<size_t>(v)] = 1;
     std::vector<int32_t> kept;
@@ -111,7 +111,7 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
 
   char name[32];
   if (def_.surface_only) {
-    for (const Tri& f : extract_boundary_faces(model.tet_points)) {
+    for (const Tri& f : faces) {
       triangles.push_back({file_index[static_cast<size_t>(f[0])], file_index[static_cast<size_t>(f[1])],
                            file_index[static_cast<size_t>(f[2])]});
     }

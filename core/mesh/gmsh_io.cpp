@@ -28,8 +28,8 @@ void expect(TokenReader& in, const char* word) {
 
 TetMesh read_gmsh(std::string_view text, const std::string& source) {
   TokenReader in(text, source, 0);
-  // Version 1.0 has no $MeshFormat: it starts with $NOD (or a $PTS/$COMMENTS block).
-  const bool v1 = in.peek() != "$MeshFormat";
+  // Version 1.0 has no $MeshFormat: it starts with $NOD.
+  const bool v1 = in.peek() == "$NOD";
   bool v4 = false;
   if (!v1) {
     expect(in, "$MeshFormat");
@@ -40,8 +40,6 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
     v4 = version.rfind("4", 0) == 0;
     if (!v4 && version.rfind("2", 0) != 0) in.fail("MSH version " + version + ": expected 2.2 or 4.1");
     expect(in, "$EndMeshFormat");
-  } else if (in.peek().empty() || in.peek()[0] != '$') {
-    in.fail("expected $MeshFormat (Gmsh 2.2 or 4.1) or $NOD (Gmsh 1.0), got '" + std::string(in.peek()) + "'");
   }
 
   std::vector<Vec3> nodes;

@@ -25,7 +25,7 @@ TetMesh read_vtk(std::string_view bytes, const std::string& source) {
       mesh.points = read_vtk_points(in, values);
       have_points = true;
     } else if (keyword == "CELLS") {
-      cells = read_vtk_cell_list(in, values, in.next_int("the cell count"));
+      cells = read_vtk_cell_list(in, values, keyword, in.next_int("the cell count"));
       have_cells = true;
     } else if (keyword == "CELL_TYPES") {
       const int64_t n = in.next_int("the cell type count");

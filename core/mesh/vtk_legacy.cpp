@@ -62,7 +62,7 @@ std::string read_vtk_legacy_header(TokenReader& in, bool& binary) {
   const std::string_view encoding = in.next("ASCII or BINARY");
   if (encoding != "ASCII" && encoding != "BINARY") in.fail("expected ASCII or BINARY, got '" + std::string(encoding) + "'");
   binary = encoding == "BINARY";
-  if (in.next("DATASET") != "DATASET") in.fail("expected 'DATASET <type>'");
+  if (in.next("DATASET") != "DATASET") in.fail("expected 'DATASET UNSTRUCTURED_GRID' or 'DATASET POLYDATA'");
   return std::string(in.next("the dataset type"));
 }
 
@@ -85,7 +85,8 @@ std::vector<Vec3> read_vtk_points(TokenReader& in, VtkValues& values) {
   return points;
 }
 
-std::vector<std::vector<int64_t>> read_vtk_cell_list(TokenReader& in, VtkValues& values, int64_t n) {
+std::vector<std::vector<int64_t>> read_vtk_cell_list(TokenReader& in, VtkValues& values, const std::string& keyword,
+                                                     int64_t n) {
   const int64_t size = in.next_int("the cell list size");
   std::vector<std::vector<int64_t>> cells;
   const auto indices = [](std::vector<double>::const_iterator begin, std::vector<double>::const_iterator end) {
@@ -111,7 +112,7 @@ std::vector<std::vector<int64_t>> read_vtk_cell_list(TokenReader& in, VtkValues&
   if (n > size) in.fail(std::to_string(n) + " cells cannot fit in a list of " + std::to_string(size) + " entries");
   size_t k = 0;
   for (int64_t c = 0; c < n; ++c) {
-    if (k >= list.size()) in.fail("cell list is shorter than its " + std::to_string(n) + " cells");
+    if (k >= list.size()) in.fail(keyword + " list is shorter than its " + std::to_string(n) + " cells");
     const int64_t count = vtk_index(list[k++]);
     if (count < 0 || k + static_cast<size_t>(count) > list.size()) {
       in.fail("cell " + std::to_string(c) + " has an invalid point count " + std::to_string(count));

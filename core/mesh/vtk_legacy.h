@@ -31,7 +31,8 @@ std::string read_vtk_legacy_header(TokenReader& in, bool& binary);
 // The cells of a CELLS/POLYGONS/... section whose keyword and first count
 // (`n`) were just read: each cell's point ids, -1 for anything that is not a
 // whole non-negative number (so that range checks name the cell).
-std::vector<std::vector<int64_t>> read_vtk_cell_list(TokenReader& in, VtkValues& values, int64_t n);
+std::vector<std::vector<int64_t>> read_vtk_cell_list(TokenReader& in, VtkValues& values, const std::string& keyword,
+                                                     int64_t n);
 
 // Point coordinates of a POINTS section whose keyword was just read.
 std::vector<Vec3> read_vtk_points(TokenReader& in, VtkValues& values);

@@ -40,7 +40,7 @@ TriangleMesh read_vtk_polydata(std::string_view bytes, const std::string& source
       mesh.points = read_vtk_points(in, values);
       have_points = true;
     } else if (keyword == "POLYGONS" || keyword == "TRIANGLE_STRIPS" || keyword == "VERTICES" || keyword == "LINES") {
-      const auto cells = read_vtk_cell_list(in, values, in.next_int("the cell count"));
+      const auto cells = read_vtk_cell_list(in, values, keyword, in.next_int("the cell count"));
       if (keyword == "POLYGONS") {
         for (size_t c = 0; c < cells.size(); ++c) {
           const std::string name = "polygon " + std::to_string(c);
