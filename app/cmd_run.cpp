@@ -14,6 +14,7 @@
 #include "app/run_observers.h"
 #include "app/scenario_mesh.h"
 #include "core/sim/run.h"
+#include "core/sim/settle.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
@@ -206,6 +207,15 @@ void run_command(const RunArgs& args) {
   monitor_context.stability = stability;
   BlowupMonitor monitor(monitor_options, monitor_context);
 
+  // Start at rest under gravity (time.settle): the run begins from equilibrium.
+  nlohmann::json settle_meta = nullptr;
+  if (s.time.settle > 0) {
+    const SettleResult settled = settle(model, {s.time.settle, s.time.dt, s.time.substeps, selection.threads});
+    backend->set_state(settled.positions, settled.positions);
+    std::cout << "settle:   " << describe(settled) << "\n";
+    settle_meta = to_json(settled);
+  }
+
   RunOptions options;
   options.outdir = outdir;
   options.allow_unstable = args.allow_unstable;  // also after each topology change
@@ -221,6 +231,7 @@ void run_command(const RunArgs& args) {
       {"model_seconds", model_seconds},
       {"tool", s.tool ? (s.tool->spec.mode == ToolMode::Push ? "push" : "pull") : "none"},
   };
+  options.meta_extra["settle"] = settle_meta;
   if (!backend_choice.empty()) options.meta_extra["backend_choice"] = backend_choice;
   options.meta_extra["dt_crit"] = stability.dt_crit;
   options.meta_extra["stability"] = to_json(stability);

@@ -20,6 +20,7 @@
 #include "app/command.h"
 #include "app/scenario_mesh.h"
 #include "core/sim/run.h"
+#include "core/sim/settle.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/stability/study.h"
@@ -71,7 +72,7 @@ std::string fmt(double v, const char* spec = "%.4g") {
 
 Outcome run_configuration(const Scenario& base, const Model& model, const std::string& backend_name,
                           const std::string& precision, int32_t substeps, int32_t threads, int64_t sample_every,
-                          const StabilityReport& stability) {
+                          const StabilityReport& stability, const std::vector<Vec3>& start_positions) {
   Outcome o;
   o.backend = backend_name;
   o.precision = precision;
@@ -93,6 +94,7 @@ Outcome run_configuration(const Scenario& base, const Model& model, const std::s
     o.reason = e.what();
     return o;
   }
+  if (!start_positions.empty()) backend->set_state(start_positions, start_positions);  // the settled start
   o.ran = true;
   o.device = backend->device();
   o.trajectory.latency_ticks = backend->reaction_latency_ticks();
@@ -245,14 +247,18 @@ void study_command(const StudyArgs& args) {
   }
   const int32_t finest = *std::max_element(substeps.begin(), substeps.end());
   const int32_t ref_substeps = finest * args.ref_factor;
+  // Every configuration, the reference included, starts from the scenario's
+  // start at rest (time.settle), so the study compares only what the tool does.
+  std::vector<Vec3> start;
+  if (s.time.settle > 0) start = settle(model, {s.time.settle, s.time.dt, s.time.substeps, args.threads}).positions;
   const int total = 2 + static_cast<int>(substeps.size() * args.backends.size() * args.precisions.size());
   int done = 0;
 
   // The converged reference: double CPU at dt_ref and dt_ref / 2.
   progress(done, total, "reference dt " + fmt(tick / ref_substeps));
-  Outcome ref = run_configuration(s, model, "cpu", "double", ref_substeps, args.threads, sample_every, stability);
+  Outcome ref = run_configuration(s, model, "cpu", "double", ref_substeps, args.threads, sample_every, stability, start);
   progress(++done, total, "reference dt " + fmt(tick / (2 * ref_substeps)));
-  Outcome half = run_configuration(s, model, "cpu", "double", 2 * ref_substeps, args.threads, sample_every, stability);
+  Outcome half = run_configuration(s, model, "cpu", "double", 2 * ref_substeps, args.threads, sample_every, stability, start);
   progress(++done, total, "reference done");
   if (!ref.stable || !half.stable)
     throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + fmt(half.dt) +
@@ -269,7 +275,7 @@ void study_command(const StudyArgs& args) {
     for (const std::string& p : args.precisions)
       for (int32_t n : substeps) {
         progress(done, total, b + " " + p + " dt " + fmt(tick / n));
-        Outcome o = run_configuration(s, model, b, p, n, args.threads, sample_every, stability);
+        Outcome o = run_configuration(s, model, b, p, n, args.threads, sample_every, stability, start);
         if (o.stable) o.errors = compare_trajectories(o.trajectory, half.trajectory, diag);
         o.trajectory = Trajectory{};  // keep memory flat
         runs.push_back(std::move(o));

@@ -4,6 +4,7 @@
 
 #include "app/progress_line.h"
 #include "core/mesh/mesh_io.h"
+#include "core/mesh/units.h"
 
 namespace organsim::app {
 
@@ -14,7 +15,7 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
     // Scale first so that cell_size and facet_distance are in metres of the
     // scaled surface, like every other length in the scenario.
     TriangleMesh surface = read_surface(def.path);
-    for (Vec3& p : surface.points) p *= def.scale;
+    scale_points(surface.points, def.scale);
     MeshOptions options;
     options.target_points = def.target_points;
     options.cell_size = def.cell_size;
@@ -27,7 +28,7 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
     mesh = mesh_surface(surface, options, def.path.string(), report);
   } else {
     mesh = read_tet_mesh(def.path);
-    for (Vec3& p : mesh.points) p *= def.scale;
+    scale_points(mesh.points, def.scale);
     if (report) *report = describe_tet_mesh(mesh);
   }
   if (report) {

@@ -13,6 +13,9 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
   # Real-world CC0 meshes (femur, bunny, ...) used by some tests.
   libcgal-demo
+  # VTK itself (Python bindings, run as /usr/bin/python3): tests read the
+  # .vtu/.vtp/.pvd files we write with it and read files it writes.
+  python3-vtk9
   # Fuzzing (scripts/fuzz.sh): clang's libFuzzer runtime and its OpenMP.
   clang-14 libclang-rt-14-dev libomp-14-dev
 )

@@ -1,4 +1,5 @@
-// Gmsh .msh tet meshes, ASCII versions 2.2 and 4.1. Linear tetrahedra
+// Gmsh .msh tet meshes, ASCII versions 1.0 ($NOD/$ELM, no $MeshFormat), 2.2
+// and 4.1. Linear tetrahedra
 // (element type 4) are kept; other elements are read past. Node tags are
 // arbitrary numbers in Gmsh: points are the nodes the tets use, in file order.
 #include <unordered_map>
@@ -10,8 +11,8 @@ namespace organsim::mesh_io {
 
 namespace {
 
-void skip_section(TokenReader& in, const std::string& name) {
-  const std::string end = "$End" + name.substr(1);
+void skip_section(TokenReader& in, const std::string& name, bool v1) {
+  const std::string end = (v1 ? "$END" : "$End") + name.substr(1);
   while (!in.at_end()) {
     if (in.next(end.c_str()) == end) return;
   }
@@ -27,14 +28,19 @@ void expect(TokenReader& in, const char* word) {
 
 TetMesh read_gmsh(std::string_view text, const std::string& source) {
   TokenReader in(text, source, 0);
-  expect(in, "$MeshFormat");
-  const std::string version(in.next("the format version"));
-  const int64_t file_type = in.next_int("the file type");
-  in.next_int("the data size");
-  if (file_type != 0) in.fail("binary .msh is not supported; save the mesh as ASCII (Gmsh: -save -format msh22 or msh41)");
-  const bool v4 = version.rfind("4", 0) == 0;
-  if (!v4 && version.rfind("2", 0) != 0) in.fail("MSH version " + version + ": expected 2.2 or 4.1");
-  expect(in, "$EndMeshFormat");
+  // Version 1.0 has no $MeshFormat: it starts with $NOD.
+  const bool v1 = in.peek() == "$NOD";
+  bool v4 = false;
+  if (!v1) {
+    expect(in, "$MeshFormat");
+    const std::string version(in.next("the format version"));
+    const int64_t file_type = in.next_int("the file type");
+    in.next_int("the data size");
+    if (file_type != 0) in.fail("binary .msh is not supported; save the mesh as ASCII (Gmsh: -save -format msh22 or msh41)");
+    v4 = version.rfind("4", 0) == 0;
+    if (!v4 && version.rfind("2", 0) != 0) in.fail("MSH version " + version + ": expected 2.2 or 4.1");
+    expect(in, "$EndMeshFormat");
+  }
 
   std::vector<Vec3> nodes;
   std::unordered_map<int64_t, int32_t> node_index;  // Gmsh tag -> position in `nodes`
@@ -67,7 +73,34 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
 
   while (!in.at_end()) {
     const std::string section(in.next("a section"));
-    if (section == "$Nodes" && !v4) {
+    if (v1 && section == "$NOD") {
+      const int64_t n = in.checked_count(in.next_int("the node count"), 8, "nodes");
+      for (int64_t i = 0; i < n; ++i) {
+        const int64_t tag = in.next_int("a node number");
+        const double x = in.next_double("a node x"), y = in.next_double("a node y"), z = in.next_double("a node z");
+        add_node(tag, Vec3(x, y, z));
+      }
+      expect(in, "$ENDNOD");
+    } else if (v1 && section == "$ELM") {
+      // number type physical-region elementary-region node-count nodes...
+      const int64_t n = in.checked_count(in.next_int("the element count"), 10, "elements");
+      for (int64_t e = 0; e < n; ++e) {
+        in.next_int("an element number");
+        const int64_t type = in.next_int("an element type");
+        in.next_int("the physical region");
+        in.next_int("the elementary region");
+        const int64_t count = in.next_int("the element's node count");
+        if (count != nodes_of_type(type)) {
+          in.fail("element " + std::to_string(e) + " of type " + std::to_string(type) + " has " + std::to_string(count) +
+                  " nodes, expected " + std::to_string(nodes_of_type(type)));
+        }
+        read_element_nodes(type);
+      }
+      expect(in, "$ENDELM");
+    } else if (v1) {
+      if (section.empty() || section[0] != '$') in.fail("expected a $SECTION, got '" + section + "'");
+      skip_section(in, section, true);
+    } else if (section == "$Nodes" && !v4) {
       const int64_t n = in.next_int("the node count");
       for (int64_t i = 0; i < n; ++i) {
         const int64_t tag = in.next_int("a node tag");
@@ -121,7 +154,7 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
       }
       expect(in, "$EndElements");
     } else if (!section.empty() && section[0] == '$') {
-      skip_section(in, section);  // $PhysicalNames, $Entities, $NodeData, ...
+      skip_section(in, section, false);  // $PhysicalNames, $Entities, $NodeData, ...
     } else {
       in.fail("expected a $Section, got '" + section + "'");
     }

@@ -63,11 +63,15 @@ void write_off(std::ostream& out, const TriangleMesh& mesh);
 void write_obj(std::ostream& out, const TriangleMesh& mesh);
 void write_stl_binary(std::ostream& out, const TriangleMesh& mesh);
 void write_ply_ascii(std::ostream& out, const TriangleMesh& mesh);
+TriangleMesh read_vtk_polydata(std::string_view bytes, const std::string& source);  // legacy POLYDATA
+TriangleMesh read_vtp(std::string_view bytes, const std::string& source);           // XML PolyData
+void write_vtk_polydata(std::ostream& out, const TriangleMesh& mesh);
 
 // Tet meshes, before orientation fix-up and validation.
 TetMesh read_medit(std::string_view text, const std::string& source);
 TetMesh read_vtk(std::string_view bytes, const std::string& source);
 TetMesh read_gmsh(std::string_view text, const std::string& source);
+TetMesh read_vtu(std::string_view bytes, const std::string& source);  // XML UnstructuredGrid
 void write_medit(std::ostream& out, const TetMesh& mesh);
 void write_vtk(std::ostream& out, const TetMesh& mesh);
 

@@ -84,4 +84,33 @@ Camera make_camera(const CameraOptions& options, const std::vector<Vec3>& points
   return cam;
 }
 
+Camera make_run_camera(const CameraOptions& options, const std::vector<Vec3>& points,
+                       const std::vector<Vec3>& tool_path, double tool_radius, double aspect) {
+  if (!options.auto_fit || tool_path.empty()) return make_camera(options, points, aspect);
+  std::vector<Vec3> framed = points;
+  for (const Vec3& c : tool_path) {
+    for (int axis = 0; axis < 3; ++axis) {
+      framed.push_back(c + tool_radius * Vec3::Unit(axis));
+      framed.push_back(c - tool_radius * Vec3::Unit(axis));
+    }
+  }
+  Vec3 lo = points.empty() ? Vec3::Zero() : points[0], hi = lo;
+  for (const Vec3& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec3 up = options.up.normalized();
+  const Vec3 from_model = tool_path.front() - (lo + hi) / 2;
+  const Vec3 across = from_model - from_model.dot(up) * up;  // the tool's side in the horizontal plane
+  CameraOptions o = options;
+  // Within ~25 degrees of straight above/below: the default oblique view shows it.
+  if (across.norm() > 0.45 * from_model.norm()) {
+    const Vec3 side = across.normalized();
+    const Vec3 aside = up.cross(side);
+    const double turn = std::numbers::pi / 6, raise = std::numbers::pi / 6;
+    o.auto_direction = std::cos(raise) * (std::cos(turn) * side + std::sin(turn) * aside) + std::sin(raise) * up;
+  }
+  return make_camera(o, framed, aspect);
+}
+
 }  // namespace organsim

@@ -23,4 +23,13 @@ struct Camera {
 // to the view, fov outside (0, 180)).
 Camera make_camera(const CameraOptions& options, const std::vector<Vec3>& points, double aspect);
 
+// The camera for a run. With auto_fit it frames the model and the tool's whole
+// path (spheres of `tool_radius` about `tool_path`), looking from the side
+// the tool comes from (its first position relative to the model's centre,
+// raised 30 degrees above the horizontal plane of `up` and turned 30 degrees
+// aside, so the contact is not hidden behind the tool). A tool that comes
+// from straight above or below keeps the default oblique view.
+Camera make_run_camera(const CameraOptions& options, const std::vector<Vec3>& points,
+                       const std::vector<Vec3>& tool_path, double tool_radius, double aspect);
+
 }  // namespace organsim

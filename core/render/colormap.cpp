@@ -25,10 +25,12 @@ void point_strain(const Model& model, const std::vector<Vec3>& x, std::vector<fl
 }
 
 void point_displacement(const Model& model, const std::vector<Vec3>& x, std::vector<float>& out) {
-  out.resize(model.npoint());
-  for (int32_t i = 0; i < model.npoint(); ++i) {
-    out[i] = static_cast<float>((x[i] - model.rest_position[i]).norm());
-  }
+  point_displacement(model.rest_position, x, out);
+}
+
+void point_displacement(const std::vector<Vec3>& reference, const std::vector<Vec3>& x, std::vector<float>& out) {
+  out.resize(reference.size());
+  for (size_t i = 0; i < reference.size(); ++i) out[i] = static_cast<float>((x[i] - reference[i]).norm());
 }
 
 Vec3f colormap_rgb(float s) {

@@ -15,6 +15,8 @@ namespace organsim {
 void point_strain(const Model& model, const std::vector<Vec3>& x, std::vector<float>& out);
 // |x - rest| per point, m.
 void point_displacement(const Model& model, const std::vector<Vec3>& x, std::vector<float>& out);
+// |x - reference| per point, m (the frames measure from the run's start).
+void point_displacement(const std::vector<Vec3>& reference, const std::vector<Vec3>& x, std::vector<float>& out);
 
 // The colour scale: s in [0, 1] (clamped) -> RGB in [0, 1]. Dark blue through
 // cyan, green and yellow to red, monotonic in lightness up to yellow so that

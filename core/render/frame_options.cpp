@@ -25,6 +25,7 @@ FrameOutputs to_frame_outputs(const OutputsDef& outputs) {
   frames.camera = to_camera_options(f.camera);
   frames.style.wireframe = f.style.wireframe;
   frames.style.colormap = f.style.colormap;
+  frames.style.colormap_max = f.style.colormap_max;
   frames.style.background = Vec3(f.style.background[0], f.style.background[1], f.style.background[2]);
   out.frames = frames;
   if (outputs.video) {

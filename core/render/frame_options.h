@@ -30,9 +30,9 @@ struct StyleOptions {
   Vec3 background{1.0, 1.0, 1.0};         // RGB in [0, 1]
   Vec3 surface_color{0.80, 0.45, 0.40};   // RGB in [0, 1], when colormap is None
   Vec3 tool_color{0.55, 0.60, 0.70};      // RGB in [0, 1]
-  // Colour map range; <= 0 means "the largest value so far in the run".
-  // Strain is dimensionless (|l/l0 - 1|, mean over a point's springs);
-  // displacement is in m.
+  // Colour map range, fixed for a run; <= 0: estimated before the run from
+  // the tool's path (colormap_range.h). Strain is dimensionless (|l/l0 - 1|,
+  // mean over a point's springs); displacement is in m, from the run's start.
   double colormap_max = 0.0;
 };
 

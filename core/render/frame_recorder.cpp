@@ -10,6 +10,7 @@
 #include "core/gl/gl_api.h"
 #include "core/mesh/boundary.h"
 #include "core/render/colormap.h"
+#include "core/render/colormap_range.h"
 #include "core/render/frame_writer.h"
 #include "core/render/surface_renderer.h"
 #include "core/util/error.h"
@@ -77,7 +78,8 @@ struct FrameRecorder::Impl {
   std::vector<Vec3> positions;  // internal numbering, reused between frames
   std::vector<float> scalars;
   std::vector<Vec3f> colors;
-  double colormap_running_max = 0;
+  std::vector<Vec3> start_positions;  // positions at t = 0 (settled), internal numbering
+  ColormapRange range;      // fixed for the run once known
   FrameRecorderTiming timing;
 
   void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center) {
@@ -110,12 +112,12 @@ struct FrameRecorder::Impl {
       if (frames.style.colormap == Colormap::Strain) {
         point_strain(model, positions, scalars);
       } else {
-        point_displacement(model, positions, scalars);
+        point_displacement(start_positions, positions, scalars);  // what happened since t = 0
       }
-      // The range only grows during a run (largest value so far), so a colour
-      // means the same value in every later frame of the sequence.
-      colormap_max = std::max(colormap_range_max(scalars, frames.style.colormap_max), colormap_running_max);
-      colormap_running_max = colormap_max;
+      // One range for the whole run, so a colour means the same value in every
+      // frame and on the contact sheet; values above it saturate.
+      if (!(range.max > 0)) range.max = colormap_range_max(scalars, 0);
+      colormap_max = range.max;
       colors.resize(scalars.size());
       for (size_t i = 0; i < scalars.size(); ++i) {
         // An all-zero field (the rest state) is the bottom of the scale.
@@ -135,7 +137,7 @@ struct FrameRecorder::Impl {
     start = Clock::now();
     cv::Mat image = renderer->read_back();
     if (frames.style.colormap != Colormap::None) {
-      draw_colormap_legend(image, colormap_title(frames.style.colormap), 0.0, colormap_max,
+      draw_colormap_legend(image, colormap_legend_title(frames.style.colormap, range), 0.0, colormap_max,
                            colormap_unit(frames.style.colormap));
     }
     timing.readback_ms += ms_since(start) + upload_ms;
@@ -177,6 +179,8 @@ void FrameRecorder::on_topology_changed(const Model& next, Backend& /*backend*/)
 
 void FrameRecorder::on_start(const Model& model, Backend& backend) {
   Impl& s = *impl_;
+  // Before our context exists: a GL backend makes its own current to read back.
+  backend.positions(s.start_positions);
   // Created here, not in the constructor, so `--plan` and scenes that fail
   // before the run never open a GL context.
   {
@@ -193,7 +197,12 @@ void FrameRecorder::on_start(const Model& model, Backend& backend) {
     s.renderer = std::make_unique<SurfaceRenderer>(s.frames.width, s.frames.height);
   }
   topology_changed(model);
-  s.camera = make_camera(s.frames.camera, model.rest_position, static_cast<double>(s.frames.width) / s.frames.height);
+  std::vector<Vec3> tool_path;
+  constexpr int kPathSamples = 50;
+  for (int k = 0; s.tool && k <= kPathSamples; ++k) tool_path.push_back(s.tool->position_at(s.duration * k / kPathSamples));
+  s.camera = make_run_camera(s.frames.camera, s.start_positions, tool_path, s.tool ? s.tool->radius : 0.0,
+                             static_cast<double>(s.frames.width) / s.frames.height);
+  s.range = colormap_range(s.frames.style, s.tool, s.start_positions, s.duration);
   s.writer = std::make_unique<FrameWriter>(s.outputs, s.outdir, expected_frame_count(s.duration, s.frames.rate),
                                            cv::Size(s.frames.width, s.frames.height));
   const double t = backend.time();

@@ -28,6 +28,9 @@ struct FrameStyle {
   bool wireframe = false;                 // edges drawn over the shaded surface
   Colormap colormap = Colormap::None;     // spring strain or point displacement, with a legend
   std::array<double, 3> background{1.0, 1.0, 1.0};  // r, g, b in 0..1
+  // Top of the colour scale, kept for the whole run (m for displacement,
+  // dimensionless for strain); 0: estimated before the run from the tool's path.
+  double colormap_max = 0;
 };
 
 // OUTDIR/frames/frame_00000.png ...
@@ -51,8 +54,16 @@ struct ContactSheetDef {
   int32_t columns = 3;  // grid columns, >= 1
 };
 
+// OUTDIR/vtk/state_00000.vtu ... and OUTDIR/states.pvd: the model's state as a
+// ParaView time series (docs/scenarios.md lists the arrays).
+struct VtkSeriesDef {
+  double rate = 30.0;         // states per simulated second, > 0
+  bool surface_only = false;  // boundary triangles as .vtp (smaller, for long runs) instead of the tets
+};
+
 struct OutputsDef {
   bool forces = true;  // OUTDIR/forces.json
+  std::optional<VtkSeriesDef> vtk;
   std::optional<FramesDef> frames;
   std::optional<VideoDef> video;
   std::optional<ContactSheetDef> contact_sheet;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "core/mesh/units.h"
 #include "core/scenario/scenario_sections.h"
 #include "core/util/atomic_file.h"
 
@@ -43,6 +44,13 @@ MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::files
     mesh.path = resolve(*tet, base_dir);
   }
   if (auto s = r.number("scale")) mesh.scale = require_positive(*s, r.at("scale"));
+  if (auto u = r.string("units")) {
+    if (r.has("scale")) throw at.error("give \"units\" or \"scale\", not both");
+    const auto metres = metres_per_unit(*u);
+    if (!metres) throw r.at("units").error("expected \"mm\", \"cm\" or \"m\" (got \"" + *u + "\")");
+    mesh.units = *u;
+    mesh.scale = *metres;
+  }
   if (const nlohmann::json* o = r.get("options")) {
     const JsonPath oat = r.at("options");
     if (mesh.kind != MeshDef::Kind::Surface) throw oat.error("meshing options apply only to a \"surface\" mesh");
@@ -134,6 +142,7 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
     if (*v < 1 || *v > 1'000'000) throw r.at("substeps").error("expected an integer >= 1 (got " + std::to_string(*v) + ")");
     t.substeps = static_cast<int32_t>(*v);
   }
+  if (auto v = r.number("settle")) t.settle = require_non_negative(*v, r.at("settle"));
   r.finish();
   if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");
   return t;

@@ -25,6 +25,7 @@ struct MeshDef {
   enum class Kind { Surface, Tet } kind = Kind::Tet;
   std::filesystem::path path;  // resolved against the scenario file's folder
   double scale = 1.0;          // coordinates are multiplied by this (e.g. 0.001 for mm input)
+  std::string units = "m";     // the file's length unit as given ("mm", "cm", "m"); scale follows from it
   // Surface meshing options (Kind::Surface only), in metres after scaling.
   std::optional<int32_t> target_points;
   std::optional<double> cell_size;       // m
@@ -37,6 +38,7 @@ struct TimeDef {
   double duration = 1.0;   // s
   double dt = 1e-4;        // s, integration step
   int32_t substeps = 10;   // steps per tick
+  double settle = 0;       // s before t = 0 to come to rest under gravity, no tool (0: start from the rest shape)
 
   double tick() const { return dt * substeps; }   // s
   int64_t ticks() const;                         // ceil(duration / tick)

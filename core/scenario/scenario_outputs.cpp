@@ -1,4 +1,4 @@
-// The scenario's `outputs` section (force log, frames, video, contact sheet).
+// The scenario's `outputs` section (force log, ParaView series, frames, video, contact sheet).
 #include <nlohmann/json.hpp>
 
 #include "core/scenario/scenario_sections.h"
@@ -52,6 +52,7 @@ FrameStyle parse_style(const nlohmann::json& j, const JsonPath& at) {
     else if (*c == "displacement") s.colormap = Colormap::Displacement;
     else throw r.at("colormap").error("expected " + one_of({"none", "strain", "displacement"}) + " (got \"" + *c + "\")");
   }
+  if (auto m = r.number("colormap_max")) s.colormap_max = require_positive(*m, r.at("colormap_max"));
   if (const auto* b = r.get("background")) {
     const auto rgb = read_numbers(*b, r.at("background"), 3);
     for (size_t i = 0; i < 3; ++i) {
@@ -115,12 +116,21 @@ ContactSheetDef parse_contact_sheet(const nlohmann::json& j, const JsonPath& at)
   r.finish();
   return c;
 }
+VtkSeriesDef parse_vtk(const nlohmann::json& j, const JsonPath& at) {
+  ObjectReader r(j, at);
+  VtkSeriesDef v;
+  if (auto rate = r.number("rate")) v.rate = require_positive(*rate, r.at("rate"));
+  if (auto s = r.boolean("surface_only")) v.surface_only = *s;
+  r.finish();
+  return v;
+}
 }  // namespace
 
 OutputsDef parse_outputs(const nlohmann::json& j, const JsonPath& at) {
   ObjectReader r(j, at);
   OutputsDef o;
   if (auto f = r.boolean("forces")) o.forces = *f;
+  if (const auto* v = r.get("vtk")) o.vtk = parse_vtk(*v, r.at("vtk"));
   if (const auto* f = r.get("frames")) o.frames = parse_frames(*f, r.at("frames"));
   for (const char* key : {"video", "contact_sheet"}) {
     if (r.has(key) && !o.frames) throw r.at(key).error("needs outputs.frames (the images it is made of)");

@@ -10,6 +10,7 @@
 #include "../core/mesh_io_test_util.h"
 #include "core/mesh/example_shapes.h"
 #include "core/mesh/mesh_io.h"
+#include "core/mesh/mesh_stats.h"
 #include "core/util/atomic_file.h"
 
 namespace organsim {
@@ -175,13 +176,46 @@ TEST(MeshCli, JsonReportParsesAndMatchesTheWrittenMesh) {
   for (const char* key : {"points", "springs", "tets", "boundary_triangles"}) EXPECT_EQ(k.at(key), j.at(key)) << key;
 }
 
+TEST(MeshCli, MillimetreSurfaceIsScaledBeforeMeshingAndReportedInMetres) {
+  const auto dir = fresh_test_dir("mesh_cli");
+  TriangleMesh sphere_mm = make_sphere_surface(0.05, 3);
+  for (Vec3& p : sphere_mm.points) p *= 1000.0;  // a 50 mm sphere, as a CT segmentation would give it
+  write_surface(dir / "sphere_mm.vtk", sphere_mm);
+  // --cell-size is in metres of the scaled surface: 12 mm cells on a 100 mm sphere.
+  const CliRun run = run_organsim("mesh " + (dir / "sphere_mm.vtk").string() + " --units mm --cell-size 0.012 -o " +
+                                      (dir / "sphere.vtu").string() + " --json", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  const std::string notes = j.at("notes").dump();
+  EXPECT_NE(notes.find("input scaled by 0.001 (--units mm)"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("sizes in metres"), std::string::npos) << notes;
+  const TetMesh mesh = read_tet_mesh(dir / "sphere.vtu");
+  EXPECT_EQ(j.at("points").get<size_t>(), mesh.points.size());
+  // Volume of the meshed sphere within 5 % of 4/3 pi (0.05 m)^3: the mesh
+  // boundary is a polyhedral approximation (facet distance 1.2 mm).
+  const double sphere_volume = 4.0 / 3.0 * 3.14159265358979 * 0.05 * 0.05 * 0.05;
+  EXPECT_NEAR(tet_mesh_volume(mesh), sphere_volume, 0.05 * sphere_volume);
+  // --scale 0.001 is the same as --units mm: the same mesh, point for point.
+  const CliRun same = run_organsim("mesh " + (dir / "sphere_mm.vtk").string() + " --scale 0.001 --cell-size 0.012 -o " +
+                                       (dir / "same.vtu").string(), dir);
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  const TetMesh again = read_tet_mesh(dir / "same.vtu");
+  ASSERT_EQ(again.points.size(), mesh.points.size());
+  for (size_t i = 0; i < mesh.points.size(); ++i) EXPECT_EQ(again.points[i], mesh.points[i]) << i;
+  // Unknown units and --units with --scale are CLI11 parse errors; a bad scale is ours.
+  EXPECT_NE(run_organsim("mesh " + (dir / "sphere_mm.vtk").string() + " --units inch -o " + (dir / "x.vtu").string(), dir).exit_code, 0);
+  EXPECT_NE(run_organsim("mesh " + (dir / "sphere_mm.vtk").string() + " --units mm --scale 0.001 -o " + (dir / "x.vtu").string(), dir).exit_code, 0);
+  EXPECT_EQ(run_organsim("mesh " + (dir / "sphere_mm.vtk").string() + " --scale -1 -o " + (dir / "x.vtu").string(), dir).exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.vtu"));
+}
+
 TEST(MeshCli, UsageErrorsExitWithTheUsageCode) {
   const auto dir = fresh_test_dir("mesh_cli");
   write_surface(dir / "sphere.off", make_sphere_surface(0.05, 1));
   // Unsupported output extension: refused before meshing, nothing written.
   CliRun run = run_organsim("mesh " + (dir / "sphere.off").string() + " -o " + (dir / "out.stl").string(), dir);
   EXPECT_EQ(run.exit_code, 2) << run.err;
-  EXPECT_NE(run.err.find("out.stl: output must end in .mesh (medit) or .vtk"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("out.stl: output must end in .mesh (medit), .vtk (VTK legacy) or .vtu"), std::string::npos) << run.err;
   // --target-points and --cell-size exclude each other (CLI11's parse error).
   run = run_organsim("mesh " + (dir / "sphere.off").string() + " -o " + (dir / "out.mesh").string() +
                          " --target-points 100 --cell-size 0.01", dir);

@@ -32,8 +32,8 @@ TEST(RunLiverPush, NoForceBeforeContactThenOpposingAndGrowingWithDepth) {
   // Contact begins at the first tick with a contact point. The tool's bottom
   // (centre z - 2 cm) starts 1 cm above the undeformed top (z = 0.058 m on the
   // tool's path) and descends at 3.5 cm/s: contact at t = 0.29 s if the liver
-  // did not move; it sags under gravity away from the tool, so contact must
-  // start after 0.25 s and well before the end.
+  // did not move; it has sagged under gravity away from the tool before t = 0
+  // (time.settle), so contact must start after 0.25 s and well before the end.
   size_t first = n;
   for (size_t i = 0; i < n; ++i) {
     if (s["contacts"][i].get<int>() > 0) {

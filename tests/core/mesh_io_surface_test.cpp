@@ -12,15 +12,8 @@ namespace {
 
 using testing::error_message;
 using testing::fresh_test_dir;
+using testing::octahedron;
 using testing::write_fixture;
-
-// An octahedron of "radius" 1 with outward faces: 6 points, 8 faces, volume 4/3.
-TriangleMesh octahedron() {
-  TriangleMesh m;
-  m.points = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  m.faces = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  return m;
-}
 
 TEST(SurfaceIo, OctahedronIsOutwardWithVolumeFourThirds) {
   // The fixture itself: the divergence-theorem volume of the octahedron |x|+|y|+|z| <= 1 is 4/3.

@@ -206,6 +206,20 @@ TEST(ScenarioParse, OutOfRangeNamesTheJsonPathAndValue) {
   EXPECT_EQ(error_of(j), "scene.json: outputs.frames.size[0]: expected a size in 16..8192 pixels (got 8)");
 }
 
+TEST(ScenarioParse, MeshUnitsSetTheScale) {
+  json j = json::parse(R"({"mesh": {"surface": "organ_mm.vtk", "units": "mm"}})");
+  Scenario s = parse(j);
+  EXPECT_EQ(s.mesh.units, "mm");
+  EXPECT_DOUBLE_EQ(s.mesh.scale, 0.001);
+  j["mesh"]["units"] = "cm";
+  EXPECT_DOUBLE_EQ(parse(j).mesh.scale, 0.01);
+  j["mesh"]["units"] = "inch";
+  EXPECT_EQ(error_of(j), "scene.json: mesh.units: expected \"mm\", \"cm\" or \"m\" (got \"inch\")");
+  j["mesh"]["units"] = "mm";
+  j["mesh"]["scale"] = 0.001;
+  EXPECT_EQ(error_of(j), "scene.json: mesh: give \"units\" or \"scale\", not both");
+}
+
 TEST(ScenarioParse, KeyframesMustBeSortedByTime) {
   json j = minimal();
   j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}, {"t": 0.6, "position": [0,0,0]},
