@@ -19,15 +19,11 @@ constexpr GLuint64 kReadbackTimeoutNs = 10'000'000'000ull;  // a tick taking 10 
 }  // namespace
 
 GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBackendOptions& options)
-    : model_(model), tool_(tool), options_(options) {
+    : model_(&model), tool_(tool), options_(options) {
   gl::EglContextOptions context_options;
   context_options.debug = options.debug;
   context_ = std::make_unique<gl::EglContext>(context_options);
 
-  const gl::PackedModel packed = gl::pack_model(model);
-  npoint_ = packed.npoint;
-  nchunk_ = packed.nchunk;
-  npad_ = packed.npad;
   volume_ = model.has_volume();
   gravity_ = model.has_gravity();
   push_ = tool.present && tool.mode == ToolMode::Push;
@@ -43,31 +39,10 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
 
-  // x_t = rest, d_t = 0; two pairs of buffers swapped after each substep.
-  const size_t xbytes = packed.rest.size() * sizeof(float);
-  const std::vector<float> zero(packed.rest.size(), 0.0f);
-  x_[0] = create_buffer("x_t", xbytes, packed.rest.data(), GL_DYNAMIC_STORAGE_BIT);
-  x_[1] = create_buffer("x_{t+1}", xbytes, packed.rest.data(), GL_DYNAMIC_STORAGE_BIT);
-  d_[0] = create_buffer("x_t - x_{t-1}", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
-  d_[1] = create_buffer("x_{t+1} - x_t", xbytes, zero.data(), GL_DYNAMIC_STORAGE_BIT);
-  mass_ = create_buffer("mass {1/m, m}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
-  chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
-  springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
-                           packed.springs.data(), 0);
-  if (volume_) {
-    tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
-                          packed.tets.data(), 0);
-  }
-  if (pull_) {
-    attach_upload_.assign(static_cast<size_t>(npad_) * 4, 0.0f);
-    attach_ = create_buffer("attachments {offset, attached}", attach_upload_.size() * sizeof(float),
-                            attach_upload_.data(), GL_DYNAMIC_STORAGE_BIT);
-  }
+  // Buffers that do not depend on the model's size: the readback rings.
+  const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
   if (tool.present) {
-    partials_ = create_buffer("reaction partials per workgroup", static_cast<size_t>(nchunk_) * 8 * sizeof(float),
-                              nullptr, 0);
     // Written by the GPU, read by the CPU one tick later without a copy.
-    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
     const size_t ring = static_cast<size_t>(kSlots) * 8 * sizeof(float);
     reaction_ = create_buffer("reaction ring (mapped)", ring, nullptr, map);
     reaction_map_ = static_cast<const float*>(glMapNamedBufferRange(reaction_, 0, static_cast<GLsizeiptr>(ring), map));
@@ -78,7 +53,6 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   {
     // Blow-up flag per ring slot, read with the reaction; cleared on the GPU
     // (glClearNamedBufferSubData) before the tick that writes it.
-    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
     const std::vector<uint32_t> none(kSlots, kNoPoint);
     status_ = create_buffer("non-finite flag ring (mapped)", none.size() * sizeof(uint32_t), none.data(), map);
     status_map_ = static_cast<const uint32_t*>(
@@ -87,22 +61,15 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
       throw Error(ErrorKind::Backend, "GL backend: glMapNamedBufferRange(status ring, persistent coherent) failed");
     }
   }
-  if (options.record_forces) {
-    force_ = create_buffer("recorded forces", static_cast<size_t>(npad_) * 4 * sizeof(float), nullptr, 0);
-  }
-  slots_.assign(kSlots, Slot{});
-  readback_.resize(static_cast<size_t>(npad_) * 4);
-
-  // Bindings that never change; the three position buffers rotate per substep.
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_MASS, mass_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CHUNKS, chunks_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SPRINGS, springs_);
-  if (tets_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_TETS, tets_);
-  if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
-  if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
-  if (reaction_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REACTION, reaction_);
-  if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_STATUS, status_);
+  if (reaction_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REACTION, reaction_);
+  ring_buffers_ = buffer_sizes_.size();
+  slots_.assign(kSlots, Slot{});
+
+  // x_t = rest, d_t = 0.
+  const gl::PackedModel packed = gl::pack_model(model);
+  const std::vector<float> zero(packed.rest.size(), 0.0f);
+  upload_model(packed, packed.rest, zero);
   if (gravity_) {
     glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
                        static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
@@ -110,9 +77,90 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (tool.present) {
     glProgramUniform1f(step_.id(), ORGANSIM_GL_U_TOOL_RADIUS, static_cast<float>(tool.radius));
     glProgramUniform1f(step_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
-    glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
   }
   context_->check_errors("GL backend setup");
+}
+
+void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d) {
+  npoint_ = packed.npoint;
+  nchunk_ = packed.nchunk;
+  npad_ = packed.npad;
+  buffer_sizes_.resize(ring_buffers_);
+  // Two pairs of buffers swapped after each substep.
+  const size_t xbytes = packed.rest.size() * sizeof(float);
+  cur_ = 0;
+  x_[0] = create_buffer("x_t", xbytes, x.data(), GL_DYNAMIC_STORAGE_BIT);
+  x_[1] = create_buffer("x_{t+1}", xbytes, x.data(), GL_DYNAMIC_STORAGE_BIT);
+  d_[0] = create_buffer("x_t - x_{t-1}", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
+  d_[1] = create_buffer("x_{t+1} - x_t", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
+  mass_ = create_buffer("mass {1/m, m}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
+  chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
+  springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
+                           packed.springs.data(), 0);
+  if (volume_) {
+    tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
+                          packed.tets.data(), 0);
+  }
+  if (pull_) {
+    // Attachments survive a rebuild: the ids they name are kept.
+    attach_upload_.resize(static_cast<size_t>(npad_) * 4, 0.0f);
+    attach_ = create_buffer("attachments {offset, attached}", attach_upload_.size() * sizeof(float),
+                            attach_upload_.data(), GL_DYNAMIC_STORAGE_BIT);
+  }
+  if (tool_.present) {
+    partials_ = create_buffer("reaction partials per workgroup", static_cast<size_t>(nchunk_) * 8 * sizeof(float),
+                              nullptr, 0);
+    glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
+  }
+  if (options_.record_forces) {
+    force_ = create_buffer("recorded forces", static_cast<size_t>(npad_) * 4 * sizeof(float), nullptr, 0);
+  }
+  readback_.resize(static_cast<size_t>(npad_) * 4);
+
+  // Bindings that never change until the next rebuild; the position buffers
+  // rotate per substep.
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_MASS, mass_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CHUNKS, chunks_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SPRINGS, springs_);
+  if (tets_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_TETS, tets_);
+  if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
+  if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
+  if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
+}
+
+void GlBackend::delete_model_buffers() {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &attach_, &partials_, &force_}) {
+    if (*b) glDeleteBuffers(1, b);
+    *b = 0;
+  }
+}
+
+void GlBackend::rebuild(const Model& next) {
+  const int32_t old_n = npoint_, n = next.npoint();
+  if (n < old_n || static_cast<int32_t>(next.origin.size()) != n) {
+    throw Error(ErrorKind::Backend, "GL backend: rebuild from a Model with " + std::to_string(n) + " points after " +
+                                        std::to_string(old_n) + " (points are append-only)");
+  }
+  make_current();
+  // The state comes back once per topology change (an event, not per step):
+  // x_t and d_t of the points that stay, copies of their origin's for the new.
+  const gl::PackedModel packed = gl::pack_model(next);
+  std::vector<float> x(packed.rest.size()), d(packed.rest.size());
+  const GLsizeiptr old_bytes = static_cast<GLsizeiptr>(static_cast<size_t>(old_n) * 4 * sizeof(float));
+  glGetNamedBufferSubData(x_[cur_], 0, old_bytes, x.data());
+  glGetNamedBufferSubData(d_[cur_], 0, old_bytes, d.data());
+  for (int32_t i = old_n; i < packed.npad; ++i) {
+    // Padding lanes copy the last point, as pack_model's rest state does.
+    const int32_t from = i < n ? next.origin[static_cast<size_t>(i)] : n - 1;
+    for (int k = 0; k < 4; ++k) {
+      x[4 * static_cast<size_t>(i) + k] = x[4 * static_cast<size_t>(from) + k];
+      d[4 * static_cast<size_t>(i) + k] = d[4 * static_cast<size_t>(from) + k];
+    }
+  }
+  delete_model_buffers();
+  model_ = &next;
+  upload_model(packed, x, d);
+  context_->check_errors("GL backend rebuild");
 }
 
 GlBackend::~GlBackend() {
@@ -122,9 +170,8 @@ GlBackend::~GlBackend() {
   }
   if (reaction_map_) glUnmapNamedBuffer(reaction_);
   if (status_map_) glUnmapNamedBuffer(status_);
-  const GLuint buffers[] = {x_[0], x_[1], d_[0], d_[1], mass_,     chunks_, springs_,
-                            tets_, attach_, partials_, reaction_, force_, status_};
-  for (GLuint b : buffers) {
+  delete_model_buffers();
+  for (GLuint b : {reaction_, status_}) {
     if (b) glDeleteBuffers(1, &b);
   }
   step_ = gl::ComputeProgram();
@@ -153,7 +200,7 @@ GLuint GlBackend::create_buffer(const char* what, size_t bytes, const void* data
 
 Plan GlBackend::plan() const {
   Plan plan;
-  const auto& m = model_;
+  const auto& m = *model_;
   std::string fused = std::to_string(m.nspring()) + " springs gathered from both ends (" +
                       std::to_string(m.layout.springs.item.size()) + " slots)";
   if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
@@ -225,7 +272,7 @@ Reaction GlBackend::tick(const TickRequest& request) {
   const GLuint program = step_.id();
   glUseProgram(program);
   glProgramUniform1f(program, ORGANSIM_GL_U_DT, static_cast<float>(request.dt));
-  glProgramUniform1f(program, ORGANSIM_GL_U_DAMPING, static_cast<float>(model_.viscous_damping * request.dt));
+  glProgramUniform1f(program, ORGANSIM_GL_U_DAMPING, static_cast<float>(model_->viscous_damping * request.dt));
   glProgramUniform1f(program, ORGANSIM_GL_U_DT2, static_cast<float>(request.dt * request.dt));
   const bool tool_acts = tool_.present && request.tool_active;
   if (tool_.present) glProgramUniform1i(program, ORGANSIM_GL_U_TOOL_ACTIVE, tool_acts ? 1 : 0);
@@ -301,7 +348,7 @@ Reaction GlBackend::read_slot(int slot) {
     const int32_t p = static_cast<int32_t>(bad);
     const double t0 = s.t_end;
     throw Error(ErrorKind::Numerical,
-                "GL backend: non-finite position of point " + std::to_string(model_.input_of_internal[p]) +
+                "GL backend: non-finite position of point " + std::to_string(model_->input_of_internal[p]) +
                     " (input numbering) in the tick ending at t = " + std::to_string(t0) +
                     " s: the simulation blew up (dt above the critical step, a sliver tet or an extreme tool "
                     "stiffness); positions are no longer valid");

@@ -11,6 +11,7 @@
 
 #include "core/gl/egl_context.h"
 #include "core/gl/gl_api.h"
+#include "core/gl/gl_model_pack.h"
 #include "core/gl/gl_program.h"
 #include "core/sim/backend.h"
 
@@ -40,6 +41,7 @@ class GlBackend final : public Backend {
   Reaction tick(const TickRequest& request) override;
   void attach(const Attachment& attachment) override;
   void release() override;
+  void rebuild(const Model& next) override;
   void positions(std::vector<Vec3>& out) const override;
   double time() const override { return time_; }
 
@@ -65,8 +67,11 @@ class GlBackend final : public Backend {
   void make_current() const;
   GLuint create_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags);
   Reaction read_slot(int slot);
+  // Creates the buffers sized by the model (state x_t, d_t given, npad x 4).
+  void upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d);
+  void delete_model_buffers();
 
-  const Model& model_;
+  const Model* model_;  // the current version (rebuild() moves it on)
   BackendTool tool_;
   GlBackendOptions options_;
   std::unique_ptr<gl::EglContext> context_;
@@ -83,6 +88,7 @@ class GlBackend final : public Backend {
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;
+  size_t ring_buffers_ = 0;  // entries of buffer_sizes_ that outlive a rebuild
 
   // Readback ring: the fence and whether the slot holds a reaction.
   struct Slot {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/model/layout_build.h"
+#include "core/model/model_assembly.h"
 #include "core/model/ordering.h"
 #include "core/util/error.h"
 
@@ -109,59 +110,62 @@ Model build_model(const TetMesh& mesh, const Material& material, const ModelOpti
   sort_by_valence_in_windows(order, valence, options.sort_window);
 
   Model model;
+  model.mesh_points = npoint;
   model.input_of_internal = order;
   model.internal_of_input.assign(npoint, -1);
   for (int32_t i = 0; i < npoint; ++i) model.internal_of_input[order[i]] = i;
+  model.origin.resize(npoint);
+  std::iota(model.origin.begin(), model.origin.end(), 0);
   const auto& to_internal = model.internal_of_input;
 
   model.rest_position.resize(npoint);
   for (int32_t i = 0; i < npoint; ++i) model.rest_position[i] = mesh.points[order[i]];
 
-  // Tets (orientation unchanged by renumbering), rest volumes, lumped masses.
+  // Tets (orientation unchanged by renumbering), sorted by their smallest
+  // vertex so that neighbouring points share cache lines.
   model.tet_points.resize(mesh.tets.size());
-  model.tet_rest_volume.resize(mesh.tets.size());
-  model.mass.assign(npoint, 0.0);
-  for (size_t t = 0; t < mesh.tets.size(); ++t) {
-    Tet tet;
-    for (int k = 0; k < 4; ++k) tet[k] = to_internal[mesh.tets[t][k]];
-    model.tet_points[t] = tet;
+  for (size_t t = 0; t < mesh.tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) model.tet_points[t][k] = to_internal[mesh.tets[t][k]];
+  auto smallest = [](const Tet& t) { return *std::min_element(t.begin(), t.end()); };
+  std::stable_sort(model.tet_points.begin(), model.tet_points.end(),
+                   [&](const Tet& a, const Tet& b) { return smallest(a) < smallest(b); });
+  model.tet_rest_volume.resize(model.tet_points.size());
+  for (size_t t = 0; t < model.tet_points.size(); ++t) {
+    const Tet& tet = model.tet_points[t];
     const auto& x = model.rest_position;
-    const double v = signed_volume(x[tet[0]], x[tet[1]], x[tet[2]], x[tet[3]]);
-    model.tet_rest_volume[t] = v;
-    for (int32_t p : tet) model.mass[p] += material.density * v / 4.0;
-  }
-  // Tets sorted by their smallest vertex: neighbouring points share cache lines.
-  {
-    std::vector<size_t> perm(model.tet_points.size());
-    std::iota(perm.begin(), perm.end(), 0);
-    auto key = [&](size_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
-    std::stable_sort(perm.begin(), perm.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
-    std::vector<Tet> tets(perm.size());
-    std::vector<double> volumes(perm.size());
-    for (size_t i = 0; i < perm.size(); ++i) {
-      tets[i] = model.tet_points[perm[i]];
-      volumes[i] = model.tet_rest_volume[perm[i]];
-    }
-    model.tet_points = std::move(tets);
-    model.tet_rest_volume = std::move(volumes);
+    model.tet_rest_volume[t] = signed_volume(x[tet[0]], x[tet[1]], x[tet[2]], x[tet[3]]);
   }
 
-  // Fixed points; points used by no tet have no mass and are held fixed.
   const std::vector<uint8_t> fixed_input = select_fixed(mesh, options.fixed);
+  std::vector<uint8_t> held(npoint);
+  for (int32_t i = 0; i < npoint; ++i) held[i] = fixed_input[order[i]];
+
+  model.gravity = options.gravity;
+  model.viscous_damping = material.viscous_damping;
+  model.material = material;
+  assemble_model(model, held, options.chunk_size, options.sort_window);
+  return model;
+}
+
+void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chunk_size, int32_t sort_window) {
+  const int32_t npoint = model.npoint();
+  const Material& material = model.material;
+
+  // Lumped masses: a quarter of each tet's mass to each of its vertices.
+  model.mass.assign(npoint, 0.0);
+  for (int32_t t = 0; t < model.ntet(); ++t)
+    for (int32_t p : model.tet_points[t]) model.mass[p] += material.density * model.tet_rest_volume[t] / 4.0;
+
+  // Fixed points; points used by no tet have no mass and are held fixed.
   model.fixed.resize(npoint);
   model.inv_mass.resize(npoint);
   for (int32_t i = 0; i < npoint; ++i) {
-    model.fixed[i] = fixed_input[order[i]] || model.mass[i] <= 0;
+    model.fixed[i] = held[i] || model.mass[i] <= 0;
     model.inv_mass[i] = model.fixed[i] ? 0.0 : 1.0 / model.mass[i];
   }
 
-  // Springs: one per unique edge, in internal numbering, sorted.
-  model.spring_ends.reserve(input_edges.size());
-  for (const Edge& e : input_edges) {
-    const int32_t a = to_internal[e[0]], b = to_internal[e[1]];
-    model.spring_ends.push_back({std::min(a, b), std::max(a, b)});
-  }
-  std::sort(model.spring_ends.begin(), model.spring_ends.end());
+  // Springs: one per unique tet edge, sorted.
+  model.spring_ends = unique_edges(model.tet_points);
   const int32_t nspring = model.nspring();
   model.spring_rest.resize(nspring);
   model.spring_k.resize(nspring);
@@ -190,16 +194,13 @@ Model build_model(const TetMesh& mesh, const Material& material, const ModelOpti
     model.spring_d[s] = material.spring_damping_time * model.spring_k[s];
   }
 
+  model.tet_k.clear();
   if (material.volume_modulus > 0) {
     model.tet_k.resize(model.ntet());
     for (int32_t t = 0; t < model.ntet(); ++t) model.tet_k[t] = material.volume_modulus / model.tet_rest_volume[t];
   }
 
-  model.gravity = options.gravity;
-  model.viscous_damping = material.viscous_damping;
-  model.material = material;
-  model.layout = build_gather_layout(model, options.chunk_size, options.sort_window);
-  return model;
+  model.layout = build_gather_layout(model, chunk_size, sort_window);
 }
 
 }  // namespace organsim

@@ -22,6 +22,14 @@ struct Model {
   std::vector<int32_t> input_of_internal;  // user's point id of internal point i (npoint)
   std::vector<int32_t> internal_of_input;  // internal id of user's point i (npoint)
 
+  // Topology versions (see model_rebuild.h). Points are append-only: the
+  // mesh's own points keep internal ids 0..mesh_points-1 in every version,
+  // and a point appended by a change has internal id == output number >=
+  // mesh_points.
+  int32_t version = 0;               // 0 as built from the mesh, +1 per topology change
+  int32_t mesh_points = 0;           // points read from the mesh
+  std::vector<int32_t> origin;       // internal id of the point each point was copied from, itself for mesh points (npoint)
+
   // Springs: one per unique tet edge, ends in internal numbering.
   std::vector<Edge> spring_ends;     // (nspring x 2), ends[0] < ends[1]
   std::vector<double> spring_rest;   // rest length, m (nspring)

@@ -61,6 +61,13 @@ class Backend {
   // Replaces x_t and x_{t-1} (internal numbering), e.g. to start from a
   // deformed or moving state in tests. Not for use inside a run.
   virtual void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) = 0;
+  // The Model changed topology (model_rebuild.h: ids kept, points appended):
+  // re-packs everything from `next`, which must outlive the backend or the
+  // next rebuild. x_t and x_{t-1} of existing points carry over exactly;
+  // appended points start with the x_t and x_{t-1} of the point they copy
+  // (Model::origin), so a cut adds no velocity jump. Attachments stay on the
+  // same ids. Between ticks only.
+  virtual void rebuild(const Model& next) = 0;
   // Simulated time at the end of the last tick, s.
   virtual double time() const = 0;
 };

@@ -48,6 +48,16 @@ struct Soa3 {
     y.assign(n, v);
     z.assign(n, v);
   }
+  void resize(size_t n, Real v) {
+    x.resize(n, v);
+    y.resize(n, v);
+    z.resize(n, v);
+  }
+  void copy(size_t from, size_t to) {
+    x[to] = x[from];
+    y[to] = y[from];
+    z[to] = z[from];
+  }
   void swap(Soa3& other) {
     x.swap(other.x);
     y.swap(other.y);
@@ -62,15 +72,143 @@ class CpuBackend final : public Backend {
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options)
-      : model_(model), tool_(tool), threads_(choose_threads(model, options)) {
-    const int32_t n = model.npoint();
-    const auto& layout = model.layout;
+      : model_(&model), tool_(tool), threads_(choose_threads(model, options)) {
     // State is the displacement u = x - X from rest and the last step's
     // increment d = u_t - u_{t-1}. In float, x itself would round away the
     // per-step increment dt^2 F/m (~1e-9 m against a 4e-9 m spacing of floats
     // near 5 cm), and u_{t-1} would leave the velocity d/dt as the difference
     // of two nearly equal numbers, worse the smaller dt is. In exact
     // arithmetic this is the same position Verlet.
+    const size_t n = static_cast<size_t>(model.npoint());
+    u_.assign(n, 0);
+    d_.assign(n, 0);
+    attached_.assign(n, -1);
+    pack();
+    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "");
+  }
+
+  void rebuild(const Model& next) override {
+    const size_t old_n = u_.x.size(), n = static_cast<size_t>(next.npoint());
+    if (n < old_n || next.origin.size() != n)
+      throw Error(ErrorKind::Backend, "cpu backend: rebuild from a Model with " + std::to_string(n) +
+                                          " points after " + std::to_string(old_n) + " (points are append-only)");
+    model_ = &next;
+    // An appended point copies its origin's displacement and increment: its
+    // rest position is the origin's, so it starts at the same x_t and x_{t-1}.
+    for (Soa3<Real>* s : {&u_, &d_}) {
+      s->resize(n, 0);
+      for (size_t i = old_n; i < n; ++i) s->copy(next.origin[i], i);
+    }
+    attached_.resize(n, -1);
+    pack();
+  }
+
+  std::string name() const override { return "cpu"; }
+  std::string device() const override { return device_; }
+  std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
+  int32_t reaction_latency_ticks() const override { return 0; }
+  double time() const override { return time_; }
+
+  Plan plan() const override {
+    Plan plan;
+    const auto& m = *model_;
+    const size_t real = sizeof(Real);
+    plan.passes.push_back({"springs", std::to_string(m.nspring()) + " springs gathered from both ends (" +
+                                          std::to_string(m.layout.springs.item.size()) + " slots)"});
+    if (m.has_volume())
+      plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
+                                           std::to_string(m.layout.tets.item.size()) + " slots)"});
+    if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
+    if (tool_.present)
+      plan.passes.push_back({"tool-contact", tool_.mode == ToolMode::Push ? "sphere penalty contact"
+                                                                          : "grasp attachment springs"});
+    plan.passes.push_back({"integrate", "position Verlet, fused with the passes above (" +
+                                            std::to_string(kLanes) + " lanes per SIMD group)"});
+    const size_t n = static_cast<size_t>(m.npoint());
+    plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
+    plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
+    plan.buffers.push_back({"spring slots (other, rest, k, d)",
+                            m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
+    if (m.has_volume())
+      plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)",
+                              m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
+    if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
+    plan.dispatches_per_step = 1;
+    plan.syncs_per_step = 0;
+    return plan;
+  }
+
+  void attach(const Attachment& attachment) override {
+    release();
+    attach_offset_.assign(attachment.points.size(), Eigen::Matrix<Real, 3, 1>::Zero());
+    for (size_t k = 0; k < attachment.points.size(); ++k) {
+      attached_[attachment.points[k]] = static_cast<int32_t>(k);
+      attach_offset_[k] = attachment.offsets[k].cast<Real>();
+    }
+    attached_points_ = attachment.points;
+  }
+
+  void release() override {
+    for (int32_t p : attached_points_) attached_[p] = -1;
+    attached_points_.clear();
+  }
+
+  void positions(std::vector<Vec3>& out) const override {
+    out.resize(u_.x.size());
+    for (size_t i = 0; i < out.size(); ++i) out[i] = model_->rest_position[i] + displacement(u_, i);
+  }
+
+  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override {
+    if (x.size() != u_.x.size() || x_prev.size() != u_.x.size())
+      throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.x.size()) + " positions");
+    for (size_t i = 0; i < x.size(); ++i) {
+      const Vec3 u = x[i] - model_->rest_position[i], d = x[i] - x_prev[i];
+      u_.x[i] = static_cast<Real>(u.x());
+      u_.y[i] = static_cast<Real>(u.y());
+      u_.z[i] = static_cast<Real>(u.z());
+      d_.x[i] = static_cast<Real>(d.x());
+      d_.y[i] = static_cast<Real>(d.y());
+      d_.z[i] = static_cast<Real>(d.z());
+    }
+  }
+
+  Reaction tick(const TickRequest& request) override {
+    StepContext<Real> ctx;
+    ctx.dt = static_cast<Real>(request.dt);
+    ctx.inv_dt = static_cast<Real>(1.0 / request.dt);
+    ctx.dt2 = static_cast<Real>(request.dt * request.dt);
+    ctx.drag = static_cast<Real>(1.0 - model_->viscous_damping * request.dt);
+    for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(model_->gravity[k]);
+    ctx.tool_radius = static_cast<Real>(tool_.radius);
+    ctx.tool_k = static_cast<Real>(tool_.contact_stiffness);
+    const int tool_kind = !(tool_.present && request.tool_active) ? kNoTool
+                          : tool_.mode == ToolMode::Push         ? kPush
+                                                                 : kPull;
+    Reaction reaction;
+    for (int32_t s = 0; s < request.substeps; ++s) {
+      // The force of substep s acts at its start: tool centre interpolated there.
+      const double f = static_cast<double>(s) / request.substeps;
+      const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
+      for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
+      reaction = step(ctx, tool_kind);
+      time_ += request.dt;
+    }
+    return reaction;
+  }
+
+ private:
+  struct Partial {
+    Vec3 force, torque;
+    int32_t contacts;
+  };
+
+  // Everything derived from the Model, in the backend's precision and slot
+  // order; the constructor and rebuild() share it, so a topology change needs
+  // no code of its own here.
+  void pack() {
+    const Model& model = *model_;
+    const int32_t n = model.npoint();
+    const auto& layout = model.layout;
     rest_.assign(n, 0);
     for (int32_t i = 0; i < n; ++i) {
       rest_.x[i] = static_cast<Real>(model.rest_position[i].x());
@@ -78,8 +216,6 @@ class CpuBackend final : public Backend {
       rest_.z[i] = static_cast<Real>(model.rest_position[i].z());
     }
     pos_ = rest_;
-    u_.assign(n, 0);
-    d_.assign(n, 0);
     u_next_.assign(n, 0);
     d_next_.assign(n, 0);
 
@@ -138,109 +274,8 @@ class CpuBackend final : public Backend {
       tw = std::max(tw, layout.tets.count[p]);
     }
     groups_per_chunk_ = groups_per_chunk;
-    attached_.assign(n, -1);
     partial_.resize(layout.nchunk);
-    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "");
   }
-
-  std::string name() const override { return "cpu"; }
-  std::string device() const override { return device_; }
-  std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
-  int32_t reaction_latency_ticks() const override { return 0; }
-  double time() const override { return time_; }
-
-  Plan plan() const override {
-    Plan plan;
-    const auto& m = model_;
-    const size_t real = sizeof(Real);
-    plan.passes.push_back({"springs", std::to_string(m.nspring()) + " springs gathered from both ends (" +
-                                          std::to_string(m.layout.springs.item.size()) + " slots)"});
-    if (m.has_volume())
-      plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
-                                           std::to_string(m.layout.tets.item.size()) + " slots)"});
-    if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
-    if (tool_.present)
-      plan.passes.push_back({"tool-contact", tool_.mode == ToolMode::Push ? "sphere penalty contact"
-                                                                          : "grasp attachment springs"});
-    plan.passes.push_back({"integrate", "position Verlet, fused with the passes above (" +
-                                            std::to_string(kLanes) + " lanes per SIMD group)"});
-    const size_t n = static_cast<size_t>(m.npoint());
-    plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
-    plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
-    plan.buffers.push_back({"spring slots (other, rest, k, d)",
-                            m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
-    if (m.has_volume())
-      plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)",
-                              m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
-    if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
-    plan.dispatches_per_step = 1;
-    plan.syncs_per_step = 0;
-    return plan;
-  }
-
-  void attach(const Attachment& attachment) override {
-    release();
-    attach_offset_.assign(attachment.points.size(), Eigen::Matrix<Real, 3, 1>::Zero());
-    for (size_t k = 0; k < attachment.points.size(); ++k) {
-      attached_[attachment.points[k]] = static_cast<int32_t>(k);
-      attach_offset_[k] = attachment.offsets[k].cast<Real>();
-    }
-    attached_points_ = attachment.points;
-  }
-
-  void release() override {
-    for (int32_t p : attached_points_) attached_[p] = -1;
-    attached_points_.clear();
-  }
-
-  void positions(std::vector<Vec3>& out) const override {
-    out.resize(u_.x.size());
-    for (size_t i = 0; i < out.size(); ++i) out[i] = model_.rest_position[i] + displacement(u_, i);
-  }
-
-  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override {
-    if (x.size() != u_.x.size() || x_prev.size() != u_.x.size())
-      throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.x.size()) + " positions");
-    for (size_t i = 0; i < x.size(); ++i) {
-      const Vec3 u = x[i] - model_.rest_position[i], d = x[i] - x_prev[i];
-      u_.x[i] = static_cast<Real>(u.x());
-      u_.y[i] = static_cast<Real>(u.y());
-      u_.z[i] = static_cast<Real>(u.z());
-      d_.x[i] = static_cast<Real>(d.x());
-      d_.y[i] = static_cast<Real>(d.y());
-      d_.z[i] = static_cast<Real>(d.z());
-    }
-  }
-
-  Reaction tick(const TickRequest& request) override {
-    StepContext<Real> ctx;
-    ctx.dt = static_cast<Real>(request.dt);
-    ctx.inv_dt = static_cast<Real>(1.0 / request.dt);
-    ctx.dt2 = static_cast<Real>(request.dt * request.dt);
-    ctx.drag = static_cast<Real>(1.0 - model_.viscous_damping * request.dt);
-    for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(model_.gravity[k]);
-    ctx.tool_radius = static_cast<Real>(tool_.radius);
-    ctx.tool_k = static_cast<Real>(tool_.contact_stiffness);
-    const int tool_kind = !(tool_.present && request.tool_active) ? kNoTool
-                          : tool_.mode == ToolMode::Push         ? kPush
-                                                                 : kPull;
-    Reaction reaction;
-    for (int32_t s = 0; s < request.substeps; ++s) {
-      // The force of substep s acts at its start: tool centre interpolated there.
-      const double f = static_cast<double>(s) / request.substeps;
-      const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
-      for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
-      reaction = step(ctx, tool_kind);
-      time_ += request.dt;
-    }
-    return reaction;
-  }
-
- private:
-  struct Partial {
-    Vec3 force, torque;
-    int32_t contacts;
-  };
 
   static Vec3 displacement(const Soa3<Real>& u, size_t i) {
     return Vec3(static_cast<double>(u.x[i]), static_cast<double>(u.y[i]), static_cast<double>(u.z[i]));
@@ -258,7 +293,7 @@ class CpuBackend final : public Backend {
   }
 
   Reaction step(const StepContext<Real>& ctx, int tool_kind) {
-    const bool volume = model_.has_volume(), gravity = model_.has_gravity();
+    const bool volume = model_->has_volume(), gravity = model_->has_gravity();
     // Lean scenes: each combination of passes is its own compiled loop, so a
     // scene without volume or tool never touches that code or data.
     if (volume) {
@@ -280,7 +315,7 @@ class CpuBackend final : public Backend {
 
   template <bool Volume, bool Gravity, int Tool>
   Reaction run(const StepContext<Real>& ctx) {
-    const int32_t nchunk = model_.layout.nchunk, npoint = model_.npoint();
+    const int32_t nchunk = model_->layout.nchunk, npoint = model_->npoint();
 #pragma omp parallel num_threads(threads_)
     {
       // Positions x = X + u once per step: the gathers below then fetch 3
@@ -310,9 +345,9 @@ class CpuBackend final : public Backend {
 
   template <bool Volume, bool Gravity, int Tool>
   void chunk(const StepContext<Real>& ctx, int32_t c) {
-    const auto& L = model_.layout;
+    const auto& L = model_->layout;
     const int32_t C = L.chunk_size;
-    const int32_t first = c * C, last = std::min(model_.npoint(), first + C);
+    const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
     Partial partial{Vec3::Zero(), Vec3::Zero(), 0};
     const Real* __restrict X = pos_.x.data();
     const Real* __restrict Y = pos_.y.data();
@@ -439,7 +474,7 @@ class CpuBackend final : public Backend {
     if constexpr (Tool != kNoTool) partial_[c] = partial;
   }
 
-  const Model& model_;
+  const Model* model_;  // the current version (rebuild() moves it on)
   BackendTool tool_;
   int threads_;
   std::string device_;

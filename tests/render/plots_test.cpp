@@ -125,6 +125,7 @@ class LateBackend : public Backend {
   Reaction tick(const TickRequest&) override { return {}; }
   void attach(const Attachment&) override {}
   void release() override {}
+  void rebuild(const Model&) override {}
   void positions(std::vector<Vec3>&) const override {}
   void set_state(const std::vector<Vec3>&, const std::vector<Vec3>&) override {}
   double time() const override { return 0; }
