@@ -29,7 +29,7 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
                                            const std::function<void(int, int, const std::string&)>& progress) {
   // Shapes: a block for uniaxial compression, a 10:1 beam, and the issue's
   // indentation box (a half-space for a contact radius of a few mm).
-  const Vec3 block(0.04, 0.04, 0.06), beam(0.2, 0.02, 0.02), slab(0.10, 0.08, 0.06);
+  const Vec3 block(0.06, 0.06, 0.09), beam(0.2, 0.02, 0.02), slab(0.10, 0.08, 0.06);
   const std::vector<double> depth_ratios{0.05, 0.1, 0.2};
   const int total = static_cast<int>(options.cell_sizes.size() * options.poisson_ratios.size());
   int done = 0;

@@ -1,6 +1,5 @@
 #include "core/fit/least_squares.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -17,16 +16,42 @@ struct Search {
     const double v = p[i].log ? std::exp(z) : z;
     return std::clamp(v, p[i].lower, p[i].upper);
   }
-  std::vector<double> values(const Eigen::VectorXd& z) const {
+  std::vector<double> values(const std::vector<double>& z) const {
     std::vector<double> v(p.size());
-    for (size_t i = 0; i < p.size(); ++i) v[i] = to_value(i, z[static_cast<Eigen::Index>(i)]);
+    for (size_t i = 0; i < p.size(); ++i) v[i] = to_value(i, z[i]);
     return v;
   }
-  Eigen::VectorXd clamp(Eigen::VectorXd z) const {
-    for (size_t i = 0; i < p.size(); ++i) z[static_cast<Eigen::Index>(i)] = to_search(i, values(z)[i]);
+  std::vector<double> clamp(std::vector<double> z) const {
+    const std::vector<double> v = values(z);
+    for (size_t i = 0; i < p.size(); ++i) z[i] = to_search(i, v[i]);
     return z;
   }
 };
+
+// Solves A x = b for a small symmetric positive definite A (n x n, row-major)
+// by Cholesky; false when A is not positive definite.
+bool cholesky_solve(std::vector<double> A, std::vector<double>& x, size_t n) {
+  for (size_t j = 0; j < n; ++j) {
+    double d = A[j * n + j];
+    for (size_t k = 0; k < j; ++k) d -= A[j * n + k] * A[j * n + k];
+    if (!(d > 0)) return false;
+    A[j * n + j] = std::sqrt(d);
+    for (size_t i = j + 1; i < n; ++i) {
+      double s = A[i * n + j];
+      for (size_t k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
+      A[i * n + j] = s / A[j * n + j];
+    }
+  }
+  for (size_t i = 0; i < n; ++i) {  // L y = b
+    for (size_t k = 0; k < i; ++k) x[i] -= A[i * n + k] * x[k];
+    x[i] /= A[i * n + i];
+  }
+  for (size_t i = n; i-- > 0;) {  // L^T x = y
+    for (size_t k = i + 1; k < n; ++k) x[i] -= A[k * n + i] * x[k];
+    x[i] /= A[i * n + i];
+  }
+  return true;
+}
 
 double half_squared(const std::vector<double>& r) {
   double s = 0;
@@ -40,16 +65,16 @@ LeastSquaresResult least_squares(
     const std::vector<FitParameter>& parameters,
     const std::function<std::vector<double>(const std::vector<double>&)>& residual, const LeastSquaresOptions& options,
     const std::function<void(int32_t, double, const std::vector<double>&)>& progress) {
-  const Eigen::Index n = static_cast<Eigen::Index>(parameters.size());
+  const size_t n = parameters.size();
   for (const FitParameter& p : parameters)
     if (!(p.lower <= p.start && p.start <= p.upper) || (p.log && !(p.lower > 0)))
       throw Error(ErrorKind::Usage, p.name + ": start " + std::to_string(p.start) + " outside its bounds [" +
                                         std::to_string(p.lower) + ", " + std::to_string(p.upper) + "]");
   const Search search{parameters};
   LeastSquaresResult result;
-  Eigen::VectorXd z(n);
-  for (Eigen::Index i = 0; i < n; ++i) z[i] = search.to_search(static_cast<size_t>(i), parameters[i].start);
-  auto evaluate = [&](const Eigen::VectorXd& at) {
+  std::vector<double> z(n);
+  for (size_t i = 0; i < n; ++i) z[i] = search.to_search(i, parameters[i].start);
+  auto evaluate = [&](const std::vector<double>& at) {
     ++result.evaluations;
     return residual(search.values(at));
   };
@@ -57,28 +82,39 @@ LeastSquaresResult least_squares(
   double cost = half_squared(r);
   if (!std::isfinite(cost)) throw Error(ErrorKind::Numerical, "fit: the simulation at the start values failed");
   double lambda = 1e-3;  // Levenberg-Marquardt damping, relative to diag(J^T J)
-  for (result.iterations = 0; result.iterations < options.max_iterations;) {
+  while (result.iterations < options.max_iterations) {
     // Forward-difference Jacobian in search coordinates, stepping inwards at a bound.
-    const Eigen::Index m = static_cast<Eigen::Index>(r.size());
-    Eigen::MatrixXd J(m, n);
-    const Eigen::Map<const Eigen::VectorXd> r0(r.data(), m);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      Eigen::VectorXd step = z;
+    const size_t m = r.size();
+    std::vector<std::vector<double>> J(n, std::vector<double>(m));  // columns
+    for (size_t i = 0; i < n; ++i) {
+      std::vector<double> step = z;
       double h = options.relative_step * std::max(1.0, std::abs(z[i]));
-      if (search.to_value(static_cast<size_t>(i), z[i] + h) == search.to_value(static_cast<size_t>(i), z[i])) h = -h;
+      if (search.to_value(i, z[i] + h) == search.to_value(i, z[i])) h = -h;
       step[i] += h;
       const std::vector<double> ri = evaluate(step);
-      for (Eigen::Index k = 0; k < m; ++k) J(k, i) = (ri[k] - r[k]) / h;
+      for (size_t k = 0; k < m; ++k) J[i][k] = (ri[k] - r[k]) / h;
     }
     ++result.iterations;
-    const Eigen::MatrixXd JtJ = J.transpose() * J;
-    const Eigen::VectorXd g = J.transpose() * r0;
+    std::vector<double> JtJ(n * n, 0.0), g(n, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t k = 0; k < m; ++k) g[i] += J[i][k] * r[k];
+      for (size_t j = 0; j < n; ++j)
+        for (size_t k = 0; k < m; ++k) JtJ[i * n + j] += J[i][k] * J[j][k];
+    }
     bool improved = false, small_step = false;
     for (int attempt = 0; attempt < 12 && !improved; ++attempt) {
-      Eigen::MatrixXd A = JtJ;
-      for (Eigen::Index i = 0; i < n; ++i) A(i, i) += lambda * std::max(JtJ(i, i), 1e-30);
-      const Eigen::VectorXd trial = search.clamp(z - A.ldlt().solve(g));
-      small_step = ((trial - z).array().abs() <= options.tolerance * (1.0 + z.array().abs())).all();
+      std::vector<double> A = JtJ, delta = g;
+      for (size_t i = 0; i < n; ++i) A[i * n + i] += lambda * std::max(JtJ[i * n + i], 1e-30);
+      if (!cholesky_solve(A, delta, n)) {
+        lambda *= 10;
+        continue;
+      }
+      std::vector<double> trial = z;
+      for (size_t i = 0; i < n; ++i) trial[i] -= delta[i];
+      trial = search.clamp(trial);
+      small_step = true;
+      for (size_t i = 0; i < n; ++i)
+        small_step = small_step && std::abs(trial[i] - z[i]) <= options.tolerance * (1.0 + std::abs(z[i]));
       if (small_step) break;
       const std::vector<double> rt = evaluate(trial);
       const double c = half_squared(rt);
