@@ -175,6 +175,8 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
     model.inv_mass[i] = model.fixed[i] ? 0.0 : 1.0 / model.mass[i];
   }
 
+  model.tool_k_scale = tool_stiffness_scale(model.mass, model.fixed);
+
   // Springs: one per unique tet edge, sorted.
   model.spring_ends = unique_edges(model.tet_points);
   const int32_t nspring = model.nspring();

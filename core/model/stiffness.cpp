@@ -49,6 +49,19 @@ std::vector<double> spring_stiffness(const Material& material, const std::vector
   return k;
 }
 
+std::vector<double> tool_stiffness_scale(const std::vector<double>& mass, const std::vector<uint8_t>& fixed) {
+  std::vector<double> free_mass;
+  for (size_t i = 0; i < mass.size(); ++i)
+    if (!fixed[i] && mass[i] > 0) free_mass.push_back(mass[i]);
+  std::vector<double> scale(mass.size(), 1.0);
+  if (free_mass.empty()) return scale;
+  const auto middle = free_mass.begin() + static_cast<std::ptrdiff_t>(free_mass.size() / 2);
+  std::nth_element(free_mass.begin(), middle, free_mass.end());
+  const double median = *middle;
+  for (size_t i = 0; i < mass.size(); ++i) scale[i] = std::min(1.0, mass[i] / median);
+  return scale;
+}
+
 std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume) {
   const double modulus = volume_term_modulus(material);
   std::vector<double> k;

@@ -47,6 +47,13 @@ std::vector<double> spring_stiffness(const Material& material, const std::vector
                                      const std::vector<Edge>& spring_ends, const std::vector<Tet>& tets,
                                      const std::vector<double>& tet_rest_volume);
 
+// Tool contact and grasp: the scenario's contact_stiffness k_c is what a
+// point of the median free mass m_med feels; a lighter point gets
+// k_c m_i / m_med, so the tool adds at most k_c / m_med to any point's
+// omega^2 and a light corner or sliver point cannot set the time step.
+// Returns min(1, m_i / m_med) per point (npoint); 1 where nothing is free.
+std::vector<double> tool_stiffness_scale(const std::vector<double>& mass, const std::vector<uint8_t>& fixed);
+
 // Per-tet volume stiffness K_v / V_r, N/m^5; empty when the volume term is off
 // (K_v == 0).
 std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume);

@@ -258,6 +258,8 @@ class CpuBackend final : public Backend {
     }
     mass_.resize(n);
     inv_mass_.resize(n);
+    tool_scale_.resize(n);
+    for (int32_t i = 0; i < n; ++i) tool_scale_[i] = static_cast<Real>(model.tool_scale(i));
     for (int32_t i = 0; i < n; ++i) {
       mass_[i] = static_cast<Real>(model.mass[i]);
       inv_mass_[i] = static_cast<Real>(model.inv_mass[i]);
@@ -434,11 +436,11 @@ class CpuBackend final : public Backend {
             if (dist >= ctx.tool_radius) continue;
             const Eigen::Matrix<Real, 3, 1> n =
                 dist > Real(0) ? Eigen::Matrix<Real, 3, 1>(dvec / dist) : Eigen::Matrix<Real, 3, 1>(0, 0, 1);
-            fc = ctx.tool_k * (ctx.tool_radius - dist) * n;
+            fc = ctx.tool_k * tool_scale_[p] * (ctx.tool_radius - dist) * n;
           } else {
             const int32_t a = attached_[p];
             if (a < 0) continue;
-            fc = ctx.tool_k * (ctr + attach_offset_[a] - x);
+            fc = ctx.tool_k * tool_scale_[p] * (ctr + attach_offset_[a] - x);
           }
           fx[l] += fc.x();
           fy[l] += fc.y();
@@ -490,6 +492,7 @@ class CpuBackend final : public Backend {
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;
+  std::vector<Real> tool_scale_;   // tool stiffness multiplier per point (npoint), Model::tool_k_scale
   std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint)
   std::vector<int32_t> attached_points_;
   std::vector<Eigen::Matrix<Real, 3, 1>> attach_offset_;

@@ -108,7 +108,7 @@ TEST(GlKernel, PushContactAndReactionMatchTheReference) {
   std::vector<Vec3> got, want;
   gl.forces(got);
   reference_internal_forces(model, s.x, s.v, want);
-  const Reaction expect = reference_push_forces(s.x, center, tool.radius, tool.contact_stiffness, want);
+  const Reaction expect = reference_push_forces(s.x, center, tool.radius, tool.contact_stiffness, want, model.tool_k_scale);
   ASSERT_GT(expect.contacts, 0);
   EXPECT_LT(relative_difference(got, want), 1e-5);
   // The reaction of that tick comes back with the next one.
@@ -151,7 +151,7 @@ TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   std::vector<Vec3> got, want;
   gl.forces(got);
   reference_internal_forces(model, s.x, s.v, want);
-  const Reaction expect = reference_pull_forces(s.x, attachment, center, tool.contact_stiffness, want);
+  const Reaction expect = reference_pull_forces(s.x, attachment, center, tool.contact_stiffness, want, model.tool_k_scale);
   EXPECT_LT(relative_difference(got, want), 1e-5);
   request.tool_active = false;
   const Reaction r = gl.tick(request);
