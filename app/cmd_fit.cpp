@@ -99,7 +99,6 @@ std::string fmt(double v, const char* spec = "%.6g") {
 void fit_command(const FitArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (!s.tool) throw Error(ErrorKind::Scenario, args.scenario + ": tool: fit needs a tool whose force it compares");
-  const MeasuredCurve curve = read_measured_curve(args.measured);
   std::vector<const ParameterSlot*> slots;
   std::vector<FitParameter> parameters;
   for (const std::string& name : args.params) {
@@ -117,6 +116,7 @@ void fit_command(const FitArgs& args) {
   }
   if (s.material.spring_stiffness)
     throw Error(ErrorKind::Scenario, args.scenario + ": material.spring_stiffness: fit needs young_modulus instead");
+  const MeasuredCurve curve = read_measured_curve(args.measured);
 
   const TetMesh mesh = load_scenario_mesh(s.mesh);
   const Vec3 tool_start = s.tool->spec.position_at(0);
