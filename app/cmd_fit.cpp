@@ -50,7 +50,7 @@ struct ParameterSlot {
 const std::vector<ParameterSlot>& parameter_slots() {
   static const std::vector<ParameterSlot> slots{
       {"material.young_modulus", 1.0, 1e10, true, [](Material& m) -> double& { return m.young_modulus; }},
-      {"material.poisson_ratio", 0.0, 0.49, false,
+      {"material.poisson_ratio", kMinPoissonRatio, 0.49, false,
        [](Material& m) -> double& {
          if (!m.poisson_ratio) m.poisson_ratio = 0.25;  // the springs' own ratio: where the old rule is
          return *m.poisson_ratio;

@@ -36,8 +36,9 @@ void validate_material(const Material& m) {
   non_negative(m.volume_modulus, "material.volume_modulus", "Pa");
   if (m.poisson_ratio) {
     const double nu = *m.poisson_ratio;
-    if (!(nu >= 0 && nu < 0.5))
-      throw Error(ErrorKind::Scenario, "material.poisson_ratio: expected a number in [0, 0.5), got " + std::to_string(nu));
+    if (!(nu >= kMinPoissonRatio && nu < 0.5))
+      throw Error(ErrorKind::Scenario, "material.poisson_ratio: expected a number in [0.25, 0.5), got " +
+                                           std::to_string(nu) + kPoissonRatioFloorReason);
     if (m.spring_stiffness)
       throw Error(ErrorKind::Scenario, "material.poisson_ratio: needs young_modulus, not spring_stiffness");
     // The volume term is derived from nu (core/model/stiffness.h).

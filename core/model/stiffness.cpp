@@ -1,6 +1,7 @@
 #include "core/model/stiffness.h"
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 
 namespace organsim {
 
@@ -23,6 +24,16 @@ EffectiveElasticity effective_elasticity(const Material& m) {
   e.young_modulus = mu * (3 * lambda + 2 * mu) / (lambda + mu);
   e.poisson_ratio = lambda / (2 * (lambda + mu));
   return e;
+}
+
+nlohmann::json elasticity_json(const Material& m) {
+  if (m.spring_stiffness) return {{"rule", "spring_stiffness"}, {"spring_stiffness", *m.spring_stiffness}};
+  const EffectiveElasticity e = effective_elasticity(m);
+  return {{"rule", m.poisson_ratio ? "poisson_ratio" : "springs + volume_modulus"},
+          {"young_modulus", e.young_modulus},
+          {"poisson_ratio", e.poisson_ratio},
+          {"spring_modulus", spring_modulus(m)},
+          {"volume_term_modulus", volume_term_modulus(m)}};
 }
 
 std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,

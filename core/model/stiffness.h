@@ -11,14 +11,23 @@
 // term K_v/2 (V - V_r)^2 / V_r adds K_v to lambda only. So a material (E, nu)
 // needs mu_s = mu = E / (2 (1 + nu)), i.e. E_s = 2.5 mu, and
 // K_v = lambda - mu = E (4 nu - 1) / (2 (1 + nu) (1 - 2 nu)), which is >= 0
-// for nu >= 1/4 and negative (a volume term that *softens* compression)
-// below 1/4.
+// for nu >= 1/4.
+#include <nlohmann/json_fwd.hpp>
 #include <vector>
 
 #include "core/mesh/tet_mesh.h"
 #include "core/model/material.h"
 
 namespace organsim {
+
+// Below 1/4 the volume term would be negative, and on real meshes that makes
+// the stiffness indefinite (measured: a CGAL box at 8 mm cells has a
+// negative-energy mode already at nu = 0.22, docs/validation.md), i.e. an
+// unstable model. Such materials are refused.
+inline constexpr double kMinPoissonRatio = 0.25;
+inline constexpr const char* kPoissonRatioFloorReason =
+    " (a spring lattice's own ratio is 1/4; lower values need a negative volume term, which makes the model "
+    "unstable: see docs/validation.md)";
 
 // E_s of the spring formula above, Pa: young_modulus without a Poisson ratio
 // (the old rule), 2.5 E / (2 (1 + nu)) with one.
@@ -38,6 +47,12 @@ struct EffectiveElasticity {
   double lame_lambda = 0;    // Pa
 };
 EffectiveElasticity effective_elasticity(const Material& material);
+
+// For a run's meta: the rule used ("poisson_ratio" or "springs + volume_modulus"
+// or "spring_stiffness") and the effective E (Pa) and nu, so a study can
+// compare its forces with theory. docs/validation.md says how close the mesh
+// gets to them.
+nlohmann::json elasticity_json(const Material& material);
 
 // Stiffness of each spring, N/m: the constant spring_stiffness when given,
 // else E_s * V_e / r_e^2 with V_e the summed rest volume of the tets that

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <exception>
 
+#include "core/model/stiffness.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -77,6 +78,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   RunResult result;
   result.meta = initial_meta(scenario, model, backend);
   result.meta.extra = options.meta_extra;
+  result.meta.extra["elasticity"] = elasticity_json(model.material);
   if (scenario.outputs.forces) result.forces_path = options.outdir / "forces.json";
 
   const TimeDef& time = scenario.time;

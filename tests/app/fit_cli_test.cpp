@@ -68,6 +68,9 @@ TEST(FitCli, RecoversYoungModulusAndPoissonRatioFromAStartThreeTimesOff) {
   // The fitted run's force log carries the fit in its meta.
   const nlohmann::json flog = nlohmann::json::parse(test::slurp(dir / "fit" / "forces.json"));
   EXPECT_NEAR(flog["meta"]["fit"]["parameters"][0]["fitted"].get<double>(), j["parameters"][0]["fitted"].get<double>(), 1e-9);
+  // Every run's meta states the elasticity its material stands for.
+  EXPECT_EQ(flog["meta"]["elasticity"]["rule"], "poisson_ratio");
+  EXPECT_NEAR(flog["meta"]["elasticity"]["poisson_ratio"].get<double>(), j["parameters"][1]["fitted"].get<double>(), 1e-9);
   // fit.png: a real PNG.
   const std::string png = test::slurp(dir / "fit" / "fit.png");
   ASSERT_GT(png.size(), 8u);

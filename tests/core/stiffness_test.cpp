@@ -12,7 +12,7 @@ namespace {
 TEST(Stiffness, PoissonRatioRuleGivesBackTheAskedConstants) {
   // Springs carry mu (lambda_s = mu), the volume term lambda - mu: the
   // effective solid must be exactly (E, nu). 1e-12: rounding only.
-  for (double nu : {0.0, 0.1, 0.25, 0.3, 0.45, 0.49}) {
+  for (double nu : {0.25, 0.3, 0.45, 0.49}) {
     Material m;
     m.young_modulus = 8000;
     m.poisson_ratio = nu;
@@ -20,7 +20,7 @@ TEST(Stiffness, PoissonRatioRuleGivesBackTheAskedConstants) {
     EXPECT_NEAR(e.young_modulus, 8000, 1e-12 * 8000) << nu;
     EXPECT_NEAR(e.poisson_ratio, nu, 1e-12) << nu;
     EXPECT_NEAR(e.shear_modulus, 8000 / (2 * (1 + nu)), 1e-9) << nu;
-    EXPECT_EQ(volume_term_modulus(m) < 0, nu < 0.25) << nu;
+    EXPECT_GE(volume_term_modulus(m), 0) << nu;
   }
 }
 
@@ -62,6 +62,8 @@ TEST(Stiffness, PoissonRatioOutOfRangeOrWithVolumeModulusIsRefused) {
   mesh.tets = {{0, 1, 2, 3}};
   Material m;
   m.poisson_ratio = 0.5;
+  EXPECT_THROW(build_model(mesh, m, {}), Error);
+  m.poisson_ratio = 0.2;  // would need a negative volume term
   EXPECT_THROW(build_model(mesh, m, {}), Error);
   m.poisson_ratio = 0.3;
   m.volume_modulus = 100;
