@@ -15,6 +15,7 @@
 #include "app/command.h"
 #include "app/validation_suite.h"
 #include "core/model/stiffness.h"
+#include "core/render/image_io.h"
 #include "core/render/xy_plot.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
@@ -85,26 +86,32 @@ void validate_command(const ValidateArgs& args) {
   write_file_atomically(outdir / "validation.csv", [&](std::ostream& out) { out << csv.str(); });
   std::cout << csv.str();
 
-  // One series per (test, material) with a ratio: measured / theory against cell size.
-  std::map<std::string, XySeries> by_name;
-  std::vector<std::string> order;
-  for (const SuiteRow& r : rows) {
-    if (r.error_kind != "ratio") continue;
-    const std::string name = r.test + ", " + r.material;
-    if (!by_name.count(name)) order.push_back(name), by_name[name].name = name;
-    by_name[name].x.push_back(r.cell_size * 1000);
-    by_name[name].y.push_back(r.error);
+  // One panel per test (measured / theory against cell size), one line per
+  // material; Hertz at d/R = 0.1 only, the small-strain case.
+  std::vector<cv::Mat> panels;
+  for (const char* test : {"uniaxial E", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"}) {
+    std::map<std::string, XySeries> by_material;
+    std::vector<std::string> order;
+    for (const SuiteRow& r : rows) {
+      if (r.test != test) continue;
+      if (!by_material.count(r.material)) order.push_back(r.material), by_material[r.material].name = r.material;
+      by_material[r.material].x.push_back(r.cell_size * 1000);
+      by_material[r.material].y.push_back(r.error);
+    }
+    std::vector<XySeries> series;
+    for (const std::string& n : order) series.push_back(by_material[n]);
+    XyPlotOptions plot;
+    plot.width = 900;
+    plot.height = 330;
+    plot.title = std::string(test) + ": measured / theory (band +-10 %)";
+    plot.x_label = "cell size (mm)";
+    plot.y_label = "ratio";
+    plot.band = std::make_pair(0.9, 1.1);
+    panels.push_back(draw_xy_plot(series, plot));
   }
-  std::vector<XySeries> series;
-  for (const std::string& n : order) series.push_back(by_name[n]);
-  XyPlotOptions plot;
-  plot.width = 1100;
-  plot.height = 650;
-  plot.title = "measured / theory (band: +-10 %)";
-  plot.x_label = "cell size (mm)";
-  plot.y_label = "ratio";
-  plot.band = std::make_pair(0.9, 1.1);
-  write_xy_plot(outdir / "validation.png", series, plot);
+  cv::Mat sheet;
+  cv::vconcat(panels, sheet);
+  write_image_atomically(outdir / "validation.png", sheet);
   std::cout << "validation: " << (outdir / "validation.json").string() << ", validation.csv, validation.png\n";
 }
 
