@@ -5,6 +5,7 @@
 // meshes with CGAL (meshing/).
 #include <nlohmann/json.hpp>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 

@@ -182,7 +182,6 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   model.spring_ends = unique_edges(model.tet_points);
   const int32_t nspring = model.nspring();
   model.spring_rest.resize(nspring);
-  model.spring_k.resize(nspring);
   model.spring_d.resize(nspring);
   for (int32_t s = 0; s < nspring; ++s) {
     const auto [a, b] = model.spring_ends[s];

@@ -9,6 +9,14 @@
 namespace organsim {
 namespace {
 
+// The tet (0, e_x, e_y, e_z) * 1 cm.
+TetMesh corner_tet() {
+  TetMesh mesh;
+  mesh.points = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.01, 0), Vec3(0, 0, 0.01)};
+  mesh.tets = {{0, 1, 2, 3}};
+  return mesh;
+}
+
 TEST(Stiffness, PoissonRatioRuleGivesBackTheAskedConstants) {
   // Springs carry mu (lambda_s = mu), the volume term lambda - mu: the
   // effective solid must be exactly (E, nu). 1e-12: rounding only.
@@ -39,9 +47,7 @@ TEST(Stiffness, OldRuleIsUnchangedAndReportsItsEffectiveConstants) {
 }
 
 TEST(Stiffness, SpringsOfAUnitTetFollowTheFormula) {
-  TetMesh mesh;
-  mesh.points = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.01, 0), Vec3(0, 0, 0.01)};
-  mesh.tets = {{0, 1, 2, 3}};
+  const TetMesh mesh = corner_tet();
   Material m;
   m.young_modulus = 1000;
   m.poisson_ratio = 0.4;
@@ -57,9 +63,7 @@ TEST(Stiffness, SpringsOfAUnitTetFollowTheFormula) {
 }
 
 TEST(Stiffness, PoissonRatioOutOfRangeOrWithVolumeModulusIsRefused) {
-  TetMesh mesh;
-  mesh.points = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.01, 0), Vec3(0, 0, 0.01)};
-  mesh.tets = {{0, 1, 2, 3}};
+  const TetMesh mesh = corner_tet();
   Material m;
   m.poisson_ratio = 0.5;
   EXPECT_THROW(build_model(mesh, m, {}), Error);
