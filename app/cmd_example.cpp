@@ -25,11 +25,7 @@ void run_example(const ExampleArgs& args) {
   if (!is_surface_path(args.output)) {
     throw Error(ErrorKind::Usage, args.output + ": expected a surface file name ending in .off, .obj, .stl or .ply");
   }
-  TriangleMesh surface;
-  if (args.shape == "liver") surface = make_liver_surface(args.subdivisions);
-  else if (args.shape == "sphere") surface = make_sphere_surface(args.radius, args.subdivisions);
-  else surface = make_box_surface(Vec3(-0.05, -0.04, -0.03), Vec3(0.05, 0.04, 0.03));
-  round_points(surface, 1e-6);  // micrometres: short files that read back exactly
+  const TriangleMesh surface = make_example_surface(args.shape, args.subdivisions, args.radius);
   write_surface(args.output, surface);
   std::cout << "wrote " << args.output << ": " << args.shape << ", " << surface.points.size() << " points, "
             << surface.faces.size() << " triangles, volume " << surface_volume(surface) << " m^3\n";

@@ -10,6 +10,7 @@
 
 #include "app/backend_factory.h"
 #include "app/command.h"
+#include "app/progress_line.h"
 #include "app/run_observers.h"
 #include "app/scenario_mesh.h"
 #include "core/sim/run.h"
@@ -201,6 +202,8 @@ void run_command(const RunArgs& args) {
   options.outdir = outdir;
   options.observers.push_back(&monitor);  // first: nothing else sees a blown-up state
   for (auto& o : observers) options.observers.push_back(o.get());
+  RunProgress progress(s.time.ticks(), s.time.tick());  // a line on stderr, only when it is a terminal
+  if (progress.enabled()) options.observers.push_back(&progress);
   options.meta_extra = {
       {"mesh", s.mesh.path.string()},
       {"mesh_kind", s.mesh.kind == MeshDef::Kind::Surface ? "surface" : "tet"},

@@ -27,7 +27,9 @@ int main(int argc, char** argv) {
   try {
     root.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return root.exit(e);
+    // CLI11 prints the message (or the help); every real parse error exits
+    // with the documented usage code, not CLI11's own numbers.
+    return root.exit(e) == 0 ? 0 : static_cast<int>(ErrorKind::Usage);
   } catch (const Error& e) {
     std::cerr << "organsim: error: " << e.what() << "\n";
     return e.exit_code();

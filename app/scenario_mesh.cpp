@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "app/progress_line.h"
 #include "core/mesh/mesh_io.h"
 
 namespace organsim::app {
@@ -19,6 +20,10 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
     options.cell_size = def.cell_size;
     options.facet_distance = def.facet_distance;
     options.exude = def.exude;
+    ProgressLine line;  // meshing a large target takes minutes: say which stage it is in
+    options.on_stage = [&line, &def](const std::string& stage) {
+      line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
+    };
     mesh = mesh_surface(surface, options, def.path.string(), report);
   } else {
     mesh = read_tet_mesh(def.path);

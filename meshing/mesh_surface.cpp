@@ -41,6 +41,27 @@ constexpr double kPointsPerVolume = 1.0;  // first guess only; corrected by the 
 constexpr double kAcceptTolerance = 0.03;  // stop when within 3 % (the promise is 10 %)
 constexpr int kMaxTries = 10;
 
+// Absurd cell sizes are refused before Mesh_3 runs for hours: a surface
+// enclosing V m^3 meshed at cell size h gets roughly V / h^3 points.
+constexpr double kMaxEstimatedPoints = 5e7;
+// Below this fraction of the bounding-box diagonal, the facet distance asks
+// for a surface refinement that does not end in reasonable time.
+constexpr double kMinRelativeFacetDistance = 1e-6;
+
+void check_point_estimate(double volume, double h) {
+  const double estimate = volume / (h * h * h);
+  if (!(estimate <= kMaxEstimatedPoints)) {
+    throw Error(ErrorKind::Usage, "cell size " + format_number(h) + " m would make about " + format_number(estimate) +
+                                      " points in this surface (" + format_number(volume) +
+                                      " m^3); expected at most " + format_number(kMaxEstimatedPoints) +
+                                      ": give a larger cell size");
+  }
+}
+
+void stage(const MeshOptions& options, const std::string& what) {
+  if (options.on_stage) options.on_stage(what);
+}
+
 struct Try {
   double h;
   int32_t points;
@@ -52,6 +73,8 @@ double search_cell_size(const Mesh3Domain& domain, double volume, int32_t target
   std::vector<Try> tries;
   double h = std::cbrt(kPointsPerVolume * volume / target);
   for (int i = 0; i < kMaxTries; ++i) {
+    stage(options, "searching the cell size for " + std::to_string(target) + " points: try " + std::to_string(i + 1) +
+                       " of at most " + std::to_string(kMaxTries) + ", cell size " + format_number(h) + " m");
     const TetMesh m = domain.mesh({h, facet_distance(h), /*exude=*/false});
     tries.push_back({h, static_cast<int32_t>(m.points.size())});
     const double error = std::log(static_cast<double>(tries.back().points) / target);
@@ -103,7 +126,15 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
   }
 
   std::vector<std::string> notes;
+  stage(options, "checking the surface");
   const TriangleMesh checked = check_surface(surface, source, notes);
+  const double size = bounding_box_diagonal(checked);
+  if (options.cell_size) check_point_estimate(surface_volume(checked), *options.cell_size);
+  if (options.facet_distance && *options.facet_distance < kMinRelativeFacetDistance * size) {
+    throw Error(ErrorKind::Usage, "facet distance " + format_number(*options.facet_distance) + " m is below " +
+                                      format_number(kMinRelativeFacetDistance) + " of the surface's size (" +
+                                      format_number(size) + " m): meshing would not finish");
+  }
   const Mesh3Domain domain(checked);
   double h = 0;
   if (options.cell_size) {
@@ -111,14 +142,22 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
   } else if (options.target_points) {
     h = search_cell_size(domain, surface_volume(checked), *options.target_points, options, source, notes);
   } else {
-    h = bounding_box_diagonal(checked) / 20.0;  // default: see docs/meshing.md
+    h = size / 20.0;  // default: see docs/meshing.md
     notes.push_back("no --cell-size or --target-points: cell size " + format_number(h) +
                     " m (bounding-box diagonal / 20)");
   }
+  stage(options, "meshing at cell size " + format_number(h) + " m" + (options.exude ? ", then sliver exudation" : ""));
   const TetMesh mesh = domain.mesh({h, options.facet_distance.value_or(0.1 * h), options.exude});
   if (mesh.tets.empty()) {
     throw input_error(source, "meshing produced no tetrahedra at cell size " + format_number(h) +
                                   " m; is the surface much smaller than the cell size?");
+  }
+  // Never hand on a mesh we would refuse to read back (zero or negative volumes).
+  try {
+    validate_tet_mesh(mesh, source);
+  } catch (const Error& e) {
+    throw Error(ErrorKind::Numerical, std::string("meshing gave a degenerate mesh, not used: ") + e.what() +
+                                          "; try another cell size");
   }
   if (report != nullptr) {
     *report = describe_tet_mesh(mesh);

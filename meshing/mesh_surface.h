@@ -1,6 +1,7 @@
 #pragma once
 // Tetrahedralisation of closed surfaces with CGAL Mesh_3 (the only CGAL user).
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +16,9 @@ struct MeshOptions {
   std::optional<double> cell_size;       // max tet circumradius h, m
   std::optional<double> facet_distance;  // max surface approximation error, m (default 0.1 h)
   bool exude = true;                     // sliver exudation (1.3-3x slower, much better dihedral angles)
+  // Told the stage meshing has reached ("meshing at cell size 0.004 m"), for
+  // a progress line; meshing a large target can take minutes.
+  std::function<void(const std::string&)> on_stage;
 };
 
 // Validates the surface (triangle mesh, faces > 0, closed, not

@@ -10,7 +10,10 @@
 #include <algorithm>
 #include <map>
 
+#include "core/mesh/mesh_stats.h"
+#include "core/mesh/surface_limits.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim {
 
@@ -52,13 +55,8 @@ std::string manifold_problem(const TriangleMesh& surface) {
 }  // namespace
 
 TriangleMesh check_surface(const TriangleMesh& surface, const std::string& source, std::vector<std::string>& notes) {
-  if (surface.faces.empty()) throw input_error(source, "no faces (expected a closed triangle surface)");
-  for (size_t f = 0; f < surface.faces.size(); ++f) {
-    const Tri& t = surface.faces[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      throw input_error(source, "face " + std::to_string(f) + " repeats a vertex (degenerate triangle); remove it");
-    }
-  }
+  // Numbers and degenerate faces first: CGAL checks none of them.
+  const double size = check_surface_limits(surface, source);
 
   // Only referenced vertices, so isolated points cannot confuse the checks or Mesh_3.
   TriangleMesh clean;
@@ -112,6 +110,15 @@ TriangleMesh check_surface(const TriangleMesh& surface, const std::string& sourc
   if (!PMP::is_outward_oriented(mesh)) {
     for (Tri& f : clean.faces) std::swap(f[1], f[2]);
     notes.push_back("surface " + source + " was oriented inward: its faces were reversed");
+  }
+  // Closed and consistently oriented, so this is the enclosed volume (about
+  // the first point, not the origin, so far-off coordinates do not cancel).
+  TriangleMesh local = clean;
+  for (Vec3& p : local.points) p -= clean.points.front();
+  const double volume = surface_volume(local);
+  if (!(volume > kFlatTolerance * size * size * size)) {
+    throw input_error(source, "encloses almost no volume (" + format_number(volume) + " m^3 inside a bounding box " +
+                                  format_number(size) + " m across); expected a solid organ");
   }
   return clean;
 }

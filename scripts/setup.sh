@@ -13,6 +13,8 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
   # Real-world CC0 meshes (femur, bunny, ...) used by some tests.
   libcgal-demo
+  # Fuzzing (scripts/fuzz.sh): clang's libFuzzer runtime and its OpenMP.
+  clang-14 libclang-rt-14-dev libomp-14-dev
 )
 
 missing=()

@@ -6,6 +6,8 @@
 #include <map>
 #include <numbers>
 
+#include "core/util/error.h"
+
 namespace organsim {
 
 TriangleMesh make_icosphere(int subdivisions) {
@@ -125,6 +127,16 @@ void round_points(TriangleMesh& mesh, double quantum) {
   for (Vec3& p : mesh.points) {
     for (int c = 0; c < 3; ++c) p[c] = std::round(p[c] * per_metre) / per_metre;
   }
+}
+
+TriangleMesh make_example_surface(const std::string& shape, int subdivisions, double radius) {
+  TriangleMesh surface;
+  if (shape == "liver") surface = make_liver_surface(subdivisions);
+  else if (shape == "sphere") surface = make_sphere_surface(radius, subdivisions);
+  else if (shape == "box") surface = make_box_surface(Vec3(-0.05, -0.04, -0.03), Vec3(0.05, 0.04, 0.03));
+  else throw Error(ErrorKind::Usage, "unknown example shape '" + shape + "', expected liver, sphere or box");
+  round_points(surface, 1e-6);  // micrometres
+  return surface;
 }
 
 }  // namespace organsim

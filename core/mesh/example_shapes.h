@@ -1,6 +1,8 @@
 #pragma once
 // Closed triangle surfaces the project makes itself (examples/ and tests):
 // no meshes copied from elsewhere. All sizes in metres.
+#include <string>
+
 #include "core/mesh/tet_mesh.h"
 
 namespace organsim {
@@ -21,6 +23,11 @@ TriangleMesh make_box_surface(const Vec3& min, const Vec3& max);
 // so sampling its radius on an icosphere gives a closed, non-self-intersecting,
 // outward-oriented surface.
 TriangleMesh make_liver_surface(int subdivisions);
+
+// The surface `organsim example SHAPE` writes and examples/ holds ("liver",
+// "sphere" of `radius` m, or "box"), rounded to micrometres so the files are
+// short and read back exactly. Throws Error(Usage) for another name.
+TriangleMesh make_example_surface(const std::string& shape, int subdivisions = 4, double radius = 0.05);
 
 // Rounds every coordinate to a multiple of `quantum` m, so text files stay
 // short and read back exactly.

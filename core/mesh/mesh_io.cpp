@@ -39,12 +39,17 @@ TriangleMesh read_surface(const std::filesystem::path& path) {
   if (!is_surface_path(path)) {
     throw input_error(source, "unknown surface extension '" + ext + "', expected one of " + kSurfaceExtensions);
   }
-  const std::string bytes = read_bytes(path);
+  return parse_surface(read_bytes(path), source);
+}
+
+TriangleMesh parse_surface(std::string_view bytes, const std::string& source) {
+  const std::string ext = mesh_io::lower_extension(source);
   TriangleMesh mesh;
   if (ext == ".off") mesh = mesh_io::read_off(bytes, source);
   else if (ext == ".obj") mesh = mesh_io::read_obj(bytes, source);
   else if (ext == ".stl") mesh = mesh_io::read_stl(bytes, source);
-  else mesh = mesh_io::read_ply(bytes, source);
+  else if (ext == ".ply") mesh = mesh_io::read_ply(bytes, source);
+  else throw input_error(source, "unknown surface extension '" + ext + "', expected one of " + kSurfaceExtensions);
   mesh_io::check_surface_indices(mesh, source);
   return mesh;
 }
@@ -69,11 +74,16 @@ TetMesh read_tet_mesh(const std::filesystem::path& path) {
   if (!is_tet_mesh_path(path)) {
     throw input_error(source, "unknown tet mesh extension '" + ext + "', expected one of " + kTetExtensions);
   }
-  const std::string bytes = read_bytes(path);
+  return parse_tet_mesh(read_bytes(path), source);
+}
+
+TetMesh parse_tet_mesh(std::string_view bytes, const std::string& source) {
+  const std::string ext = mesh_io::lower_extension(source);
   TetMesh mesh;
   if (ext == ".mesh") mesh = mesh_io::read_medit(bytes, source);
   else if (ext == ".vtk") mesh = mesh_io::read_vtk(bytes, source);
-  else mesh = mesh_io::read_gmsh(bytes, source);
+  else if (ext == ".msh") mesh = mesh_io::read_gmsh(bytes, source);
+  else throw input_error(source, "unknown tet mesh extension '" + ext + "', expected one of " + kTetExtensions);
   if (mesh.tets.empty()) throw input_error(source, "no tetrahedra, expected a tetrahedral volume mesh");
 
   // Some tools write every tet with the opposite orientation: flip them all
@@ -101,6 +111,14 @@ void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh) {
   if (ext != ".mesh" && ext != ".vtk") {
     throw Error(ErrorKind::Output, path.string() + ": unknown tet mesh output extension '" + ext +
                                        "', expected .mesh (medit) or .vtk (VTK legacy)");
+  }
+  // A tet mesh we write is one we can read back: every tet positive.
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& k = mesh.tets[t];
+    if (!(signed_volume(mesh.points[k[0]], mesh.points[k[1]], mesh.points[k[2]], mesh.points[k[3]]) > 0)) {
+      throw Error(ErrorKind::Numerical, path.string() + ": not written: tetrahedron " + std::to_string(t) +
+                                            " has non-positive volume");
+    }
   }
   write_file_atomically(path, [&](std::ostream& out) {
     if (ext == ".mesh") mesh_io::write_medit(out, mesh);

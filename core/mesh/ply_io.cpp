@@ -3,11 +3,13 @@
 // read past.
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <ostream>
 #include <vector>
 
 #include "core/mesh/mesh_io_detail.h"
+#include "core/util/format.h"
 
 namespace organsim::mesh_io {
 
@@ -130,7 +132,7 @@ TriangleMesh read_ply(std::string_view bytes, const std::string& source) {
   }
   size_t body = header_end + std::string_view("end_header").size();
   while (body < bytes.size() && bytes[body] != '\n') ++body;
-  ++body;
+  if (body < bytes.size()) ++body;  // past the newline; a file may end right after end_header
 
   TriangleMesh mesh;
   // Reads one element instance, calling `value(property_index, item, v)` for each number.
@@ -160,8 +162,13 @@ TriangleMesh read_ply(std::string_view bytes, const std::string& source) {
         for (size_t k = 0; k < e.properties.size(); ++k) {
           const Property& prop = e.properties[k];
           if (prop.is_list) {
-            const auto n = static_cast<int64_t>(read_count(prop, where));
-            if (n < 0) throw input_error(source, where + ": negative list length");
+            // The count's type is the file's choice (even float): check it is
+            // a whole number before it becomes one.
+            const double length = read_count(prop, where);
+            if (!(length >= 0 && length <= 2147483647.0 && length == std::floor(length))) {
+              throw input_error(source, where + ": list length " + format_number(length) + ", expected a count >= 0");
+            }
+            const auto n = static_cast<int64_t>(length);
             for (int64_t j = 0; j < n; ++j) {
               const double v = read_scalar(prop, where);
               if (static_cast<int>(k) == index_list) {

@@ -100,7 +100,8 @@ TetMesh read_vtk(std::string_view bytes, const std::string& source) {
   while (!in.at_end() && !(have_points && have_cells && have_types)) {
     const std::string keyword(in.next("a section keyword"));
     if (keyword == "POINTS") {
-      const int64_t n = in.next_int("the point count");
+      // Checked before 3 * n, which could overflow.
+      const int64_t n = in.checked_count(in.next_int("the point count"), 3, "points");
       const std::string type(in.next("the point data type"));
       const auto xyz = values.read(3 * n, type, "point coordinate");
       for (int64_t i = 0; i < n; ++i) mesh.points.emplace_back(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
@@ -164,8 +165,9 @@ TetMesh read_vtk(std::string_view bytes, const std::string& source) {
       const int64_t arrays = in.next_int("the field array count");
       for (int64_t a = 0; a < arrays; ++a) {
         in.next("an array name");
-        const int64_t components = in.next_int("the component count");
-        const int64_t tuples = in.next_int("the tuple count");
+        // Each checked before their product, which could overflow.
+        const int64_t components = in.checked_count(in.next_int("the component count"), 1, "components");
+        const int64_t tuples = in.checked_count(in.next_int("the tuple count"), 1, "tuples");
         const std::string type(in.next("the array type"));
         values.read(components * tuples, type, "field value");
       }

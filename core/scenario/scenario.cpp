@@ -193,7 +193,13 @@ Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& ba
 }
 
 Scenario load_scenario(const std::filesystem::path& path) {
-  const std::string text = read_text_file(path);
+  return parse_scenario_text(read_text_file(path),
+                             path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path(),
+                             path.string());
+}
+
+Scenario parse_scenario_text(std::string_view text, const std::filesystem::path& base_dir,
+                             const std::string& source) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
@@ -203,11 +209,9 @@ Scenario load_scenario(const std::filesystem::path& path) {
     for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
       if (text[i] == '\n') { ++line; col = 1; } else { ++col; }
     }
-    throw input_error(path.string(), "invalid JSON at line " + std::to_string(line) + ", column " +
-                                         std::to_string(col));
+    throw input_error(source, "invalid JSON at line " + std::to_string(line) + ", column " + std::to_string(col));
   }
-  return parse_scenario(j, path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path(),
-                        path.string());
+  return parse_scenario(j, base_dir, source);
 }
 
 }  // namespace organsim

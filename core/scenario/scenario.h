@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/model/material.h"
@@ -69,6 +70,11 @@ struct Scenario {
 // the file in messages. Throws Error(Scenario) naming the JSON path.
 Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& base_dir,
                         const std::string& source);
+
+// Parses scenario JSON text (what load_scenario reads from the file; the
+// fuzz harness enters here). Errors as load_scenario's.
+Scenario parse_scenario_text(std::string_view text, const std::filesystem::path& base_dir,
+                             const std::string& source);
 
 // Reads and parses a scenario file. Throws Error(Input) for an unreadable file
 // or invalid JSON (with line and column), Error(Scenario) for bad fields.

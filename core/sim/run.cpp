@@ -6,6 +6,7 @@
 
 #include "core/model/stiffness.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim {
 
@@ -129,6 +130,13 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       const Reaction r = backend.tick(request);
       step_seconds += seconds_since(step_start);
       ++ticks_done;
+      // The blow-up checks run every few ticks; a reaction that is already
+      // non-finite stops the run here, so the force log never holds a NaN.
+      if (!r.force.allFinite() || !r.torque.allFinite()) {
+        throw Error(ErrorKind::Numerical, "run stopped at t = " + format_number(t1, "%.6g") +
+                                              " s: the tool's reaction force is not finite (the simulation blew up; "
+                                              "a smaller time.dt or more substeps keeps it stable)");
+      }
 
       result.samples.push(t1, r.force, r.torque, request.tool_to, r.contacts);
       TickInfo info;

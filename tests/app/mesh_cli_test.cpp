@@ -96,7 +96,21 @@ std::vector<BadCase> bad_cases() {
   flat.tets[1] = {0, 1, 3, 2};
   TetMesh range = five_tet_cube();
   range.tets[4][3] = 8;
+  // The closed tetrahedron of issue 10 with one coordinate or the scale changed:
+  // before the range checks these crashed (SIGFPE), hung, or wrote zero-volume tets.
+  const auto tet = [](const std::string& a, const std::string& b) {
+    return "OFF\n4 4 0\n0 0 0\n" + a + " 0 0\n0 " + b + " 0\n0 0 " + b + "\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  };
+  const TriangleMesh millimetres = make_box_surface({-50, -50, -50}, {50, 50, 50});  // a 10 cm cube written in mm
   return {
+      {"huge.off", tet("1e300", "0.1"), "huge.off: the surface is 1e+300 m across (bounding-box diagonal); expected an organ between 0.0001 m and 10 m"},
+      {"far.off", tet("1e200", "1e200"), "far.off: the surface is 1.732e+200 m across"},
+      {"tiny.off", tet("1e-300", "1e-300"), "tiny.off: the surface is 1.732e-300 m across"},
+      {"denormal.off", tet("0.1", "1e-310"), "denormal.off: vertex 2 (0 9.9999999999999694e-311 0) has a denormal coordinate"},
+      {"mm.off", off_text(millimetres), "mm.off: the surface is 173.2 m across (bounding-box diagonal); expected an organ between 0.0001 m and 10 m, in metres; if the file is in millimetres, scale it by 0.001 (organsim mesh --scale 0.001"},
+      {"coplanar.off", "OFF\n3 2 0\n0 0 0\n0.1 0 0\n0 0.1 0\n3 0 1 2\n3 0 2 1\n", "coplanar.off: all points lie in one plane"},
+      {"duplicate.off", "OFF\n5 4 0\n0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n0.1 0 0\n3 0 2 1\n3 0 4 3\n3 0 3 2\n3 1 2 3\n",
+       "duplicate.off: vertex 1 (0.10000000000000001 0 0) and vertex 4 are at the same position"},
       {"missing.off", "", "missing.off: no such file"},
       {"surface.xyz", "1 2 3\n", "surface.xyz: unknown extension '.xyz'"},
       {"nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "nofaces.off: no faces"},
@@ -171,7 +185,8 @@ TEST(MeshCli, UsageErrorsExitWithTheUsageCode) {
   // --target-points and --cell-size exclude each other (CLI11's parse error).
   run = run_organsim("mesh " + (dir / "sphere.off").string() + " -o " + (dir / "out.mesh").string() +
                          " --target-points 100 --cell-size 0.01", dir);
-  EXPECT_NE(run.exit_code, 0);
+  EXPECT_EQ(run.exit_code, 2) << run.err;  // a crash (no exit status) or another code fails
+  EXPECT_NE(run.err.find("excludes"), std::string::npos) << run.err;
   EXPECT_EQ(other_files(dir, "sphere.off").size(), 0u);
 }
 

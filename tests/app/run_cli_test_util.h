@@ -37,4 +37,15 @@ inline CliResult run_organsim(const std::string& args, const std::filesystem::pa
   return r;
 }
 
+// Exit 6 (ErrorKind::Backend) is acceptable from a GL run only when this
+// machine cannot create an OpenGL 4.5 context at all: that error comes from
+// EGL context creation and starts "EGL: ". A backend that got its context and
+// then failed (a shader that no longer compiles, a buffer it could not make)
+// is a bug, and this fails the test.
+inline void expect_no_gl_context_here(const CliResult& r) {
+  EXPECT_EQ(r.exit_code, 6) << r.err;
+  EXPECT_EQ(r.err.rfind("organsim: error: EGL: ", 0), 0u)
+      << "the GL backend failed with a context available (not a missing-GL machine):\n" << r.err;
+}
+
 }  // namespace organsim::test

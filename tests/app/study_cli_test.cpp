@@ -68,4 +68,36 @@ TEST(StudyCli, GentlePushStudy) {
   EXPECT_GT(a["position_error_rms"].get<double>(), 1.5 * b["position_error_rms"].get<double>());
 }
 
+// A tick of 2 ms (dt 0.4 ms x 5) lets `--dt 0.002` run as one 2 ms step per
+// tick, 1.46 x dt_crit (1.37 ms): the configuration really exceeds dt_crit.
+// (With the scenario's 1 ms tick, --dt 0.002 is rounded to the 1 ms tick,
+// which is stable, so the unstable branch above never runs.)
+TEST(StudyCli, ConfigurationAboveTheCriticalStepIsReportedUnstableWithItsReason) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_unstable";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json scenario = nlohmann::json::parse(std::ifstream(stress / "gentle_push.json"));
+  scenario["mesh"]["tet"] = (stress / "box.mesh").string();
+  scenario["time"] = {{"duration", 0.2}, {"dt", 0.0004}, {"substeps", 5}};
+  std::ofstream(out / "long_tick.json") << scenario.dump(2);
+  std::string output;
+  const int code = run("study " + (out / "long_tick.json").string() +
+                           " --dt 0.002,0.0005 --precision double --duration 0.2 -o " + out.string(),
+                       output);
+  ASSERT_EQ(code, 0) << output;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(out / "study.json"));
+  const double dt_crit = j["stability"]["dt_crit"].get<double>();
+  ASSERT_EQ(j["runs"].size(), 2u);
+  const auto& over = j["runs"][0];
+  EXPECT_DOUBLE_EQ(over["dt"].get<double>(), 0.002);  // not rounded away
+  EXPECT_GT(over["dt"].get<double>(), dt_crit);
+  EXPECT_TRUE(over["ran"].get<bool>());
+  EXPECT_FALSE(over["stable"].get<bool>()) << over.dump();
+  EXPECT_NE(over["reason"].get<std::string>().find("run stopped at t = "), std::string::npos) << over.dump();
+  const auto& under = j["runs"][1];
+  EXPECT_LT(under["dt"].get<double>(), dt_crit);
+  EXPECT_TRUE(under["stable"].get<bool>()) << under.dump();
+}
+
 }  // namespace

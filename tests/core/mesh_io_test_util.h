@@ -7,6 +7,7 @@
 #include <fstream>
 #include <string>
 
+#include "core/mesh/mesh_io_detail.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/util/error.h"
 
@@ -24,6 +25,15 @@ inline std::filesystem::path fresh_test_dir(const std::string& group) {
 inline std::filesystem::path write_fixture(const std::filesystem::path& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
   out << bytes;
+  return path;
+}
+
+// A tet mesh written by the format writers directly, past write_tet_mesh's
+// refusal of non-positive tets: fixtures of bad meshes for the readers.
+inline std::filesystem::path write_bad_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh) {
+  std::ofstream out(path, std::ios::binary);
+  if (path.extension() == ".vtk") mesh_io::write_vtk(out, mesh);
+  else mesh_io::write_medit(out, mesh);
   return path;
 }
 

@@ -15,6 +15,7 @@ namespace {
 using testing::error_message;
 using testing::five_tet_cube;
 using testing::fresh_test_dir;
+using testing::write_bad_tet_mesh;
 using testing::write_fixture;
 
 // Gmsh 2.2 text of `mesh` with node tags 101.. (not 1-based on purpose), a
@@ -137,7 +138,7 @@ TEST(TetMeshIo, AllNegativeTetsAreFlippedConsistently) {
   const auto dir = fresh_test_dir("mesh_io");
   TetMesh flipped = five_tet_cube();
   for (Tet& t : flipped.tets) std::swap(t[0], t[1]);  // every tet negative, as some tools write them
-  write_tet_mesh(dir / "neg.vtk", flipped);
+  write_bad_tet_mesh(dir / "neg.vtk", flipped);
   const TetMesh m = read_tet_mesh(dir / "neg.vtk");
   expect_cube(m, "flipped");
   EXPECT_NEAR(describe_tet_mesh(m).quality.min_tet_volume, 1.0 / 6.0, 1e-12);  // all positive now
@@ -148,7 +149,7 @@ TEST(TetMeshIo, BadTetsAreErrorsNamingFileAndElement) {
   // One inverted tet among positive ones: an error, not a silent flip.
   TetMesh mixed = five_tet_cube();
   std::swap(mixed.tets[2][0], mixed.tets[2][1]);
-  write_tet_mesh(dir / "mixed.mesh", mixed);
+  write_bad_tet_mesh(dir / "mixed.mesh", mixed);
   std::string msg = error_message([&] { read_tet_mesh(dir / "mixed.mesh"); });
   EXPECT_NE(msg.find("mixed.mesh"), std::string::npos) << msg;
   EXPECT_NE(msg.find("tetrahedron 2"), std::string::npos) << msg;
@@ -157,7 +158,7 @@ TEST(TetMeshIo, BadTetsAreErrorsNamingFileAndElement) {
   // A flat tet (all four corners in the plane z = 0).
   TetMesh flat = five_tet_cube();
   flat.tets[1] = {0, 1, 3, 2};
-  write_tet_mesh(dir / "flat.vtk", flat);
+  write_bad_tet_mesh(dir / "flat.vtk", flat);
   msg = error_message([&] { read_tet_mesh(dir / "flat.vtk"); });
   EXPECT_NE(msg.find("flat.vtk"), std::string::npos) << msg;
   EXPECT_NE(msg.find("tetrahedron 1"), std::string::npos) << msg;
@@ -195,6 +196,24 @@ TEST(TetMeshIo, BadTetsAreErrorsNamingFileAndElement) {
   const auto unknown = write_fixture(dir / "cube.off", "OFF\n");
   msg = error_message([&] { read_tet_mesh(unknown); });
   EXPECT_NE(msg.find("unknown tet mesh extension '.off'"), std::string::npos) << msg;
+}
+
+TEST(TetMeshIo, AMeshWithANonPositiveTetIsNeverWritten) {
+  const auto dir = fresh_test_dir("tet_io");
+  for (const char* name : {"flat.mesh", "inverted.vtk"}) {
+    TetMesh bad = five_tet_cube();
+    if (std::string(name) == "flat.mesh") bad.points[6] = bad.points[5];  // tets using 5 and 6 collapse
+    else std::swap(bad.tets[3][0], bad.tets[3][1]);
+    try {
+      write_tet_mesh(dir / name, bad);
+      ADD_FAILURE() << name << " was written";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Numerical);
+      EXPECT_NE(std::string(e.what()).find(name + std::string(": not written: tetrahedron ")), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "core/io/force_log.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "file_size_limit.h"
 
 namespace organsim {
 namespace {
@@ -74,18 +75,24 @@ TEST(ForceLog, NoFileUnderTheFinalNameWhenWritingFails) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "force_log_atomic";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  ForceLogMeta meta = sample_meta();
-  meta.stop_reason = "bad byte \xff";  // invalid UTF-8: the JSON writer throws
-  EXPECT_ANY_THROW(write_force_log(dir / "forces.json", meta, three_samples()));
+  // A log of 20,000 ticks is ~2 MB of JSON; the operating system refuses
+  // the write after 16 KiB, midway through the samples.
+  ForceSamples many;
+  for (int i = 0; i < 20000; ++i) many.push(1e-3 * i, Vec3(i, 0, -i), Vec3(0, i, 0), Vec3(0, 0, 0.1), i);
+  const auto write_limited = [&] {
+    testing::FileSizeLimit limit(16 * 1024);
+    write_force_log(dir / "forces.json", sample_meta(), many);
+  };
+  EXPECT_THROW(write_limited(), Error);
   EXPECT_FALSE(fs::exists(dir / "forces.json"));
-  // Nor is a temporary left behind.
-  EXPECT_TRUE(fs::is_empty(dir));
+  EXPECT_TRUE(fs::is_empty(dir)) << "a temporary was left behind";
 
   // An earlier complete log is not clobbered by a failed rewrite.
   write_force_log(dir / "forces.json", sample_meta(), three_samples());
   const std::string before = read_text_file(dir / "forces.json");
-  EXPECT_ANY_THROW(write_force_log(dir / "forces.json", meta, ForceSamples{}));
+  EXPECT_THROW(write_limited(), Error);
   EXPECT_EQ(read_text_file(dir / "forces.json"), before);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
 }
 
 TEST(ForceLog, IncompleteRunSaysSoAndStaysValidJson) {

@@ -168,6 +168,96 @@ TEST(RunLoop, PullGraspsNearbyPointsDragsThemAndReleases) {
   EXPECT_LT(r.samples.force[lift].z(), 0.0);
 }
 
+// Copies the positions at the chosen ticks.
+class PositionProbe : public RunObserver {
+ public:
+  explicit PositionProbe(std::vector<int64_t> ticks) : ticks_(std::move(ticks)), positions(ticks_.size()) {}
+  void on_tick(const Model&, Backend& backend, const TickInfo& info) override {
+    for (size_t k = 0; k < ticks_.size(); ++k) {
+      if (info.tick == ticks_[k]) backend.positions(positions[k]);
+    }
+  }
+  std::vector<int64_t> ticks_;
+  std::vector<std::vector<Vec3>> positions;
+};
+
+TEST(RunLoop, GraspedPointsMoveWithTheToolAndFixedPointsStay) {
+  Scenario s = cube_scenario();
+  ToolDef tool;
+  tool.spec.mode = ToolMode::Pull;
+  tool.spec.radius = 0.01;
+  tool.spec.grasp_radius = 0.025;
+  tool.spec.contact_stiffness = 200;
+  tool.spec.grasp_time = 0.05;
+  tool.spec.release_time = 0.3;
+  // Grasp at the top face's centre at 0.05 s, lift 2 cm by 0.25 s, hold.
+  tool.spec.keyframes = {{0.05, Vec3(0.05, 0.05, 0.1)}, {0.25, Vec3(0.05, 0.05, 0.12)}};
+  s.tool = tool;
+  s.time.duration = 0.3;
+  const Model model = cube_model(s);
+  auto backend = make_cpu_backend(model, backend_tool(s), single_thread());
+  PositionProbe probe({49, 249, 299});  // the grasp tick, the end of the lift, the release
+  RunOptions o;
+  o.outdir = outdir("run_pull_moves");
+  o.observers = {&probe};
+  const RunResult r = run_scenario(s, model, *backend, o);
+  ASSERT_GE(r.grasped_points, 5);
+
+  // The grasped set, as the run loop chose it at the grasp tick.
+  const Attachment grasped = select_grasp(model, probe.positions[0], Vec3(0.05, 0.05, 0.1), 0.025);
+  ASSERT_EQ(static_cast<int32_t>(grasped.points.size()), r.grasped_points);
+  // Mean z displacement of the grasped points since the grasp.
+  const auto rise = [&](const std::vector<Vec3>& x) {
+    double sum = 0;
+    for (int32_t i : grasped.points) sum += x[i].z() - probe.positions[0][i].z();
+    return sum / static_cast<double>(grasped.points.size());
+  };
+  // The tool rose 2 cm; its 200 N/m springs against the soft cube's pull
+  // leave the points some way behind, but they follow: more than a quarter
+  // of the lift, never more than the lift itself, and still up while held.
+  EXPECT_GT(rise(probe.positions[1]), 0.005) << "grasped points did not follow the tool";
+  EXPECT_LT(rise(probe.positions[1]), 0.02 + 1e-3);
+  EXPECT_GT(rise(probe.positions[2]), 0.005);
+  // Fixed points (the bottom face) never move.
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if (model.fixed[i]) {
+      EXPECT_EQ(probe.positions[2][i], model.rest_position[i]) << "fixed point " << i << " moved";
+    }
+  }
+}
+
+TEST(RunLoop, KeyframesHoldBeforeTheFirstAndAfterTheLast) {
+  Scenario s = cube_scenario();
+  add_push_tool(s);
+  // Far above the cube (no contact): the path is all that matters here.
+  s.tool->spec.keyframes = {{0.1, Vec3(0.05, 0.05, 0.5)}, {0.2, Vec3(0.15, 0.05, 0.6)}};
+  s.time.duration = 0.3;
+  const Model model = cube_model(s);
+  auto backend = make_cpu_backend(model, backend_tool(s), single_thread());
+  RunOptions o;
+  o.outdir = outdir("run_keyframes_outside");
+  const RunResult r = run_scenario(s, model, *backend, o);
+  ASSERT_EQ(r.samples.size(), 300u);
+  for (size_t i = 0; i < r.samples.size(); ++i) {
+    const double t = r.samples.t[i];
+    const Vec3& p = r.samples.tool_position[i];
+    if (t <= 0.1) {
+      EXPECT_EQ(p, Vec3(0.05, 0.05, 0.5)) << "before the first keyframe, t = " << t;
+    } else if (t >= 0.2) {
+      EXPECT_EQ(p, Vec3(0.15, 0.05, 0.6)) << "after the last keyframe, t = " << t;
+    } else {
+      // Linear in between, exact up to rounding of t.
+      const double u = (t - 0.1) / 0.1;
+      EXPECT_NEAR((p - Vec3(0.05 + 0.1 * u, 0.05, 0.5 + 0.1 * u)).norm(), 0.0, 1e-12) << "t = " << t;
+    }
+  }
+  // One keyframe: the tool stays there for the whole run.
+  s.tool->spec.keyframes = {{0.15, Vec3(0.01, 0.02, 0.7)}};
+  auto one = make_cpu_backend(model, backend_tool(s), single_thread());
+  const RunResult still = run_scenario(s, model, *one, o);
+  for (const Vec3& p : still.samples.tool_position) EXPECT_EQ(p, Vec3(0.01, 0.02, 0.7));
+}
+
 TEST(RunLoop, GraspSelectsFreePointsWithinTheRadiusWithTheirOffsets) {
   const Scenario s = cube_scenario();  // bottom face (z = 0) fixed
   const Model model = cube_model(s);

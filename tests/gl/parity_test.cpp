@@ -109,6 +109,39 @@ TEST(GlParity, PushMatchesTheDoubleReference) {
   EXPECT_EQ(c.dispatches, kTicks * (kSubsteps + 1) + 2);
 }
 
+// Above 4,096 points there are more than 64 chunks, so the reduction's 64
+// lanes each sum several workgroup partials before the tree: the contacts
+// must be counted whichever chunk they fall in. Same tolerances as above.
+TEST(GlParity, ReactionOverMoreThan64ChunksMatchesTheDoubleReference) {
+  const Model model = gl_test::box_model(20, 20, 10, true, 2e4, Vec3(0, 0, -9.81));  // 21 x 21 x 11 points
+  ASSERT_GT(model.npoint(), 64 * 64);
+  // A 3 cm sphere pressed 8 mm into the top face (z = 0.05) above the top
+  // points in chunks 64 and up (the locality order puts them in one corner),
+  // so the points under it lie in chunks on both sides of chunk 64 and both
+  // parts of the lanes' loop carry contact forces.
+  Vec3 corner(0, 0, 0);
+  int ncorner = 0;
+  for (int32_t i = 64 * 64; i < model.npoint(); ++i) {
+    if (model.rest_position[i].z() > 0.05 - 1e-9) corner += model.rest_position[i], ++ncorner;
+  }
+  ASSERT_GT(ncorner, 0);
+  corner /= ncorner;
+  const BackendTool tool{true, ToolMode::Push, 0.03, 200.0};
+  const Vec3 start(corner.x(), corner.y(), 0.082), end(corner.x(), corner.y(), 0.072);
+  int32_t below = 0, above = 0;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if ((model.rest_position[i] - end).norm() < tool.radius) (i < 64 * 64 ? below : above) += 1;
+  }
+  ASSERT_GT(below, 0);
+  ASSERT_GT(above, 0);
+  const Comparison c = compare(model, tool, [&](int n) { return tool_request(n, start, end); });
+  std::cout << "push over " << model.npoint() << " points: force " << c.force << " of peak " << c.peak_force
+            << " N, " << c.max_contacts << " contacts\n";
+  ASSERT_GT(c.max_contacts, 10);
+  EXPECT_LT(c.position, 1e-5);
+  EXPECT_LT(c.force, 1e-4);
+}
+
 TEST(GlParity, PullMatchesTheDoubleReference) {
   const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
   const BackendTool tool{true, ToolMode::Pull, 0.01, 200.0};

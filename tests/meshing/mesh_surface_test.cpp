@@ -51,7 +51,10 @@ TEST(MeshSurface, SphereIsClosedWithTheSphereVolume) {
   EXPECT_NEAR(tet_mesh_volume(mesh), exact, 0.02 * exact);
   EXPECT_GT(report.quality.min_tet_volume, 0.0);  // every tet positively oriented
   EXPECT_EQ(report.points, static_cast<int32_t>(mesh.points.size()));
-  EXPECT_GT(report.quality.min_dihedral_deg, 1.0);  // exude removes the worst slivers (typically ~10 deg)
+  // docs/meshing.md promises a minimum dihedral angle of about 10 deg with
+  // sliver removal (perturbation aims at 10 deg; this mesh gets 12.8 deg,
+  // and meshing is deterministic, so the margin cannot drift by chance).
+  EXPECT_GE(report.quality.min_dihedral_deg, 10.0);
   // The mesh's boundary is as large as the report says, and is outward.
   TriangleMesh boundary{mesh.points, boundary_triangles(mesh)};
   EXPECT_EQ(report.boundary_triangles, static_cast<int32_t>(boundary.faces.size()));
@@ -73,6 +76,18 @@ TEST(MeshSurface, LiverTargetPointsLandWithinTenPercent) {
   const double mean = 2.0 * report.springs / report.points;
   EXPECT_GT(mean, 11.0);
   EXPECT_LT(mean, 16.0);
+}
+
+TEST(MeshSurface, LiverAtTheDefaultScenariosSizeKeepsTheDocumentedDihedralAngle) {
+  // scenarios/default.json meshes examples/liver.off to 2,500 points with
+  // sliver removal; docs/meshing.md promises about 10-11 deg (10.9 here).
+  const auto path = std::filesystem::path(ORGANSIM_SOURCE_DIR) / "examples" / "liver.off";
+  MeshOptions options;
+  options.target_points = 2500;
+  MeshReport report;
+  mesh_surface_file(path, options, &report);
+  EXPECT_GE(report.quality.min_dihedral_deg, 10.0);
+  EXPECT_GT(report.quality.min_tet_volume, 0.0);
 }
 
 TEST(MeshSurface, SameInputGivesTheSameMesh) {
@@ -135,6 +150,30 @@ TEST(MeshSurface, BadSurfacesAreErrorsNamingTheProblem) {
   TriangleMesh degenerate = make_sphere_surface(0.05, 1);
   degenerate.faces[3][1] = degenerate.faces[3][0];
   fails_with(degenerate, "face 3 repeats a vertex");
+}
+
+TEST(MeshSurface, AbsurdCellSizesAndFacetDistancesAreRefusedBeforeMeshing) {
+  const TriangleMesh sphere = make_sphere_surface(0.05, 2);
+  // 1e-5 m in a ball of 5 cm radius: ~5e11 points; Mesh_3 would run for days.
+  MeshOptions tiny = cell_size(1e-5);
+  std::string msg;
+  try {
+    mesh_surface(sphere, tiny, "ball.off");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Usage);
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("cell size 1e-05 m would make about "), std::string::npos) << msg;
+  MeshOptions hairline = cell_size(0.01);
+  hairline.facet_distance = 1e-9;
+  msg.clear();
+  try {
+    mesh_surface(sphere, hairline, "ball.off");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Usage);
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("facet distance 1e-09 m is below 1e-06 of the surface's size"), std::string::npos) << msg;
 }
 
 TEST(MeshSurface, BadFilesAreErrorsNamingTheFile) {

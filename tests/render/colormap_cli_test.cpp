@@ -44,10 +44,23 @@ TEST(ColorMap, ScaleRunsFromDarkBlueToRedAndLegendShowsIt) {
   EXPECT_EQ(colormap_rgb(2), hi);
   cv::Mat img(300, 400, CV_8UC3, cv::Scalar(255, 255, 255));
   draw_colormap_legend(img, "strain", 0.0, 0.12, "");
-  // The bar's top row has the high colour, its bottom row the low colour.
-  const cv::Mat red = testing::differs_from(img, cv::Vec3b(static_cast<uchar>(hi.z() * 255), static_cast<uchar>(hi.y() * 255),
-                                                           static_cast<uchar>(hi.x() * 255)), 3);
-  EXPECT_LT(cv::countNonZero(red), img.rows * img.cols - 5);  // some pixels are the top colour
+  // The bar has the high colour at the top and the low colour at the bottom
+  // (an upside-down legend swaps them): the mean row of each colour's pixels,
+  // matched within 3 of 255 per channel (the bar rounds, the test truncates).
+  const auto mean_row_of = [&](const Vec3f& rgb) {
+    const cv::Scalar bgr(rgb.z() * 255, rgb.y() * 255, rgb.x() * 255);
+    cv::Mat mask;
+    cv::inRange(img, bgr - cv::Scalar::all(3), bgr + cv::Scalar::all(3), mask);
+    std::vector<cv::Point> at;
+    cv::findNonZero(mask, at);
+    double sum = 0;
+    for (const cv::Point& p : at) sum += p.y;
+    EXPECT_GT(at.size(), 5u) << "colour not found in the legend";
+    return at.empty() ? 0.0 : sum / static_cast<double>(at.size());
+  };
+  const double top = mean_row_of(hi), bottom = mean_row_of(lo);
+  // The bar is half the image tall (150 rows): its ends are ~150 rows apart.
+  EXPECT_LT(top + 100, bottom) << "high colour at row " << top << ", low colour at row " << bottom;
   // Text was written (dark pixels right of the bar).
   cv::Mat grey;
   cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);

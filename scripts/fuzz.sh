@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses of tests/fuzz/harnesses.txt with clang-14
+# (ASan + UBSan) into ${ORGANSIM_FUZZ_BUILD_DIR:-build-fuzz} and runs each one.
+#   scripts/fuzz.sh [--seconds S | --runs N] [NAME...]
+# --seconds S: each harness for S seconds (default 10); --runs N: N inputs
+# each. NAMEs pick rows of the table (default: all). The corpus grows in
+# BUILD/corpus/NAME between runs; a crash, hang or sanitizer report leaves
+# its input in BUILD/artifacts/NAME/ and makes the script fail. Prints one
+# line per harness: executions, coverage (edges), corpus size, result.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${ORGANSIM_FUZZ_BUILD_DIR:-$root/build-fuzz}
+limit=(-max_total_time=10)
+names=()
+while [ $# -gt 0 ]; do
+  case $1 in
+    --seconds) limit=(-max_total_time="$2"); shift 2 ;;
+    --runs) limit=(-runs="$2"); shift 2 ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    *) names+=("$1"); shift ;;
+  esac
+done
+
+export CCACHE_BASEDIR=$root
+CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DORGANSIM_FUZZ=ON -DORGANSIM_BUILD_TESTS=OFF -DORGANSIM_WERROR=OFF >/dev/null
+cmake --build "$build" --target organsim_fuzz -j "${ORGANSIM_JOBS:-2}"
+
+# Leaks are bugs too; a hang is an input taking over 10 s; 2 GB of memory
+# is far more than any input of at most 64 KiB should need.
+options=(-timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1)
+failed=0
+printf '%-15s %12s %8s %8s  %s\n' harness executions coverage corpus result
+while read -r name kind ext seeds; do
+  case $name in ''|'#'*) continue ;; esac
+  if [ ${#names[@]} -gt 0 ] && [[ ! " ${names[*]} " == *" $name "* ]]; then continue; fi
+  corpus=$build/corpus/$name artifacts=$build/artifacts/$name seed_dir=$build/seeds/$name
+  mkdir -p "$corpus" "$artifacts" "$seed_dir"
+  # Hand-made seeds and the inputs of past findings (tests/fuzz/regressions).
+  cp "$root"/tests/fuzz/corpus/"$name"/* "$root"/tests/fuzz/regressions/"$name"/* "$seed_dir"/ 2>/dev/null || true
+  for pattern in $seeds; do
+    # shellcheck disable=SC2086  # the pattern is a glob on purpose
+    cp $root/$pattern "$seed_dir"/
+  done
+  log=$build/logs/$name.log
+  mkdir -p "$(dirname "$log")"
+  result=ok
+  if ! "$build/tests/fuzz/organsim_fuzz_$name" "${limit[@]}" "${options[@]}" -artifact_prefix="$artifacts/" \
+      "$corpus" "$seed_dir" >"$log" 2>&1; then
+    result="FAILED: $(ls -t "$artifacts" | head -1 | sed "s|^|$artifacts/|"), log $log"
+    failed=1
+  fi
+  executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  coverage=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  printf '%-15s %12s %8s %8s  %s\n' "$name" "${executions:-?}" "${coverage:-?}" "$(ls "$corpus" | wc -l)" "$result"
+done <"$root/tests/fuzz/harnesses.txt"
+exit $failed

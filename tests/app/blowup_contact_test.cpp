@@ -1,0 +1,73 @@
+// A blow-up while the tool presses on the tissue, on both backends: the run
+// stops with the numerical exit code and leaves a force log that is valid
+// JSON, says why it stopped, and holds only finite numbers, including the
+// nonzero contact forces recorded before the stop. (Without a tool the force
+// is identically zero, so a NaN check there proves nothing.)
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "tests/app/run_cli_test_util.h"
+
+namespace organsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+void blow_up_in_contact(const std::string& backend) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / ("blowup_contact_" + backend);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json s = nlohmann::json::parse(std::ifstream(stress / "dt_over.json"));
+  s["mesh"]["tet"] = (stress / "box.mesh").string();
+  // dt 2.5 ms is 1.6 x dt_crit of the box alone (1.55 ms), more with the
+  // tool's contact stiffness: it diverges within a few hundred ticks.
+  s["time"] = {{"duration", 1.0}, {"dt", 0.0025}, {"substeps", 1}};
+  s["backend"] = {{"name", backend}};
+  // The 1 cm sphere starts 3 mm into the 4 cm box's top face and keeps pressing.
+  s["tool"] = {{"radius", 0.01},
+               {"contact_stiffness", 500},
+               {"mode", "push"},
+               {"keyframes", {{{"t", 0.0}, {"position", {0.02, 0.02, 0.047}}},
+                              {{"t", 1.0}, {"position", {0.02, 0.02, 0.040}}}}}};
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const test::CliResult r =
+      test::run_organsim("run '" + (dir / "scene.json").string() + "' --allow-unstable -o '" + (dir / "out").string() + "'", dir);
+  if (backend == "gl" && r.exit_code == 6) {
+    test::expect_no_gl_context_here(r);
+    return;
+  }
+  ASSERT_EQ(r.exit_code, 5) << r.out << r.err;  // ErrorKind::Numerical: stopped by a blow-up check
+  const nlohmann::json log = nlohmann::json::parse(test::slurp(dir / "out" / "forces.json"));
+  EXPECT_EQ(log["meta"]["backend"], backend);
+  EXPECT_FALSE(log["meta"]["completed"].get<bool>());
+  // The log says why, in the words of the error the user saw, with the time.
+  const std::string reason = log["meta"]["stop_reason"].get<std::string>();
+  EXPECT_NE(reason.find("t = "), std::string::npos) << reason;
+  EXPECT_NE(r.err.find("organsim: error: " + reason), std::string::npos) << r.err;
+  const auto& force = log["samples"]["force"];
+  ASSERT_GT(force.size(), 0u);
+  EXPECT_LT(force.size(), 1000u) << "the run was not stopped";
+  double largest = 0;
+  for (const auto& f : force) {
+    ASSERT_EQ(f.size(), 3u);
+    for (const auto& c : f) {
+      ASSERT_TRUE(c.is_number()) << "null (NaN) in the force log: " << f.dump();
+      ASSERT_TRUE(std::isfinite(c.get<double>()));
+      largest = std::max(largest, std::abs(c.get<double>()));
+    }
+  }
+  // 3 mm into the box at 500 N/m: about a newton; anything above 1 mN means
+  // the tool really was in contact.
+  EXPECT_GT(largest, 1e-3);
+  for (const auto& t : log["samples"]["torque"])
+    for (const auto& c : t) ASSERT_TRUE(c.is_number()) << t.dump();
+}
+
+TEST(BlowupInContact, CpuStopsWithAFiniteForceLog) { blow_up_in_contact("cpu"); }
+TEST(BlowupInContact, GlStopsWithAFiniteForceLog) { blow_up_in_contact("gl"); }
+
+}  // namespace
+}  // namespace organsim

@@ -1,0 +1,67 @@
+// Every input the fuzzer found that crashed, hung or tripped a sanitizer
+// (tests/fuzz/regressions/<harness>/) now gets the clean error listed here,
+// naming the file. The fuzz seeds include these files, so the fuzzer keeps
+// mutating around them too.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+
+#include "core/mesh/mesh_io.h"
+#include "core/scenario/scenario.h"
+#include "core/util/atomic_file.h"
+#include "mesh_io_test_util.h"
+
+namespace organsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kRegressions = fs::path(ORGANSIM_SOURCE_DIR) / "tests" / "fuzz" / "regressions";
+
+struct Regression {
+  const char* file;      // under tests/fuzz/regressions/
+  const char* expected;  // in the message, after "<file>: "
+};
+
+// One row per saved input; how each was found is in docs/robustness.md.
+const Regression kCases[] = {
+    {"ply_ascii/end_header_at_eof.ply", "PLY element 'vertex' lacks an x, y or z property"},
+    {"ply_binary/end_header_at_eof.ply", "PLY element 'vertex' lacks an x, y or z property"},
+    {"ply_binary/float_list_length.ply", "fake 0: list length 2.406e-38, expected a count >= 0"},
+    {"vtk/huge_point_count.vtk", "line 5: 5750106523498388593 points cannot fit in the rest of the file"},
+};
+
+// Reads the input the way its harness does (the extension picks the reader).
+void parse(const std::string& bytes, const std::string& source) {
+  if (is_surface_path(source)) {
+    parse_surface(bytes, source);
+  } else if (is_tet_mesh_path(source)) {
+    parse_tet_mesh(bytes, source);
+  } else {
+    parse_scenario_text(bytes, "/fuzz", source);
+  }
+}
+
+TEST(FuzzRegressions, EachSavedInputGetsItsCleanError) {
+  for (const Regression& r : kCases) {
+    const fs::path path = kRegressions / r.file;
+    const std::string source = path.filename().string();
+    const std::string msg = testing::error_message([&] { parse(read_text_file(path), source); });
+    EXPECT_EQ(msg.rfind(source + ": ", 0), 0u) << r.file << ": " << msg;
+    EXPECT_NE(msg.find(r.expected), std::string::npos) << r.file << ": " << msg;
+  }
+}
+
+TEST(FuzzRegressions, EverySavedInputIsListed) {
+  std::set<std::string> listed;
+  for (const Regression& r : kCases) listed.insert(r.file);
+  for (const auto& e : fs::recursive_directory_iterator(kRegressions)) {
+    if (!e.is_regular_file() || e.path().parent_path().filename() == "surface_check") continue;
+    const std::string rel = fs::relative(e.path(), kRegressions).string();
+    EXPECT_TRUE(listed.count(rel)) << rel << " has no row in kCases";
+  }
+}
+
+}  // namespace
+}  // namespace organsim
