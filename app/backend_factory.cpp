@@ -1,5 +1,6 @@
 #include "app/backend_factory.h"
 
+#include "core/gl/egl_context.h"
 #include "core/gl/gl_backend.h"
 #include "core/sim/cpu_backend.h"
 #include "core/util/error.h"
@@ -35,11 +36,42 @@ std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, 
 }
 }  // namespace
 
+std::string resolve_auto_backend(BackendSelection& selection) {
+  if (selection.name != "auto") return "";
+  std::string why;
+  if (selection.precision && *selection.precision == "double") {
+    selection.name = "cpu";
+    why = "double precision asked, which only the CPU backend computes";
+  } else {
+    try {
+      const gl::EglContext probe;
+      if (probe.software()) {
+        selection.name = "cpu";
+        why = "the EGL device is a software renderer (" + probe.renderer() +
+              "), slower than the CPU backend on the same cores";
+      } else {
+        selection.name = "gl";
+        why = "the EGL device is a hardware GPU (" + probe.renderer() + ")";
+      }
+    } catch (const Error& e) {
+      selection.name = "cpu";
+      why = std::string("no EGL device for the GL backend (") + e.what() + ")";
+    }
+  }
+  if (!selection.precision) selection.precision = "float";
+  return "auto chose " + selection.name + " (" + *selection.precision + "): " + why;
+}
+
 std::unique_ptr<Backend> make_backend(const BackendSelection& selection, const Model& model,
                                       const BackendTool& tool) {
+  if (selection.name == "auto") {
+    BackendSelection resolved = selection;
+    resolve_auto_backend(resolved);
+    return make_backend(resolved, model, tool);
+  }
   if (selection.name == "cpu") return make_cpu(selection, model, tool);
   if (selection.name == "gl") return make_gl(selection, model, tool);
-  throw Error(ErrorKind::Usage, "unknown backend \"" + selection.name + "\": expected \"cpu\" or \"gl\"");
+  throw Error(ErrorKind::Usage, "unknown backend \"" + selection.name + "\": expected \"auto\", \"cpu\" or \"gl\"");
 }
 
 }  // namespace organsim::app

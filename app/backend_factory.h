@@ -12,13 +12,23 @@
 namespace organsim::app {
 
 struct BackendSelection {
-  std::string name = "cpu";              // "cpu" or "gl"
+  std::string name = "auto";             // "auto", "cpu" or "gl"
   std::optional<std::string> precision;  // "double" | "float"; default: cpu double, gl float
   int32_t threads = 0;                   // cpu: 0 = all hardware threads
 };
 
 // The backend names organsim knows (whether or not this build can create them).
 const std::vector<std::string>& backend_names();
+
+// "auto" resolved here: the GL backend when the EGL device is a hardware GPU
+// (and float is acceptable), the CPU backend otherwise (Mesa's llvmpipe runs
+// the shaders on the same cores, several times slower than the CPU backend:
+// docs/bench.md); the CPU backend's default precision under auto is float,
+// its fast path. Sets selection.name (and the precision when none was asked)
+// and returns why, in one line for the run's first lines and its meta. Other
+// names are left alone (and return ""): a backend asked for by name never
+// falls back.
+std::string resolve_auto_backend(BackendSelection& selection);
 
 // Throws Error(Usage) for an unknown name or a precision the backend does not
 // offer, Error(Backend) when the backend cannot be created here.

@@ -21,6 +21,7 @@
 #include "core/mesh/mesh_io.h"
 #include "core/model/model.h"
 #include "core/render/frame_cost.h"
+#include "core/sim/scatter_step.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
@@ -103,6 +104,16 @@ struct Timing {
   double median_ms = 0, min_ms = 0, max_ms = 0;  // per step
 };
 
+Timing summarise(std::vector<double> ms) {
+  std::sort(ms.begin(), ms.end());
+  Timing t;
+  t.min_ms = ms.front();
+  t.max_ms = ms.back();
+  const size_t n = ms.size();
+  t.median_ms = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+  return t;
+}
+
 // Warm-up, then `repetitions` ticks of `steps` substeps each, each closed by
 // a position read-back (a GPU synchronisation); per-step times from each.
 Timing time_backend(Backend& backend, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
@@ -121,13 +132,25 @@ Timing time_backend(Backend& backend, const BenchArgs& args, double dt, std::vec
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ms.push_back(1e3 * seconds / args.steps);
   }
-  std::sort(ms.begin(), ms.end());
-  Timing t;
-  t.min_ms = ms.front();
-  t.max_ms = ms.back();
-  const size_t n = ms.size();
-  t.median_ms = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
-  return t;
+  return summarise(std::move(ms));
+}
+
+// The plain per-spring / per-tet scatter step (one thread, no layout) on the
+// same model, precision and dt, timed the same way: the baseline of the
+// speedup, measured in the same run so that machine load cancels out.
+template <class Real>
+Timing time_scatter(const Model& model, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
+  ScatterStep<Real> scatter(model);
+  for (int32_t i = 0; i < args.warmup; ++i) scatter.step(dt);
+  std::vector<double> ms;
+  for (int32_t r = 0; r < args.repetitions; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    for (int32_t i = 0; i < args.steps; ++i) scatter.step(dt);
+    scatter.positions(positions);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ms.push_back(1e3 * seconds / args.steps);
+  }
+  return summarise(std::move(ms));
 }
 
 struct Row {
@@ -137,6 +160,7 @@ struct Row {
   double dt = 0, dt_crit = 0;  // s: the step used and the model's critical step
   std::string backend, precision, device;
   Timing timing;
+  Timing scatter;  // the plain scatter step, same model and precision, 1 thread
   Plan plan;
   double check_ms = 0;  // one blow-up check (positions read back included)
 };
@@ -230,6 +254,8 @@ void run_bench(const BenchArgs& args) {
       row.dt = dt;
       row.dt_crit = dt_crit;
       row.timing = time_backend(*backend, args, dt, positions);
+      row.scatter = row.precision == "float" ? time_scatter<float>(model, args, dt, positions)
+                                             : time_scatter<double>(model, args, dt, positions);
       row.check_ms = measure_check_ms(model, *backend);
       rows.push_back(row);
     }
@@ -260,6 +286,8 @@ void run_bench(const BenchArgs& args) {
                            {"device", r.device}, {"median_ms", r.timing.median_ms},
                            {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
                            {"steps_per_second", 1e3 / r.timing.median_ms},
+                           {"scatter_median_ms", r.scatter.median_ms},
+                           {"speedup_over_scatter", r.scatter.median_ms / r.timing.median_ms},
                            {"dispatches_per_step", r.plan.dispatches_per_step},
                            {"syncs_per_step", r.plan.syncs_per_step}, {"blowup_check_ms", r.check_ms}};
       nlohmann::json passes = nlohmann::json::array();
@@ -330,6 +358,14 @@ void run_bench(const BenchArgs& args) {
     }
   }
   for (const auto& [b, why] : unavailable) std::cout << "  " << b << ": not measured: " << why << "\n";
+
+  std::cout << "\nspeedup over the plain per-spring / per-tet scatter step (1 thread, no layout, same model,\n"
+               "precision and dt, timed in this run), median ms per step:\n";
+  for (const Row& r : rows)
+    std::cout << "  " << std::setw(7) << r.points << " points  " << std::left << std::setw(4) << r.backend
+              << std::setw(7) << r.precision << std::right << std::setw(9) << fixed(r.timing.median_ms, 4)
+              << "  scatter " << std::setw(8) << fixed(r.scatter.median_ms, 4) << "  speedup "
+              << fixed(r.scatter.median_ms / r.timing.median_ms, 2) << "x\n";
 
   std::cout << "\nblow-up check (non-finite, energy, strain, inversion; positions read back), ms per check:\n";
   for (const Row& r : rows)

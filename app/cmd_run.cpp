@@ -152,6 +152,8 @@ void run_command(const RunArgs& args) {
   else if (!backend_switched)
     selection.precision = s.backend.precision;
   selection.threads = args.threads >= 0 ? args.threads : s.backend.threads;
+  const std::string backend_choice = resolve_auto_backend(selection);
+  if (!backend_choice.empty()) std::cout << "backend:  " << backend_choice << "\n";
   s.backend.name = selection.name;
 
   MeshReport mesh_report;
@@ -212,6 +214,7 @@ void run_command(const RunArgs& args) {
       {"model_seconds", model_seconds},
       {"tool", s.tool ? (s.tool->spec.mode == ToolMode::Push ? "push" : "pull") : "none"},
   };
+  if (!backend_choice.empty()) options.meta_extra["backend_choice"] = backend_choice;
   options.meta_extra["dt_crit"] = stability.dt_crit;
   options.meta_extra["stability"] = to_json(stability);
   options.meta_extra["stability"]["check_interval_ticks"] = check_interval;
@@ -230,6 +233,8 @@ void run_command(const RunArgs& args) {
   std::cout << "done:     " << result.samples.size() << " ticks in " << std::setprecision(3)
             << result.meta.wall_seconds << " s wall, " << std::setprecision(4) << result.meta.steps_per_second
             << " steps/s, peak tool force " << peak << " N\n";
+  std::cout << "real time: " << std::setprecision(3) << result.meta.real_time_factor
+            << "x (simulated seconds per wall second, checks and outputs included; >= 1 keeps up with the clock)\n";
   if (s.tool && s.tool->spec.mode == ToolMode::Pull) {
     std::cout << "grasp:    " << result.grasped_points << " points attached"
               << (result.grasped_points == 0 ? " (none within grasp_radius: the tool pulled nothing)" : "") << "\n";
@@ -246,8 +251,10 @@ const bool registered = register_command("run", 20, [](CLI::App& root) {
              "tool position [m] and contacts at every haptic tick.");
   cmd->add_option("scenario", args->scenario, "Scenario file (see docs/scenarios.md)")->required();
   cmd->add_option("-o,--output", args->outdir, "Output folder (default: out/<scenario name>)");
-  cmd->add_option("--backend", args->backend, "cpu or gl; overrides the scenario's backend")
-      ->check(CLI::IsMember({"cpu", "gl"}));
+  cmd->add_option("--backend", args->backend,
+                  "auto, cpu or gl; overrides the scenario's backend (default auto: gl on a hardware GPU, "
+                  "else cpu in float; gl by name never falls back)")
+      ->check(CLI::IsMember({"auto", "cpu", "gl"}));
   cmd->add_option("--precision", args->precision, "double or float; overrides the scenario's precision")
       ->check(CLI::IsMember({"double", "float"}));
   cmd->add_option("--threads", args->threads, "CPU threads (0: all); overrides the scenario's backend.threads")

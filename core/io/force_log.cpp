@@ -50,6 +50,7 @@ nlohmann::json force_log_json(const ForceLogMeta& meta, const ForceSamples& samp
       {"samples", samples.size()},
       {"wall_seconds", meta.wall_seconds},
       {"steps_per_second", meta.steps_per_second},
+      {"real_time_factor", meta.real_time_factor},
       {"completed", meta.completed},
       {"stop_reason", meta.stop_reason},
       {"units", {{"t", "s"}, {"force", "N"}, {"torque", "N m"}, {"tool_position", "m"}, {"contacts", "points"}}},

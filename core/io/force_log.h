@@ -40,6 +40,9 @@ struct ForceLogMeta {
   double duration = 0;            // s, as asked by the scenario
   double wall_seconds = 0;        // s, the stepping loop only
   double steps_per_second = 0;    // integration steps per wall-clock second
+  // Simulated seconds per wall-clock second over the whole tick loop (checks,
+  // frames and logging included): >= 1 keeps up with the clock.
+  double real_time_factor = 0;
   bool completed = false;         // false when the run was cut short
   std::string stop_reason;        // why it was cut short; empty when completed
   // Anything other parts add (dt_crit, timings of meshing, renderer, ...).

@@ -61,9 +61,9 @@ class BinaryCursor {
     std::memcpy(raw, bytes_.data() + pos_, static_cast<size_t>(size));
     pos_ += static_cast<size_t>(size);
     if (swap_) {  // byte order of the file differs from the host's
-      unsigned char swapped[8];
+      unsigned char swapped[8] = {};  // zeroed: gcc 12 without -march=native warns otherwise
       for (int b = 0; b < size; ++b) swapped[b] = raw[size - 1 - b];
-      std::memcpy(raw, swapped, sizeof raw);
+      std::memcpy(raw, swapped, static_cast<size_t>(size));
     }
     switch (size * 4 + (kind == 'f' ? 2 : kind == 'i' ? 1 : 0)) {
       case 4: return *raw;

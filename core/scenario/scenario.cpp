@@ -149,14 +149,15 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
 BackendDef parse_backend(const nlohmann::json& j, const JsonPath& at) {
   BackendDef b;
   auto check_name = [&](const std::string& name, const JsonPath& p) {
-    if (name != "cpu" && name != "gl") throw p.error("expected " + one_of({"cpu", "gl"}) + " (got \"" + name + "\")");
+    if (name != "auto" && name != "cpu" && name != "gl")
+      throw p.error("expected " + one_of({"auto", "cpu", "gl"}) + " (got \"" + name + "\")");
     return name;
   };
   if (j.is_string()) {
     b.name = check_name(j.get<std::string>(), at);
     return b;
   }
-  if (!j.is_object()) throw at.error("expected \"cpu\", \"gl\" or an object {name, precision, threads}");
+  if (!j.is_object()) throw at.error("expected \"auto\", \"cpu\", \"gl\" or an object {name, precision, threads}");
   ObjectReader r(j, at);
   if (auto n = r.string("name")) b.name = check_name(*n, r.at("name"));
   if (auto p = r.string("precision")) {

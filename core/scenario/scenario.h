@@ -47,7 +47,7 @@ struct ToolDef {
 };
 
 struct BackendDef {
-  std::string name = "cpu";              // "cpu" or "gl"
+  std::string name = "auto";             // "auto" (fastest here: app/backend_factory.h), "cpu" or "gl"
   std::optional<std::string> precision;  // "double" or "float"; default per backend
   int32_t threads = 0;                   // cpu: 0 = all hardware threads
 };

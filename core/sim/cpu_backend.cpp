@@ -3,9 +3,12 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <string>
 
+#include "core/sim/cpu_kernel_avx512.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -22,13 +25,13 @@ std::string cpu_model_name() {
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 
-// Threads pay off only when each has a few thousand points: below that the
-// per-step fork/join costs more than it saves (and thrashes a loaded machine).
-int choose_threads(const Model& model, const CpuBackendOptions& options) {
-  if (options.threads > 0) return options.threads;
-  return model.npoint() >= 4096 ? omp_get_max_threads() : 1;
+// Why the AVX-512 kernel cannot run `model` in `precision` here ("" if it can).
+template <class Real>
+std::string avx512_refusal(const Model& model) {
+  if (sizeof(Real) != sizeof(float)) return "the avx512 kernel computes in float";
+  if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
+  return avx512_kernel_unsupported(model);
 }
-
 
 // Step-invariant inputs of one substep.
 template <class Real>
@@ -72,7 +75,8 @@ class CpuBackend final : public Backend {
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options)
-      : model_(&model), tool_(tool), threads_(choose_threads(model, options)) {
+      : model_(&model), tool_(tool), kernel_choice_(options.kernel),
+        threads_(options.threads > 0 ? options.threads : 1) {
     // State is the displacement u = x - X from rest and the last step's
     // increment d = u_t - u_{t-1}. In float, x itself would round away the
     // per-step increment dt^2 F/m (~1e-9 m against a 4e-9 m spacing of floats
@@ -84,7 +88,10 @@ class CpuBackend final : public Backend {
     d_.assign(n, 0);
     attached_.assign(n, -1);
     pack();
-    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "");
+    std::string how;
+    if (options.threads <= 0 && omp_get_max_threads() > 1) how = choose_threads_by_timing();
+    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how +
+              ", " + (fast_ ? "avx512" : "generic") + " kernel";
   }
 
   void rebuild(const Model& next) override {
@@ -93,6 +100,7 @@ class CpuBackend final : public Backend {
       throw Error(ErrorKind::Backend, "cpu backend: rebuild from a Model with " + std::to_string(n) +
                                           " points after " + std::to_string(old_n) + " (points are append-only)");
     model_ = &next;
+    if (fast_) pull_fast_state();
     // An appended point copies its origin's displacement and increment: its
     // rest position is the origin's, so it starts at the same x_t and x_{t-1}.
     for (Soa3<Real>* s : {&u_, &d_}) {
@@ -134,6 +142,16 @@ class CpuBackend final : public Backend {
                               m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
     if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
     plan.dispatches_per_step = 1;
+    if (fast_) {
+      // The avx512 kernel's own packing replaces the generic streams above.
+      plan.buffers.clear();
+      plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
+                              fast_->bytes()});
+      if (m.has_volume())
+        plan.passes[1].detail = std::to_string(m.ntet()) +
+                                " tets evaluated once, 16 per batch, into 2 fixed force slices (avx512 kernel)";
+      plan.passes.back().detail = "position Verlet, fused with springs and the tet forces (16 float lanes, avx512 kernel)";
+    }
     plan.syncs_per_step = 0;
     return plan;
   }
@@ -146,6 +164,9 @@ class CpuBackend final : public Backend {
       attach_offset_[k] = attachment.offsets[k].cast<Real>();
     }
     attached_points_ = attachment.points;
+    attach_offset_f_.clear();
+    for (const Vec3& o : attachment.offsets)
+      for (int k = 0; k < 3; ++k) attach_offset_f_.push_back(static_cast<float>(o[k]));
   }
 
   void release() override {
@@ -155,6 +176,14 @@ class CpuBackend final : public Backend {
 
   void positions(std::vector<Vec3>& out) const override {
     out.resize(u_.x.size());
+    if (fast_) {
+      float u[3], d[3];
+      for (size_t i = 0; i < out.size(); ++i) {
+        fast_->get_point(static_cast<int32_t>(i), u, d);
+        out[i] = model_->rest_position[i] + Vec3(u[0], u[1], u[2]);
+      }
+      return;
+    }
     for (size_t i = 0; i < out.size(); ++i) out[i] = model_->rest_position[i] + displacement(u_, i);
   }
 
@@ -170,6 +199,7 @@ class CpuBackend final : public Backend {
       d_.y[i] = static_cast<Real>(d.y());
       d_.z[i] = static_cast<Real>(d.z());
     }
+    if (fast_) push_fast_state();
   }
 
   Reaction tick(const TickRequest& request) override {
@@ -190,7 +220,7 @@ class CpuBackend final : public Backend {
       const double f = static_cast<double>(s) / request.substeps;
       const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
       for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
-      reaction = step(ctx, tool_kind);
+      reaction = fast_ ? fast_step(ctx, tool_kind) : step(ctx, tool_kind);
       time_ += request.dt;
     }
     return reaction;
@@ -277,6 +307,97 @@ class CpuBackend final : public Backend {
     }
     groups_per_chunk_ = groups_per_chunk;
     partial_.resize(layout.nchunk);
+    pack_fast();
+  }
+
+  // The AVX-512 kernel packs its own streams from the same Model; while it
+  // runs, it holds the state (u_, d_ are filled from it only for a rebuild).
+  void pack_fast() {
+    const std::string refusal = avx512_refusal<Real>(*model_);
+    if (kernel_choice_ == CpuKernel::Avx512 && !refusal.empty())
+      throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
+    if (kernel_choice_ == CpuKernel::Generic || !refusal.empty()) {
+      fast_.reset();
+      return;
+    }
+    if (!fast_) fast_ = std::make_unique<Avx512FloatKernel>();
+    fast_->pack(*model_);
+    fast_partial_.resize(fast_->nchunk());
+    // The kernel reads attachment indices 16 points at a time, padding included.
+    attached_.resize(std::max(attached_.size(), static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size), -1);
+    push_fast_state();
+  }
+  void push_fast_state() {
+    float u[3], d[3];
+    for (size_t i = 0; i < u_.x.size(); ++i) {
+      u[0] = static_cast<float>(u_.x[i]), u[1] = static_cast<float>(u_.y[i]), u[2] = static_cast<float>(u_.z[i]);
+      d[0] = static_cast<float>(d_.x[i]), d[1] = static_cast<float>(d_.y[i]), d[2] = static_cast<float>(d_.z[i]);
+      fast_->set_point(static_cast<int32_t>(i), u, d);
+    }
+  }
+  void pull_fast_state() {
+    float u[3], d[3];
+    for (size_t i = 0; i < u_.x.size(); ++i) {
+      fast_->get_point(static_cast<int32_t>(i), u, d);
+      u_.x[i] = u[0], u_.y[i] = u[1], u_.z[i] = u[2];
+      d_.x[i] = d[0], d_.y[i] = d[1], d_.z[i] = d[2];
+    }
+  }
+
+  Reaction fast_step(const StepContext<Real>& ctx, int tool_kind) {
+    FloatStepInputs in;
+    in.dt2 = static_cast<float>(ctx.dt2);
+    in.inv_dt = static_cast<float>(ctx.inv_dt);
+    in.drag = static_cast<float>(ctx.drag);
+    for (int k = 0; k < 3; ++k) {
+      in.gravity[k] = static_cast<float>(ctx.gravity[k]);
+      in.tool_center[k] = static_cast<float>(ctx.tool_center[k]);
+    }
+    in.tool_radius = static_cast<float>(ctx.tool_radius);
+    in.tool_k = static_cast<float>(ctx.tool_k);
+    in.tool = tool_kind == kPush ? FloatStepInputs::Push : tool_kind == kPull ? FloatStepInputs::Pull
+                                                                              : FloatStepInputs::None;
+    in.attached = attached_.data();
+    in.attach_offset = attach_offset_f_.data();
+    fast_->step(in, threads_, fast_partial_);
+    Reaction reaction;
+    if (tool_kind != kNoTool) {
+      // Fixed-order sum of per-chunk partials: identical for any thread count.
+      for (const ChunkReaction& p : fast_partial_) {
+        reaction.force += p.force;
+        reaction.torque += p.torque;
+        reaction.contacts += p.contacts;
+      }
+    }
+    return reaction;
+  }
+
+  // Times a few steps from rest on 1 thread and on all hardware threads
+  // (alternating, best of three each) and keeps the faster; the state is
+  // put back to rest afterwards. Small models stay on one thread when the
+  // fork/join costs more than it saves. Returns what it measured, for device().
+  std::string choose_threads_by_timing() {
+    const int all = omp_get_max_threads();
+    StepContext<Real> ctx{};
+    ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
+    const int32_t steps = std::clamp<int32_t>(200000 / std::max<int32_t>(model_->npoint(), 1), 4, 50);
+    double best[2] = {1e30, 1e30};
+    for (int round = 0; round < 3; ++round) {
+      for (int which = 0; which < 2; ++which) {
+        threads_ = which ? all : 1;
+        const auto start = std::chrono::steady_clock::now();
+        for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
+        const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / steps;
+        best[which] = std::min(best[which], ms);
+      }
+    }
+    threads_ = best[1] < best[0] ? all : 1;
+    u_.assign(u_.x.size(), 0);
+    d_.assign(d_.x.size(), 0);
+    if (fast_) push_fast_state();
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " (timed: %.4f ms per step on 1, %.4f on %d)", best[0], best[1], all);
+    return buf;
   }
 
   static Vec3 displacement(const Soa3<Real>& u, size_t i) {
@@ -478,7 +599,11 @@ class CpuBackend final : public Backend {
 
   const Model* model_;  // the current version (rebuild() moves it on)
   BackendTool tool_;
+  CpuKernel kernel_choice_;
   int threads_;
+  std::unique_ptr<Avx512FloatKernel> fast_;  // set when the AVX-512 kernel runs this backend
+  std::vector<ChunkReaction> fast_partial_;  // its tool reaction per chunk
+  std::vector<float> attach_offset_f_;       // pull offsets in float, 3 per attachment
   std::string device_;
   double time_ = 0;
   Soa3<Real> rest_;                   // X, rest positions (npoint)

@@ -3,6 +3,13 @@
 // is tested against; in float it is the fast path. Both gather springs and
 // tets per point through the Model's layout (no atomics, deterministic for
 // any thread count) and fuse force evaluation with Verlet integration.
+//
+// Two kernels, chosen at construction (and again at every rebuild):
+// - generic: portable C++ the compiler vectorises, any precision, any layout;
+//   the double-precision reference;
+// - avx512: float only, in builds for AVX-512 (cpu_kernel_avx512.h), for
+//   models whose layout it supports; several times faster.
+// `Auto` takes avx512 where it can and says so in device() and plan().
 #include <memory>
 
 #include "core/sim/backend.h"
@@ -11,9 +18,16 @@ namespace organsim {
 
 enum class Precision { Double, Float };
 
+enum class CpuKernel { Auto, Generic, Avx512 };
+
 struct CpuBackendOptions {
   Precision precision = Precision::Double;
-  int32_t threads = 0;  // 0: all hardware threads
+  // 0: chosen by timing a few steps on 1 thread and on all hardware threads
+  // at construction (results are bit-identical for any count).
+  int32_t threads = 0;
+  // Avx512 when it cannot run here (double, a build without AVX-512, an
+  // unsupported model) is an Error(Backend) naming why; Auto never fails.
+  CpuKernel kernel = CpuKernel::Auto;
 };
 
 std::unique_ptr<Backend> make_cpu_backend(const Model& model, const BackendTool& tool,

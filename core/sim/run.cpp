@@ -159,6 +159,8 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   const int64_t steps = ticks_done * time.substeps;
   result.meta.wall_seconds = seconds_since(loop_start);
   result.meta.steps_per_second = step_seconds > 0 ? static_cast<double>(steps) / step_seconds : 0;
+  result.meta.real_time_factor =
+      result.meta.wall_seconds > 0 ? static_cast<double>(ticks_done) * tick / result.meta.wall_seconds : 0;
   result.meta.extra["step_seconds"] = step_seconds;
   result.meta.extra["steps"] = steps;
   if (pull) result.meta.extra["grasped_points"] = result.grasped_points;

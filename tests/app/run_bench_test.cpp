@@ -28,6 +28,13 @@ TEST(RunBench, QuickJsonRunHasOneRowPerSizeAndConfigurationWithThePaperFigures) 
     EXPECT_GT(lo, 0.0);
     EXPECT_LE(lo, med);
     EXPECT_LE(med, hi);
+    // The plain scatter step is timed in the same run and the ratio printed.
+    const double scatter = row["scatter_median_ms"];
+    EXPECT_GT(scatter, 0.0);
+    EXPECT_DOUBLE_EQ(row["speedup_over_scatter"].get<double>(), scatter / med);
+    // The thread count and the kernel are reported with how they were chosen.
+    const std::string device = row["device"];
+    EXPECT_NE(device.find("kernel"), std::string::npos) << device;
   }
   // Meshed within 10 % of the asked point count (the mesher's promise).
   EXPECT_NEAR(j["rows"][1]["points"].get<double>(), 1617, 162);

@@ -62,8 +62,17 @@ TEST(RunCli, WritesForcesJsonWithOneSamplePerTickAndExitsZero) {
   EXPECT_EQ(j["samples"]["t"].size(), 50u);  // 0.05 s / 1 ms
   EXPECT_EQ(j["samples"]["force"].size(), 50u);
   EXPECT_EQ(j["meta"]["points"], 125);
-  EXPECT_EQ(j["meta"]["backend"], "cpu");
-  EXPECT_EQ(j["meta"]["precision"], "double");
+  // No backend in the scenario: auto, which says what it chose and why, in
+  // the first lines and in meta. On a software EGL renderer (llvmpipe) or
+  // none it is the CPU backend in float, its fast path; on a GPU it is gl.
+  const std::string choice = j["meta"]["backend_choice"];
+  EXPECT_NE(r.out.find("backend:  " + choice), std::string::npos) << r.out;
+  const bool gpu = choice.find("hardware GPU") != std::string::npos;
+  EXPECT_EQ(choice.rfind(gpu ? "auto chose gl (float): " : "auto chose cpu (float): ", 0), 0u) << choice;
+  EXPECT_EQ(j["meta"]["backend"], gpu ? "gl" : "cpu");
+  EXPECT_EQ(j["meta"]["precision"], "float");
+  EXPECT_GT(j["meta"]["real_time_factor"].get<double>(), 0.0);
+  EXPECT_NE(r.out.find("real time: "), std::string::npos) << r.out;
   EXPECT_EQ(j["meta"]["completed"], true);
   EXPECT_EQ(j["meta"]["mesh_kind"], "tet");
   // Tool bottom reaches the top face (z = 0.04) at t = 0.025 s and is 5 mm in at the end.
@@ -75,10 +84,13 @@ TEST(RunCli, PrecisionOverrideReachesTheBackend) {
   const fs::path dir = test_dir("float");
   write_cube_mesh(dir);
   const fs::path scene = write_scenario(dir, nlohmann::json::object());
-  const auto r = run_organsim("run '" + scene.string() + "' -o '" + (dir / "out").string() + "' --precision float", dir);
+  const auto r = run_organsim("run '" + scene.string() + "' -o '" + (dir / "out").string() + "' --precision double", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(test::slurp(dir / "out" / "forces.json"));
-  EXPECT_EQ(j["meta"]["precision"], "float");
+  // Only the CPU backend computes in double: auto takes it and says why.
+  EXPECT_EQ(j["meta"]["precision"], "double");
+  EXPECT_EQ(j["meta"]["backend"], "cpu");
+  EXPECT_EQ(j["meta"]["backend_choice"], "auto chose cpu (double): double precision asked, which only the CPU backend computes");
 }
 
 TEST(RunCli, BadScenarioExitsNonZeroNamingTheJsonPath) {

@@ -49,7 +49,8 @@ TEST(ForceLog, JsonHasTheDocumentedFieldsAndOneSamplePerTick) {
   const auto& meta = j.at("meta");
   for (const char* key : {"organsim_version", "scenario", "backend", "device", "precision",
                           "reaction_latency_ticks", "points", "springs", "tets", "dt", "substeps",
-                          "duration", "wall_seconds", "steps_per_second", "completed", "stop_reason"}) {
+                          "duration", "wall_seconds", "steps_per_second", "real_time_factor", "completed",
+                          "stop_reason"}) {
     EXPECT_TRUE(meta.contains(key)) << key;
   }
   EXPECT_EQ(meta.at("organsim_version"), ORGANSIM_VERSION);

@@ -89,6 +89,8 @@ TEST(RunLoop, OneSamplePerTickFollowingTheKeyframes) {
   EXPECT_NEAR(backend->time(), 0.5, 1e-9);  // 5000 steps of 1e-4 s
   EXPECT_TRUE(r.meta.completed);
   EXPECT_GT(r.meta.steps_per_second, 0);
+  // 0.5 s simulated over the loop's wall time.
+  EXPECT_NEAR(r.meta.real_time_factor, 0.5 / r.meta.wall_seconds, 1e-9 * r.meta.real_time_factor);
 
   const auto j = nlohmann::json::parse(read_text_file(o.outdir / "forces.json"));
   EXPECT_EQ(j["samples"]["t"].size(), 500u);

@@ -48,7 +48,7 @@ TEST(ScenarioParse, DefaultsAreAppliedAndDocumentedValues) {
   EXPECT_EQ(s.time.substeps, 10);
   EXPECT_EQ(s.time.ticks(), 1000);  // 1 s at a 1 ms tick
   EXPECT_FALSE(s.tool.has_value());
-  EXPECT_EQ(s.backend.name, "cpu");
+  EXPECT_EQ(s.backend.name, "auto");  // the fastest backend here, chosen at run time
   EXPECT_FALSE(s.backend.precision.has_value());
   EXPECT_TRUE(s.outputs.forces);
   EXPECT_FALSE(s.outputs.frames.has_value());
@@ -200,7 +200,7 @@ TEST(ScenarioParse, OutOfRangeNamesTheJsonPathAndValue) {
   EXPECT_EQ(error_of(j), "scene.json: fixed[0].sphere.radius: expected a value > 0 (got 0)");
   j = minimal();
   j["backend"] = "cuda";
-  EXPECT_EQ(error_of(j), "scene.json: backend: expected \"cpu\" or \"gl\" (got \"cuda\")");
+  EXPECT_EQ(error_of(j), "scene.json: backend: expected \"auto\", \"cpu\" or \"gl\" (got \"cuda\")");
   j = minimal();
   j["outputs"] = json::parse(R"({"frames": {"size": [8, 480]}})");
   EXPECT_EQ(error_of(j), "scene.json: outputs.frames.size[0]: expected a size in 16..8192 pixels (got 8)");

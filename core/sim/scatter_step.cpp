@@ -1,0 +1,64 @@
+#include "core/sim/scatter_step.h"
+
+namespace organsim {
+
+template <class Real>
+ScatterStep<Real>::ScatterStep(const Model& model)
+    : model_(model), u_(model.npoint(), V3::Zero()), d_(model.npoint(), V3::Zero()), force_(model.npoint()) {
+  rest_.reserve(model.npoint());
+  for (const Vec3& x : model.rest_position) rest_.push_back(x.cast<Real>());
+}
+
+template <class Real>
+void ScatterStep<Real>::step(double dt_seconds) {
+  const Model& m = model_;
+  const Real dt = static_cast<Real>(dt_seconds), inv_dt = 1 / dt;
+  const Real drag = static_cast<Real>(1 - m.viscous_damping * dt_seconds);
+  const V3 gravity = m.gravity.cast<Real>();
+  for (int32_t i = 0; i < m.npoint(); ++i) force_[i] = static_cast<Real>(m.mass[i]) * gravity;
+  auto x = [&](int32_t i) -> V3 { return rest_[i] + u_[i]; };
+  // Springs: f_a = [k (L - r) + d ((v_b - v_a) . l/L)] l/L, f_b = -f_a.
+  for (int32_t s = 0; s < m.nspring(); ++s) {
+    const auto [a, b] = m.spring_ends[s];
+    const V3 l = x(b) - x(a);
+    const Real length = l.norm();
+    if (length <= 0) continue;
+    const V3 dir = l / length;
+    const Real along = (d_[b] - d_[a]).dot(dir) * inv_dt;
+    const V3 f = (static_cast<Real>(m.spring_k[s]) * (length - static_cast<Real>(m.spring_rest[s])) +
+                  static_cast<Real>(m.spring_d[s]) * along) * dir;
+    force_[a] += f;
+    force_[b] -= f;
+  }
+  // Volume: f_i = k_v (V_r - V) dV/dx_i.
+  if (m.has_volume()) {
+    for (int32_t t = 0; t < m.ntet(); ++t) {
+      const Tet& tet = m.tet_points[t];
+      const V3 p0 = x(tet[0]), e1 = x(tet[1]) - p0, e2 = x(tet[2]) - p0, e3 = x(tet[3]) - p0;
+      const Real volume = e1.dot(e2.cross(e3)) / 6;
+      const Real scale = static_cast<Real>(m.tet_k[t]) * (static_cast<Real>(m.tet_rest_volume[t]) - volume) / 6;
+      const V3 g1 = e2.cross(e3), g2 = e3.cross(e1), g3 = e1.cross(e2);
+      force_[tet[0]] -= scale * (g1 + g2 + g3);
+      force_[tet[1]] += scale * g1;
+      force_[tet[2]] += scale * g2;
+      force_[tet[3]] += scale * g3;
+    }
+  }
+  // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m, u' = u + d'.
+  for (int32_t i = 0; i < m.npoint(); ++i) {
+    if (m.fixed[i]) continue;
+    d_[i] = drag * d_[i] + (dt * dt * static_cast<Real>(m.inv_mass[i])) * force_[i];
+    u_[i] += d_[i];
+  }
+}
+
+template <class Real>
+void ScatterStep<Real>::positions(std::vector<Vec3>& out) const {
+  out.resize(u_.size());
+  for (size_t i = 0; i < u_.size(); ++i) out[i] = model_.rest_position[i] + u_[i].template cast<double>();
+}
+
+template class ScatterStep<float>;
+template class ScatterStep<double>;
+
+}  // namespace organsim
