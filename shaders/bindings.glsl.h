@@ -20,7 +20,7 @@
 #define ORGANSIM_GL_B_D_CUR 1     // vec4 d_t = x_t - x_{t-1}, m (npad)
 #define ORGANSIM_GL_B_X_NEXT 2    // vec4 x_{t+1}, m (npad); written by the step
 #define ORGANSIM_GL_B_D_NEXT 3    // vec4 d_{t+1}, m (npad); written by the step
-#define ORGANSIM_GL_B_MASS 4      // vec2 {1/m (0 = fixed or padding), m}, kg (npad)
+#define ORGANSIM_GL_B_MASS 4      // vec4 {1/m (0 = fixed or padding), m (kg), tool k scale, 0} (npad)
 #define ORGANSIM_GL_B_CHUNKS 5    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk)
 #define ORGANSIM_GL_B_SPRINGS 6   // {int other; float rest, k, d} per (chunk, slot, lane) (nspring_entry)
 #define ORGANSIM_GL_B_TETS 7      // {int a, b, c; float k_v, V_r} per (chunk, slot, lane) (ntet_entry)

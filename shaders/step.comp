@@ -24,7 +24,7 @@ layout(std430, binding = ORGANSIM_GL_B_X_CUR) readonly buffer XCur { vec4 x_cur[
 layout(std430, binding = ORGANSIM_GL_B_D_CUR) readonly buffer DCur { vec4 d_cur[]; };
 layout(std430, binding = ORGANSIM_GL_B_X_NEXT) writeonly buffer XNext { vec4 x_next[]; };
 layout(std430, binding = ORGANSIM_GL_B_D_NEXT) writeonly buffer DNext { vec4 d_next[]; };
-layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec2 mass[]; };
+layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec4 mass[]; };
 layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
 layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
 #ifdef HAS_VOLUME
@@ -101,7 +101,7 @@ void main() {
   }
 #endif
 
-  const vec2 m = mass[p];  // {1/m, m}
+  const vec4 m = mass[p];  // {1/m, m, tool stiffness scale, 0}
 #ifdef HAS_GRAVITY
   f += m.y * u_gravity;
 #endif
@@ -117,7 +117,7 @@ void main() {
     const float dist = length(d);
     if (dist < u_tool_radius) {
       const vec3 n = dist > 0.0 ? d / dist : vec3(0.0, 0.0, 1.0);
-      const vec3 fc = u_tool_k * (u_tool_radius - dist) * n;
+      const vec3 fc = u_tool_k * m.z * (u_tool_radius - dist) * n;
       f += fc;
       contact_force = vec4(-fc, 1.0);
       contact_torque = vec4(cross(d, -fc), 0.0);
@@ -126,7 +126,7 @@ void main() {
     // Grasped points follow centre + offset through springs of stiffness k_c.
     const vec4 at = attach[p];
     if (at.w > 0.0) {
-      const vec3 fc = u_tool_k * (u_tool_center + at.xyz - xi);
+      const vec3 fc = u_tool_k * m.z * (u_tool_center + at.xyz - xi);
       f += fc;
       contact_force = vec4(-fc, 1.0);
       contact_torque = vec4(cross(d, -fc), 0.0);

@@ -93,7 +93,7 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   x_[1] = create_buffer("x_{t+1}", xbytes, x.data(), GL_DYNAMIC_STORAGE_BIT);
   d_[0] = create_buffer("x_t - x_{t-1}", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
   d_[1] = create_buffer("x_{t+1} - x_t", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
-  mass_ = create_buffer("mass {1/m, m}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
+  mass_ = create_buffer("mass {1/m, m, tool k scale, 0}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
   chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
   springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
                            packed.springs.data(), 0);

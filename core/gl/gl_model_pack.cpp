@@ -23,15 +23,16 @@ PackedModel pack_model(const Model& model) {
   const bool volume = model.has_volume();
 
   p.rest.assign(static_cast<size_t>(p.npad) * 4, 0.0f);
-  p.mass.assign(static_cast<size_t>(p.npad) * 2, 0.0f);  // padding: 1/m = 0, never moves
+  p.mass.assign(static_cast<size_t>(p.npad) * 4, 0.0f);  // padding: 1/m = 0, never moves
   for (int32_t i = 0; i < p.npad; ++i) {
     const Vec3& r = model.rest_position[static_cast<size_t>(i < p.npoint ? i : p.npoint - 1)];
     for (int k = 0; k < 3; ++k) p.rest[4 * i + k] = static_cast<float>(r[k]);
     p.rest[4 * i + 3] = 1.0f;
   }
   for (int32_t i = 0; i < p.npoint; ++i) {
-    p.mass[2 * i] = static_cast<float>(model.inv_mass[i]);
-    p.mass[2 * i + 1] = static_cast<float>(model.mass[i]);
+    p.mass[4 * i] = static_cast<float>(model.inv_mass[i]);
+    p.mass[4 * i + 1] = static_cast<float>(model.mass[i]);
+    p.mass[4 * i + 2] = static_cast<float>(model.tool_scale(i));
   }
 
   p.chunks.assign(static_cast<size_t>(p.nchunk) * 4, 0);

@@ -29,7 +29,7 @@ static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has strid
 struct PackedModel {
   int32_t npoint = 0, nchunk = 0, npad = 0;  // npad = nchunk * C
   std::vector<float> rest;        // vec4 rest positions, m, w = 1 (npad x 4); padding copies the last point
-  std::vector<float> mass;        // vec2 {1/m (0 = fixed or padding), m}, kg (npad x 2)
+  std::vector<float> mass;        // vec4 {1/m (0 = fixed or padding), m (kg), tool stiffness scale, 0} (npad x 4)
   std::vector<int32_t> chunks;    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk x 4)
   std::vector<SpringEntry> springs;  // per (chunk, slot, lane) (nspring_entry)
   std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume (ntet_entry)

@@ -12,12 +12,15 @@ namespace organsim {
 struct Material {
   double density = 1060.0;  // kg/m^3 (soft tissue ~1000-1100)
   // Spring stiffness: from Young's modulus (default) or an explicit constant.
-  // k_e = E * (sum of rest volumes of the tets sharing edge e) / r_e^2: under a
-  // uniform volumetric strain this stores exactly the energy of a linear
-  // elastic solid with Poisson ratio 1/4 (the ratio a tet spring lattice has),
-  // so results depend far less on resolution than a constant k.
+  // k_e = E_s * (sum of rest volumes of the tets sharing edge e) / r_e^2 stores
+  // the energy of a linear solid of modulus E_s with Poisson ratio 1/4 (the
+  // ratio a tet spring lattice has). See core/model/stiffness.h.
   double young_modulus = 3000.0;                // Pa (liver: a few kPa)
   std::optional<double> spring_stiffness;       // N/m; overrides young_modulus when set
+  // With a Poisson ratio (0 <= nu < 0.5) the springs carry the shear modulus
+  // and the volume term is derived from nu (volume_modulus must then be 0);
+  // without one, E_s = young_modulus and volume_modulus are used as given.
+  std::optional<double> poisson_ratio;
   double spring_damping_time = 0.002;           // s; damper d_e = spring_damping_time * k_e (N s/m)
   double viscous_damping = 1.0;                 // 1/s; mass-proportional drag F = -alpha m v
   // Volume conservation: energy K/2 (V - V_r)^2 / V_r per tet, i.e. per-tet

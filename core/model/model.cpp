@@ -8,6 +8,7 @@
 #include "core/model/layout_build.h"
 #include "core/model/model_assembly.h"
 #include "core/model/ordering.h"
+#include "core/model/stiffness.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -33,6 +34,17 @@ void validate_material(const Material& m) {
   non_negative(m.spring_damping_time, "material.spring_damping_time", "s");
   non_negative(m.viscous_damping, "material.viscous_damping", "1/s");
   non_negative(m.volume_modulus, "material.volume_modulus", "Pa");
+  if (m.poisson_ratio) {
+    const double nu = *m.poisson_ratio;
+    if (!(nu >= kMinPoissonRatio && nu < 0.5))
+      throw Error(ErrorKind::Scenario, "material.poisson_ratio: expected a number in [0.25, 0.5), got " +
+                                           std::to_string(nu) + kPoissonRatioFloorReason);
+    if (m.spring_stiffness)
+      throw Error(ErrorKind::Scenario, "material.poisson_ratio: needs young_modulus, not spring_stiffness");
+    // The volume term is derived from nu (core/model/stiffness.h).
+    if (m.volume_modulus > 0)
+      throw Error(ErrorKind::Scenario, "material: give poisson_ratio or volume_modulus, not both");
+  }
 }
 
 bool selector_matches(const FixedSelector& s, const Vec3& x) {
@@ -164,41 +176,22 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
     model.inv_mass[i] = model.fixed[i] ? 0.0 : 1.0 / model.mass[i];
   }
 
+  model.tool_k_scale = tool_stiffness_scale(model.mass, model.fixed);
+
   // Springs: one per unique tet edge, sorted.
   model.spring_ends = unique_edges(model.tet_points);
   const int32_t nspring = model.nspring();
   model.spring_rest.resize(nspring);
-  model.spring_k.resize(nspring);
   model.spring_d.resize(nspring);
-  std::vector<double> edge_volume;  // sum of rest volumes of the tets sharing each spring
-  if (!material.spring_stiffness) {
-    edge_volume.assign(nspring, 0.0);
-    for (int32_t t = 0; t < model.ntet(); ++t) {
-      const Tet& tet = model.tet_points[t];
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) {
-          const Edge e{std::min(tet[i], tet[j]), std::max(tet[i], tet[j])};
-          const auto it = std::lower_bound(model.spring_ends.begin(), model.spring_ends.end(), e);
-          edge_volume[it - model.spring_ends.begin()] += model.tet_rest_volume[t];
-        }
-    }
-  }
   for (int32_t s = 0; s < nspring; ++s) {
     const auto [a, b] = model.spring_ends[s];
-    const double r = (model.rest_position[b] - model.rest_position[a]).norm();
-    model.spring_rest[s] = r;
-    // See Material: k_e = E * V_e / r^2 matches a linear solid (nu = 1/4)
-    // under volumetric strain.
-    model.spring_k[s] = material.spring_stiffness ? *material.spring_stiffness
-                                                  : material.young_modulus * edge_volume[s] / (r * r);
-    model.spring_d[s] = material.spring_damping_time * model.spring_k[s];
+    model.spring_rest[s] = (model.rest_position[b] - model.rest_position[a]).norm();
   }
-
-  model.tet_k.clear();
-  if (material.volume_modulus > 0) {
-    model.tet_k.resize(model.ntet());
-    for (int32_t t = 0; t < model.ntet(); ++t) model.tet_k[t] = material.volume_modulus / model.tet_rest_volume[t];
-  }
+  // Stiffness from the material by the one rule in core/model/stiffness.h.
+  model.spring_k = spring_stiffness(material, model.rest_position, model.spring_ends, model.tet_points,
+                                    model.tet_rest_volume);
+  for (int32_t s = 0; s < nspring; ++s) model.spring_d[s] = material.spring_damping_time * model.spring_k[s];
+  model.tet_k = tet_volume_stiffness(material, model.tet_rest_volume);
 
   model.layout = build_gather_layout(model, chunk_size, sort_window);
 }

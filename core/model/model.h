@@ -19,6 +19,9 @@ struct Model {
   std::vector<double> mass;          // lumped mass, kg (npoint)
   std::vector<double> inv_mass;      // 1/mass, 0 for fixed points, 1/kg (npoint)
   std::vector<uint8_t> fixed;        // 1 if the point never moves (npoint)
+  // Multiplier of the tool's contact / grasp stiffness, min(1, m / median free
+  // mass) (npoint; empty = 1 everywhere): see core/model/stiffness.h.
+  std::vector<double> tool_k_scale;
   std::vector<int32_t> input_of_internal;  // user's point id of internal point i (npoint)
   std::vector<int32_t> internal_of_input;  // internal id of user's point i (npoint)
 
@@ -54,6 +57,7 @@ struct Model {
   int32_t ntet() const { return static_cast<int32_t>(tet_points.size()); }
   bool has_volume() const { return !tet_k.empty(); }
   bool has_gravity() const { return gravity.squaredNorm() > 0; }
+  double tool_scale(int32_t i) const { return tool_k_scale.empty() ? 1.0 : tool_k_scale[i]; }
   double total_mass() const;
   double rest_volume() const;
 };

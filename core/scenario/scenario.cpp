@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/mesh/units.h"
+#include "core/model/stiffness.h"
 #include "core/scenario/scenario_sections.h"
 #include "core/util/atomic_file.h"
 
@@ -81,6 +82,13 @@ Material parse_material(const nlohmann::json& j, const JsonPath& at) {
   if (auto v = r.number("spring_damping_time")) m.spring_damping_time = require_non_negative(*v, r.at("spring_damping_time"));
   if (auto v = r.number("viscous_damping")) m.viscous_damping = require_non_negative(*v, r.at("viscous_damping"));
   if (auto v = r.number("volume_modulus")) m.volume_modulus = require_non_negative(*v, r.at("volume_modulus"));
+  if (auto v = r.number("poisson_ratio")) {
+    if (!(*v >= kMinPoissonRatio && *v < 0.5))
+      throw r.at("poisson_ratio").error("expected a number in [0.25, 0.5) (got " + std::to_string(*v) + ")" + kPoissonRatioFloorReason);
+    if (has_k) throw at.error("poisson_ratio needs young_modulus, not spring_stiffness");
+    if (m.volume_modulus > 0) throw at.error("give poisson_ratio or volume_modulus, not both (nu sets the volume term)");
+    m.poisson_ratio = *v;
+  }
   r.finish();
   return m;
 }

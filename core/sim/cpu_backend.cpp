@@ -288,6 +288,12 @@ class CpuBackend final : public Backend {
     }
     mass_.resize(n);
     inv_mass_.resize(n);
+    tool_scale_.resize(n);
+    tool_scale_f_.assign(n, 0.f);
+    for (int32_t i = 0; i < n; ++i) {
+      tool_scale_[i] = static_cast<Real>(model.tool_scale(i));
+      tool_scale_f_[i] = static_cast<float>(model.tool_scale(i));
+    }
     for (int32_t i = 0; i < n; ++i) {
       mass_[i] = static_cast<Real>(model.mass[i]);
       inv_mass_[i] = static_cast<Real>(model.inv_mass[i]);
@@ -323,6 +329,8 @@ class CpuBackend final : public Backend {
     fast_partial_.resize(fast_->nchunk());
     // The kernel reads attachment indices 16 points at a time, padding included.
     attached_.resize(std::max(attached_.size(), static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size), -1);
+    // Padding lanes (at the origin, no mass) may fall inside a push tool: scale 0.
+    tool_scale_f_.resize(std::max(tool_scale_f_.size(), static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size), 0.f);
     push_fast_state();
   }
   void push_fast_state() {
@@ -357,6 +365,7 @@ class CpuBackend final : public Backend {
                                                                               : FloatStepInputs::None;
     in.attached = attached_.data();
     in.attach_offset = attach_offset_f_.data();
+    in.tool_scale = tool_scale_f_.data();
     fast_->step(in, threads_, fast_partial_);
     Reaction reaction;
     if (tool_kind != kNoTool) {
@@ -555,11 +564,11 @@ class CpuBackend final : public Backend {
             if (dist >= ctx.tool_radius) continue;
             const Eigen::Matrix<Real, 3, 1> n =
                 dist > Real(0) ? Eigen::Matrix<Real, 3, 1>(dvec / dist) : Eigen::Matrix<Real, 3, 1>(0, 0, 1);
-            fc = ctx.tool_k * (ctx.tool_radius - dist) * n;
+            fc = ctx.tool_k * tool_scale_[p] * (ctx.tool_radius - dist) * n;
           } else {
             const int32_t a = attached_[p];
             if (a < 0) continue;
-            fc = ctx.tool_k * (ctr + attach_offset_[a] - x);
+            fc = ctx.tool_k * tool_scale_[p] * (ctr + attach_offset_[a] - x);
           }
           fx[l] += fc.x();
           fy[l] += fc.y();
@@ -615,6 +624,8 @@ class CpuBackend final : public Backend {
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;
+  std::vector<Real> tool_scale_;   // tool stiffness multiplier per point (npoint), Model::tool_k_scale
+  std::vector<float> tool_scale_f_;  // the same for the AVX-512 float kernel (npoint)
   std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint)
   std::vector<int32_t> attached_points_;
   std::vector<Eigen::Matrix<Real, 3, 1>> attach_offset_;

@@ -306,10 +306,10 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
             const float dist = o.norm();
             if (dist >= in.tool_radius) continue;
             const Eigen::Vector3f n = dist > 0 ? Eigen::Vector3f(o / dist) : Eigen::Vector3f(0, 0, 1);
-            fc = in.tool_k * (in.tool_radius - dist) * n;
+            fc = in.tool_k * in.tool_scale[p0 + l] * (in.tool_radius - dist) * n;
           } else {
             const float* off = in.attach_offset + 3 * in.attached[p0 + l];
-            fc = in.tool_k * (ctr + Eigen::Vector3f(off[0], off[1], off[2]) - xl);
+            fc = in.tool_k * in.tool_scale[p0 + l] * (ctr + Eigen::Vector3f(off[0], off[1], off[2]) - xl);
           }
           for (int k = 0; k < 3; ++k) f[k][l] += fc[k];
           const Vec3 fd = fc.cast<double>();

@@ -36,6 +36,7 @@ struct FloatStepInputs {
   enum Tool { None, Push, Pull } tool = None;
   const int32_t* attached = nullptr;   // pull: attachment index per point or -1 (npoint)
   const float* attach_offset = nullptr;  // pull: 3 floats per attachment
+  const float* tool_scale = nullptr;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint)
 };
 
 // Tool reaction of one chunk (summed by the caller in chunk order, so the

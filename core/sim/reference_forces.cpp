@@ -37,7 +37,7 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
 }
 
 Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius, double stiffness,
-                               std::vector<Vec3>& force) {
+                               std::vector<Vec3>& force, const std::vector<double>& scale) {
   Reaction reaction;
   for (size_t i = 0; i < x.size(); ++i) {
     const Vec3 d = x[i] - center;
@@ -45,7 +45,7 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
     if (dist >= radius) continue;
     // At the exact centre the direction is undefined; push along +z.
     const Vec3 n = dist > 0 ? Vec3(d / dist) : Vec3(0, 0, 1);
-    const Vec3 f = stiffness * (radius - dist) * n;
+    const Vec3 f = stiffness * (scale.empty() ? 1.0 : scale[i]) * (radius - dist) * n;
     force[i] += f;
     reaction.force -= f;
     reaction.torque += d.cross(-f);
@@ -55,11 +55,11 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
 }
 
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment, const Vec3& center,
-                               double stiffness, std::vector<Vec3>& force) {
+                               double stiffness, std::vector<Vec3>& force, const std::vector<double>& scale) {
   Reaction reaction;
   for (size_t k = 0; k < attachment.points.size(); ++k) {
     const int32_t i = attachment.points[k];
-    const Vec3 f = stiffness * (center + attachment.offsets[k] - x[i]);
+    const Vec3 f = stiffness * (scale.empty() ? 1.0 : scale[i]) * (center + attachment.offsets[k] - x[i]);
     force[i] += f;
     reaction.force -= f;
     reaction.torque += (x[i] - center).cross(-f);

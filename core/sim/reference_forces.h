@@ -16,13 +16,15 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x,
                                const std::vector<Vec3>& v, std::vector<Vec3>& force);
 
 // Push contact of a sphere tool (center c, radius R, stiffness k): for points
-// with |x - c| < R, f_i = k (R - |x - c|) (x - c)/|x - c|. Adds into force and
-// returns the reaction on the tool.
+// with |x - c| < R, f_i = k s_i (R - |x - c|) (x - c)/|x - c|, s_i from
+// `scale` (Model::tool_k_scale; empty = 1). Adds into force and returns the
+// reaction on the tool.
 Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius,
-                               double stiffness, std::vector<Vec3>& force);
+                               double stiffness, std::vector<Vec3>& force, const std::vector<double>& scale = {});
 
-// Pull attachments: f_i = k (c + o_i - x_i). Adds into force, returns reaction.
+// Pull attachments: f_i = k s_i (c + o_i - x_i). Adds into force, returns reaction.
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment,
-                               const Vec3& center, double stiffness, std::vector<Vec3>& force);
+                               const Vec3& center, double stiffness, std::vector<Vec3>& force,
+                               const std::vector<double>& scale = {});
 
 }  // namespace organsim

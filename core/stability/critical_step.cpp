@@ -54,7 +54,7 @@ RestStiffness rest_stiffness(const Model& model, const CriticalStepOptions& opti
                                         std::to_string(options.tool_may_touch.size()) + " entries, expected " +
                                         std::to_string(model.npoint()));
     for (int32_t i = 0; i < model.npoint(); ++i)
-      if (options.tool_may_touch.empty() || options.tool_may_touch[i]) k.tool_k[i] = options.tool_contact_stiffness;
+      if (options.tool_may_touch.empty() || options.tool_may_touch[i]) k.tool_k[i] = options.tool_contact_stiffness * model.tool_scale(i);
   }
   return k;
 }

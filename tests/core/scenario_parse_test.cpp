@@ -285,3 +285,20 @@ TEST(ScenarioLoad, InvalidJsonGivesLineAndColumn) {
 
 }  // namespace
 }  // namespace organsim
+
+namespace organsim {
+namespace {
+
+TEST(ScenarioParse, PoissonRatioIsReadAndCheckedAgainstTheVolumeModulus) {
+  json j = minimal();
+  j["material"] = {{"young_modulus", 8000}, {"poisson_ratio", 0.45}};
+  EXPECT_DOUBLE_EQ(*parse(j).material.poisson_ratio, 0.45);
+  EXPECT_FALSE(parse(minimal()).material.poisson_ratio.has_value());  // absent: the old rule
+  j["material"]["poisson_ratio"] = 0.2;
+  EXPECT_NE(error_of(j).find("material.poisson_ratio: expected a number in [0.25, 0.5)"), std::string::npos);
+  j["material"] = {{"poisson_ratio", 0.3}, {"volume_modulus", 1000}};
+  EXPECT_NE(error_of(j).find("give poisson_ratio or volume_modulus, not both"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace organsim

@@ -108,7 +108,7 @@ TEST(GlKernel, PushContactAndReactionMatchTheReference) {
   std::vector<Vec3> got, want;
   gl.forces(got);
   reference_internal_forces(model, s.x, s.v, want);
-  const Reaction expect = reference_push_forces(s.x, center, tool.radius, tool.contact_stiffness, want);
+  const Reaction expect = reference_push_forces(s.x, center, tool.radius, tool.contact_stiffness, want, model.tool_k_scale);
   ASSERT_GT(expect.contacts, 0);
   EXPECT_LT(relative_difference(got, want), 1e-5);
   // The reaction of that tick comes back with the next one.
@@ -131,15 +131,20 @@ TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   GlBackend gl(model, tool, options);
   const OneStep s = deformed_state(model);
   gl.set_state(s.x, s.x_prev);
-  const Vec3 grasp(0.05, 0.05, 0.05);
+  // A top corner whose Kuhn corner point lies in one tet: light points with a
+  // tool stiffness scale well below 1 (Model::tool_k_scale) are among those grasped.
+  const Vec3 grasp(0.1, 0.0, 0.05);
   Attachment attachment;
+  double smallest_scale = 1;
   for (int32_t i = 0; i < model.npoint(); ++i) {
     if ((model.rest_position[i] - grasp).norm() < 0.025) {
       attachment.points.push_back(i);
       attachment.offsets.push_back(model.rest_position[i] - grasp);
+      smallest_scale = std::min(smallest_scale, model.tool_scale(i));
     }
   }
   ASSERT_GT(attachment.points.size(), 3u);
+  ASSERT_LT(smallest_scale, 0.5);
   gl.attach(attachment);
   const Vec3 center = grasp + Vec3(0.003, -0.002, 0.01);  // dragged up and sideways: force and torque
   TickRequest request;
@@ -151,7 +156,7 @@ TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   std::vector<Vec3> got, want;
   gl.forces(got);
   reference_internal_forces(model, s.x, s.v, want);
-  const Reaction expect = reference_pull_forces(s.x, attachment, center, tool.contact_stiffness, want);
+  const Reaction expect = reference_pull_forces(s.x, attachment, center, tool.contact_stiffness, want, model.tool_k_scale);
   EXPECT_LT(relative_difference(got, want), 1e-5);
   request.tool_active = false;
   const Reaction r = gl.tick(request);

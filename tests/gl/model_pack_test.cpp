@@ -50,8 +50,8 @@ TEST(GlModelPack, EveryEntryOnceAtEachEndAndPaddingInert) {
   EXPECT_EQ(real, 4 * static_cast<int64_t>(model.ntet()));
   // Padding points never move and never touch the tool (mass 0).
   for (int32_t i = model.npoint(); i < p.npad; ++i) {
-    EXPECT_EQ(p.mass[2 * i], 0.0f);
-    EXPECT_EQ(p.mass[2 * i + 1], 0.0f);
+    EXPECT_EQ(p.mass[4 * i], 0.0f);
+    EXPECT_EQ(p.mass[4 * i + 1], 0.0f);
   }
 }
 

@@ -1,0 +1,135 @@
+// `organsim validate [-o OUTDIR] [--cell-size LIST] [--poisson-ratio LIST]`
+// The force law against elasticity theory: uniaxial compression (E and nu),
+// a cantilever with a tip load and with a guided end, and Hertz indentation,
+// on CGAL meshes of boxes at several cell sizes. Writes validation.json,
+// validation.csv and validation.png (error against cell size). SI units.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "app/command.h"
+#include "app/validation_suite.h"
+#include "core/model/stiffness.h"
+#include "core/render/image_io.h"
+#include "core/render/xy_plot.h"
+#include "core/util/atomic_file.h"
+#include "core/util/error.h"
+
+namespace organsim::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ValidateArgs {
+  std::string outdir = "out/validation";
+  std::vector<double> cell_sizes;
+  std::vector<std::string> poisson_ratios;
+  double young_modulus = 10e3;
+};
+
+std::string fmt(double v, const char* spec = "%.4g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, spec, v);
+  return buf;
+}
+
+std::optional<double> parse_ratio(const std::string& text) {
+  if (text == "springs") return std::nullopt;
+  try {
+    size_t used = 0;
+    const double nu = std::stod(text, &used);
+    if (used == text.size() && nu >= kMinPoissonRatio && nu < 0.5) return nu;
+  } catch (const std::exception&) {
+  }
+  throw Error(ErrorKind::Usage, "--poisson-ratio: expected 'springs' or a number in [0.25, 0.5), got '" + text + "'");
+}
+
+void validate_command(const ValidateArgs& args) {
+  SuiteOptions options;
+  if (!args.cell_sizes.empty()) options.cell_sizes = args.cell_sizes;
+  for (double h : options.cell_sizes)
+    if (!(h > 0)) throw Error(ErrorKind::Usage, "--cell-size: expected positive sizes in m, got " + fmt(h));
+  if (!args.poisson_ratios.empty()) {
+    options.poisson_ratios.clear();
+    for (const std::string& s : args.poisson_ratios) options.poisson_ratios.push_back(parse_ratio(s));
+  }
+  if (!(args.young_modulus > 0)) throw Error(ErrorKind::Usage, "--young-modulus: expected a positive number (Pa)");
+  options.young_modulus = args.young_modulus;
+
+  const bool tty = isatty(2);
+  const auto rows = run_validation_suite(options, [tty](int done, int total, const std::string& what) {
+    if (tty) std::cerr << "\r[" << done << "/" << total << "] " << what << "                    " << std::flush;
+    if (tty && done == total) std::cerr << "\n";
+  });
+
+  const fs::path outdir(args.outdir);
+  fs::create_directories(outdir);
+  nlohmann::json j;
+  j["units"] = "SI: cell_size m; measured and theory in Pa (E), N/m (beams), N (hertz), 1 (nu)";
+  j["young_modulus"] = options.young_modulus;
+  j["indenter_radius"] = options.indenter_radius;
+  j["method"] = "small-strain static equilibrium of the model's force law (core/validation/static_solve.h)";
+  j["rows"] = nlohmann::json::array();
+  for (const SuiteRow& r : rows) j["rows"].push_back(to_json(r));
+  write_file_atomically(outdir / "validation.json", [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+
+  std::ostringstream csv;
+  csv << "test,material,cell_size_m,points,measured,theory,error,error_kind\n";
+  for (const SuiteRow& r : rows)
+    csv << r.test << "," << r.material << "," << fmt(r.cell_size) << "," << r.points << "," << fmt(r.measured, "%.6g")
+        << "," << fmt(r.theory, "%.6g") << "," << fmt(r.error, "%.4f") << "," << r.error_kind << "\n";
+  write_file_atomically(outdir / "validation.csv", [&](std::ostream& out) { out << csv.str(); });
+  std::cout << csv.str();
+
+  // One panel per test (measured / theory against cell size), one line per
+  // material; Hertz at d/R = 0.1 only, the small-strain case.
+  std::vector<cv::Mat> panels;
+  for (const char* test : {"uniaxial E", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"}) {
+    std::map<std::string, XySeries> by_material;
+    std::vector<std::string> order;
+    for (const SuiteRow& r : rows) {
+      if (r.test != test) continue;
+      if (!by_material.count(r.material)) order.push_back(r.material), by_material[r.material].name = r.material;
+      by_material[r.material].x.push_back(r.cell_size * 1000);
+      by_material[r.material].y.push_back(r.error);
+    }
+    std::vector<XySeries> series;
+    for (const std::string& n : order) series.push_back(by_material[n]);
+    XyPlotOptions plot;
+    plot.width = 900;
+    plot.height = 330;
+    plot.title = std::string(test) + ": measured / theory (band +-10 %)";
+    plot.x_label = "cell size (mm)";
+    plot.y_label = "ratio";
+    plot.band = std::make_pair(0.9, 1.1);
+    panels.push_back(draw_xy_plot(series, plot));
+  }
+  cv::Mat sheet;
+  cv::vconcat(panels, sheet);
+  write_image_atomically(outdir / "validation.png", sheet);
+  std::cout << "validation: " << (outdir / "validation.json").string() << ", validation.csv, validation.png\n";
+}
+
+const bool registered = register_command("validate", 45, [](CLI::App& root) {
+  auto args = std::make_shared<ValidateArgs>();
+  CLI::App* cmd = root.add_subcommand(
+      "validate", "The force law against elasticity theory (uniaxial E and nu, cantilever, Hertz) at several "
+                  "mesh cell sizes [m]; writes validation.json, validation.csv and validation.png");
+  cmd->add_option("-o,--output", args->outdir, "Output folder (default out/validation)");
+  cmd->add_option("--cell-size", args->cell_sizes, "CGAL cell sizes, m (comma-separated; default 0.012,0.008,0.005)")
+      ->delimiter(',');
+  cmd->add_option("--poisson-ratio", args->poisson_ratios,
+                  "Materials: 'springs' (no Poisson ratio, springs' nu = 1/4) or a Poisson ratio in [0.25, 0.5) "
+                  "(comma-separated; default springs,0.3,0.45)")
+      ->delimiter(',');
+  cmd->add_option("--young-modulus", args->young_modulus, "Young's modulus, Pa (default 10000)");
+  cmd->callback([args] { validate_command(*args); });
+});
+
+}  // namespace
+}  // namespace organsim::app

@@ -1,0 +1,77 @@
+#include "app/validation_suite.h"
+
+#include <cstdio>
+
+#include "core/mesh/example_shapes.h"
+#include "core/validation/elastic_cases.h"
+#include "meshing/mesh_surface.h"
+
+namespace organsim::app {
+
+namespace {
+
+std::string material_name(const std::optional<double>& nu) {
+  if (!nu) return "springs (nu 1/4)";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "nu %.2f", *nu);
+  return buf;
+}
+
+TetMesh mesh_box(const Vec3& size, double cell_size) {
+  MeshOptions options;
+  options.cell_size = cell_size;
+  return mesh_surface(make_box_surface(Vec3::Zero(), size), options, "validation box");
+}
+
+}  // namespace
+
+std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
+                                           const std::function<void(int, int, const std::string&)>& progress) {
+  // Shapes: a block for uniaxial compression, a 10:1 beam, and the issue's
+  // indentation box (a half-space for a contact radius of a few mm).
+  const Vec3 block(0.06, 0.06, 0.09), beam(0.2, 0.02, 0.02), slab(0.10, 0.08, 0.06);
+  const std::vector<double> depth_ratios{0.05, 0.1, 0.2};
+  const int total = static_cast<int>(options.cell_sizes.size() * options.poisson_ratios.size());
+  int done = 0;
+  std::vector<SuiteRow> rows;
+  for (double h : options.cell_sizes) {
+    const TetMesh block_mesh = mesh_box(block, h), beam_mesh = mesh_box(beam, h), slab_mesh = mesh_box(slab, h);
+    for (const auto& nu : options.poisson_ratios) {
+      Material m;
+      m.young_modulus = options.young_modulus;
+      m.poisson_ratio = nu;
+      const std::string name = material_name(nu);
+      if (progress) progress(done, total, name + ", cell size " + std::to_string(h) + " m");
+      const double asked_nu = nu.value_or(0.25);
+      auto add = [&](const std::string& test, int32_t points, double measured, double theory, bool ratio) {
+        rows.push_back({test, name, h, points, measured, theory, ratio ? measured / theory : measured - theory,
+                        ratio ? "ratio" : "difference"});
+      };
+      const UniaxialResult u = uniaxial_compression(block_mesh, m);
+      add("uniaxial E", u.points, u.young_modulus, m.young_modulus, true);
+      add("uniaxial nu", u.points, u.poisson_ratio, asked_nu, false);
+      const BeamResult tip = cantilever(beam_mesh, m, BeamEnd::TipLoad);
+      add("cantilever tip load", tip.points, tip.stiffness, tip.timoshenko, true);
+      const BeamResult guided = cantilever(beam_mesh, m, BeamEnd::Guided);
+      add("cantilever guided", guided.points, guided.stiffness, guided.timoshenko, true);
+      std::vector<double> depths;
+      for (double r : depth_ratios) depths.push_back(r * options.indenter_radius);
+      const IndentationResult hz = sphere_indentation(slab_mesh, m, options.indenter_radius, depths);
+      for (size_t i = 0; i < depths.size(); ++i) {
+        char test[48];
+        std::snprintf(test, sizeof test, "hertz d/R=%.2g", depth_ratios[i]);
+        add(test, hz.points, hz.force[i], hz.hertz[i], true);
+      }
+      ++done;
+    }
+  }
+  if (progress) progress(done, total, "done");
+  return rows;
+}
+
+nlohmann::json to_json(const SuiteRow& r) {
+  return {{"test", r.test}, {"material", r.material}, {"cell_size", r.cell_size}, {"points", r.points},
+          {"measured", r.measured}, {"theory", r.theory}, {"error", r.error}, {"error_kind", r.error_kind}};
+}
+
+}  // namespace organsim::app

@@ -1,0 +1,43 @@
+#pragma once
+// The validation suite behind `organsim validate`: each elastic case of
+// core/validation/elastic_cases.h on CGAL meshes of its box at several cell
+// sizes and for several materials, compared with theory. In app/ because it
+// meshes with CGAL (meshing/).
+#include <nlohmann/json.hpp>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/model/material.h"
+
+namespace organsim::app {
+
+struct SuiteOptions {
+  std::vector<double> cell_sizes{0.012, 0.008, 0.005};  // m (CGAL max circumradius)
+  // One material per entry, E = young_modulus: an empty optional is the
+  // springs-only rule (no Poisson ratio, nu = 1/4), else that Poisson ratio.
+  std::vector<std::optional<double>> poisson_ratios{std::nullopt, 0.3, 0.45};
+  double young_modulus = 10e3;   // Pa
+  double indenter_radius = 0.02; // m
+};
+
+// One measured quantity against its theory.
+struct SuiteRow {
+  std::string test;       // "uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"
+  std::string material;   // "springs (nu 1/4)" or "nu 0.30"
+  double cell_size = 0;   // m
+  int32_t points = 0;
+  double measured = 0, theory = 0;
+  // measured / theory for forces and moduli; measured - theory for nu.
+  double error = 0;
+  std::string error_kind;  // "ratio" or "difference"
+};
+
+// Runs every case; `progress(done, total, what)` is called between cases.
+std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
+                                           const std::function<void(int, int, const std::string&)>& progress);
+
+nlohmann::json to_json(const SuiteRow& row);
+
+}  // namespace organsim::app

@@ -1,0 +1,85 @@
+#include "core/model/stiffness.h"
+
+#include <algorithm>
+#include <nlohmann/json.hpp>
+
+namespace organsim {
+
+double spring_modulus(const Material& m) {
+  if (!m.poisson_ratio) return m.young_modulus;
+  return 2.5 * m.young_modulus / (2.0 * (1.0 + *m.poisson_ratio));
+}
+
+double volume_term_modulus(const Material& m) {
+  if (!m.poisson_ratio) return m.volume_modulus;
+  const double nu = *m.poisson_ratio;
+  return m.young_modulus * (4.0 * nu - 1.0) / (2.0 * (1.0 + nu) * (1.0 - 2.0 * nu));
+}
+
+EffectiveElasticity effective_elasticity(const Material& m) {
+  EffectiveElasticity e;
+  e.shear_modulus = 0.4 * spring_modulus(m);
+  e.lame_lambda = e.shear_modulus + volume_term_modulus(m);
+  const double mu = e.shear_modulus, lambda = e.lame_lambda;
+  e.young_modulus = mu * (3 * lambda + 2 * mu) / (lambda + mu);
+  e.poisson_ratio = lambda / (2 * (lambda + mu));
+  return e;
+}
+
+nlohmann::json elasticity_json(const Material& m) {
+  if (m.spring_stiffness) return {{"rule", "spring_stiffness"}, {"spring_stiffness", *m.spring_stiffness}};
+  const EffectiveElasticity e = effective_elasticity(m);
+  return {{"rule", m.poisson_ratio ? "poisson_ratio" : "springs + volume_modulus"},
+          {"young_modulus", e.young_modulus},
+          {"poisson_ratio", e.poisson_ratio},
+          {"spring_modulus", spring_modulus(m)},
+          {"volume_term_modulus", volume_term_modulus(m)}};
+}
+
+std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,
+                                     const std::vector<Edge>& spring_ends, const std::vector<Tet>& tets,
+                                     const std::vector<double>& tet_rest_volume) {
+  const size_t nspring = spring_ends.size();
+  if (material.spring_stiffness) return std::vector<double>(nspring, *material.spring_stiffness);
+  std::vector<double> edge_volume(nspring, 0.0);
+  for (size_t t = 0; t < tets.size(); ++t) {
+    const Tet& tet = tets[t];
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const Edge e{std::min(tet[i], tet[j]), std::max(tet[i], tet[j])};
+        const auto it = std::lower_bound(spring_ends.begin(), spring_ends.end(), e);
+        edge_volume[it - spring_ends.begin()] += tet_rest_volume[t];
+      }
+  }
+  const double modulus = spring_modulus(material);
+  std::vector<double> k(nspring);
+  for (size_t s = 0; s < nspring; ++s) {
+    const double r2 = (points[spring_ends[s][1]] - points[spring_ends[s][0]]).squaredNorm();
+    k[s] = modulus * edge_volume[s] / r2;
+  }
+  return k;
+}
+
+std::vector<double> tool_stiffness_scale(const std::vector<double>& mass, const std::vector<uint8_t>& fixed) {
+  std::vector<double> free_mass;
+  for (size_t i = 0; i < mass.size(); ++i)
+    if (!fixed[i] && mass[i] > 0) free_mass.push_back(mass[i]);
+  std::vector<double> scale(mass.size(), 1.0);
+  if (free_mass.empty()) return scale;
+  const auto middle = free_mass.begin() + static_cast<std::ptrdiff_t>(free_mass.size() / 2);
+  std::nth_element(free_mass.begin(), middle, free_mass.end());
+  const double median = *middle;
+  for (size_t i = 0; i < mass.size(); ++i) scale[i] = std::min(1.0, mass[i] / median);
+  return scale;
+}
+
+std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume) {
+  const double modulus = volume_term_modulus(material);
+  std::vector<double> k;
+  if (modulus == 0) return k;
+  k.resize(tet_rest_volume.size());
+  for (size_t t = 0; t < k.size(); ++t) k[t] = modulus / tet_rest_volume[t];
+  return k;
+}
+
+}  // namespace organsim

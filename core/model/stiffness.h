@@ -1,0 +1,76 @@
+#pragma once
+// How a Material becomes spring and volume stiffness: the one rule that
+// build_model (and any rebuild after a topology change) uses. docs/physics.md
+// derives it; docs/validation.md measures it against elasticity theory.
+//
+// A tet spring lattice is a central-force ("Cauchy") solid: on its own it has
+// Lame constants lambda = mu, i.e. Poisson ratio 1/4. With
+//   k_e = E_s * (sum of the rest volumes of the tets sharing e) / r_e^2
+// and edge directions spread evenly, the springs store the energy of a linear
+// solid of modulus E_s with nu = 1/4 (mu_s = lambda_s = 0.4 E_s). The volume
+// term K_v/2 (V - V_r)^2 / V_r adds K_v to lambda only. So a material (E, nu)
+// needs mu_s = mu = E / (2 (1 + nu)), i.e. E_s = 2.5 mu, and
+// K_v = lambda - mu = E (4 nu - 1) / (2 (1 + nu) (1 - 2 nu)), which is >= 0
+// for nu >= 1/4.
+#include <nlohmann/json_fwd.hpp>
+#include <vector>
+
+#include "core/mesh/tet_mesh.h"
+#include "core/model/material.h"
+
+namespace organsim {
+
+// Below 1/4 the volume term would be negative, and on real meshes that makes
+// the stiffness indefinite (measured: a CGAL box at 8 mm cells has a
+// negative-energy mode already at nu = 0.22, docs/validation.md), i.e. an
+// unstable model. Such materials are refused.
+inline constexpr double kMinPoissonRatio = 0.25;
+inline constexpr const char* kPoissonRatioFloorReason =
+    " (a spring lattice's own ratio is 1/4; lower values need a negative volume term, which makes the model "
+    "unstable: see docs/validation.md)";
+
+// E_s of the spring formula above, Pa: young_modulus without a Poisson ratio
+// (the old rule), 2.5 E / (2 (1 + nu)) with one.
+double spring_modulus(const Material& material);
+
+// K_v of the volume term, Pa: volume_modulus without a Poisson ratio,
+// lambda - mu with one (may be negative for nu < 1/4).
+double volume_term_modulus(const Material& material);
+
+// Lame constants of the linear solid the model approximates, Pa: with a
+// Poisson ratio the asked (E, nu); without one mu = 0.4 E_s and
+// lambda = 0.4 E_s + volume_modulus (what the old rule actually gives).
+struct EffectiveElasticity {
+  double young_modulus = 0;  // Pa
+  double poisson_ratio = 0;
+  double shear_modulus = 0;  // mu, Pa
+  double lame_lambda = 0;    // Pa
+};
+EffectiveElasticity effective_elasticity(const Material& material);
+
+// For a run's meta: the rule used ("poisson_ratio" or "springs + volume_modulus"
+// or "spring_stiffness") and the effective E (Pa) and nu, so a study can
+// compare its forces with theory. docs/validation.md says how close the mesh
+// gets to them.
+nlohmann::json elasticity_json(const Material& material);
+
+// Stiffness of each spring, N/m: the constant spring_stiffness when given,
+// else E_s * V_e / r_e^2 with V_e the summed rest volume of the tets that
+// contain spring e. `spring_ends` must be sorted (ends[0] < ends[1]) and
+// contain every edge of `tets`; `points` are the rest positions.
+std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,
+                                     const std::vector<Edge>& spring_ends, const std::vector<Tet>& tets,
+                                     const std::vector<double>& tet_rest_volume);
+
+// Tool contact and grasp: the scenario's contact_stiffness k_c is what a
+// point of the median free mass m_med feels; a lighter point gets
+// k_c m_i / m_med, so the tool adds at most k_c / m_med to any point's
+// omega^2 and a light corner or sliver point cannot set the time step.
+// Returns min(1, m_i / m_med) per point (npoint); 1 where nothing is free.
+std::vector<double> tool_stiffness_scale(const std::vector<double>& mass, const std::vector<uint8_t>& fixed);
+
+// Per-tet volume stiffness K_v / V_r, N/m^5; empty when the volume term is off
+// (K_v == 0).
+std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume);
+
+}  // namespace organsim

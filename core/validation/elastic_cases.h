@@ -1,0 +1,61 @@
+#pragma once
+// The validation cases: textbook elasticity problems posed on a tet mesh and
+// solved for the Model's small-strain static response (static_solve.h), each
+// with the theory it is compared with. SI units. docs/validation.md shows the
+// tables `organsim validate` makes from them.
+//
+// Theory uses effective_elasticity(material) (core/model/stiffness.h).
+// Every case builds its Model from `mesh` and `material` itself (no fixed
+// selectors: the case states its supports) and finds faces from the mesh's
+// bounding box, so any mesh of the right box works: CGAL meshes in the
+// command, small structured ones in the tests.
+#include <string>
+#include <vector>
+
+#include "core/mesh/tet_mesh.h"
+#include "core/model/material.h"
+
+namespace organsim {
+
+// Uniaxial compression of a block along z: bottom face on rollers (u_z = 0,
+// one point pinned in x and y, one more in y), top face pressed down by
+// `strain` * height on frictionless rollers, sides free. Theory: a uniform
+// uniaxial stress, sigma = E strain and lateral strain -nu strain.
+struct UniaxialResult {
+  double young_modulus = 0;  // measured: mean stress / strain, Pa
+  double poisson_ratio = 0;  // measured: -(lateral strain) / (axial strain), mean of x and y
+  int32_t points = 0;
+};
+UniaxialResult uniaxial_compression(const TetMesh& block, const Material& material, double strain = 1e-3);
+
+// A beam along x with its x = min face clamped and a load on its x = max face.
+// tip_load: a total force P along -z shared equally by the tip face's points;
+// measured stiffness P / (mean tip deflection); theory Euler-Bernoulli
+// P L^3 / (3 E I) plus Timoshenko shear P L / (kappa G A).
+// guided: the tip face moved rigidly by -delta in z (no rotation); measured
+// stiffness (reaction) / delta; theory P L^3 / (12 E I) plus the same shear term.
+enum class BeamEnd { TipLoad, Guided };
+struct BeamResult {
+  double stiffness = 0;                 // measured, N/m
+  double euler_bernoulli = 0;           // N/m, bending only
+  double timoshenko = 0;                // N/m, bending + shear
+  int32_t points = 0;
+};
+BeamResult cantilever(const TetMesh& beam, const Material& material, BeamEnd end);
+
+// A rigid frictionless sphere of `radius` pressed `depth` into the middle of
+// the block's top face (bottom face clamped), for each depth. Contact is a
+// stiff penalty on the points the sphere reaches, iterated until the set of
+// touching points settles. Theory: Hertz, F = 4/3 E / (1 - nu^2) sqrt(R) d^1.5
+// (a half-space, d << R).
+struct IndentationResult {
+  std::vector<double> depth;   // m
+  std::vector<double> force;   // measured, N
+  std::vector<double> hertz;   // N
+  std::vector<int32_t> contacts;  // points touching at each depth
+  int32_t points = 0;
+};
+IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
+                                     const std::vector<double>& depths);
+
+}  // namespace organsim

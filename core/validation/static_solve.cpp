@@ -1,0 +1,127 @@
+#include "core/validation/static_solve.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <string>
+
+#include "core/util/error.h"
+
+namespace organsim {
+
+namespace {
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+// Adds the 3x3 block `b` at points (p, q).
+void add_block(Triplets& t, int32_t p, int32_t q, const Eigen::Matrix3d& b) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) t.emplace_back(3 * p + i, 3 * q + j, b(i, j));
+}
+
+// Rest stiffness of the Model's force law. Springs: k u u^T between the ends.
+// Volume: f_i = k_v (V_r - V) g_i, so at rest d f_i / d x_j = -k_v g_i g_j^T.
+Triplets rest_stiffness(const Model& model) {
+  Triplets t;
+  t.reserve(static_cast<size_t>(model.nspring()) * 36 + (model.has_volume() ? model.ntet() * 144 : 0));
+  const auto& x = model.rest_position;
+  for (int32_t s = 0; s < model.nspring(); ++s) {
+    const auto [a, b] = model.spring_ends[s];
+    const Vec3 u = (x[b] - x[a]).normalized();
+    const Eigen::Matrix3d block = model.spring_k[s] * u * u.transpose();
+    add_block(t, a, a, block);
+    add_block(t, b, b, block);
+    add_block(t, a, b, -block);
+    add_block(t, b, a, -block);
+  }
+  if (model.has_volume()) {
+    for (int32_t e = 0; e < model.ntet(); ++e) {
+      const Tet& tet = model.tet_points[e];
+      const Vec3 a = x[tet[1]] - x[tet[0]], b = x[tet[2]] - x[tet[0]], c = x[tet[3]] - x[tet[0]];
+      std::array<Vec3, 4> g;
+      g[1] = b.cross(c) / 6;
+      g[2] = c.cross(a) / 6;
+      g[3] = a.cross(b) / 6;
+      g[0] = -(g[1] + g[2] + g[3]);
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) add_block(t, tet[i], tet[j], model.tet_k[e] * g[i] * g[j].transpose());
+    }
+  }
+  return t;
+}
+
+}  // namespace
+
+std::vector<double> stiffness_diagonal(const Model& model) {
+  std::vector<double> d(model.npoint(), 0.0);
+  for (const auto& t : rest_stiffness(model))
+    if (t.row() == t.col()) d[t.row() / 3] += t.value();
+  return d;
+}
+
+StaticSolution solve_static(const Model& model, const StaticProblem& problem) {
+  const int32_t n = model.npoint(), ndof = 3 * n;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(ndof), f = Eigen::VectorXd::Zero(ndof);
+  std::vector<uint8_t> held(ndof, 0);
+  for (int32_t p = 0; p < n; ++p)
+    if (model.fixed[p]) held[3 * p] = held[3 * p + 1] = held[3 * p + 2] = 1;
+  for (const PrescribedDof& d : problem.prescribed) {
+    if (d.point < 0 || d.point >= n || d.axis < 0 || d.axis > 2)
+      throw Error(ErrorKind::Usage, "solve_static: prescribed point " + std::to_string(d.point) + " axis " +
+                                        std::to_string(d.axis) + " out of range");
+    held[3 * d.point + d.axis] = 1;
+    if (!model.fixed[d.point]) u[3 * d.point + d.axis] = d.value;
+  }
+  for (size_t p = 0; p < problem.load.size() && p < static_cast<size_t>(n); ++p) f.segment<3>(3 * p) = problem.load[p];
+
+  Triplets triplets = rest_stiffness(model);
+  for (const PointSpring& s : problem.point_springs) {
+    add_block(triplets, s.point, s.point, s.k * s.direction * s.direction.transpose());
+    f.segment<3>(3 * s.point) += s.k * s.target * s.direction;
+  }
+  Eigen::SparseMatrix<double> K(ndof, ndof);
+  K.setFromTriplets(triplets.begin(), triplets.end());
+
+  // Free coordinates: K_ff u_f = f_f - K_fh u_h.
+  std::vector<int32_t> free_index(ndof, -1);
+  int32_t nfree = 0;
+  for (int32_t i = 0; i < ndof; ++i)
+    if (!held[i]) free_index[i] = nfree++;
+  Eigen::VectorXd rhs(nfree);
+  for (int32_t i = 0; i < ndof; ++i)
+    if (!held[i]) rhs[free_index[i]] = f[i];
+  Triplets free_triplets;
+  free_triplets.reserve(triplets.size());
+  for (int32_t col = 0; col < K.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it) {
+      const int32_t r = free_index[it.row()], c = free_index[it.col()];
+      if (r < 0) continue;
+      if (c >= 0)
+        free_triplets.emplace_back(r, c, it.value());
+      else
+        rhs[r] -= it.value() * u[it.col()];
+    }
+  if (nfree > 0) {
+    Eigen::SparseMatrix<double> Kff(nfree, nfree);
+    Kff.setFromTriplets(free_triplets.begin(), free_triplets.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(Kff);
+    if (solver.info() != Eigen::Success || (solver.vectorD().array() <= 0).any())
+      throw Error(ErrorKind::Numerical,
+                  "solve_static: the stiffness is singular: some rigid motion is not held by the supports");
+    const Eigen::VectorXd uf = solver.solve(rhs);
+    for (int32_t i = 0; i < ndof; ++i)
+      if (!held[i]) u[i] = uf[free_index[i]];
+  }
+
+  const Eigen::VectorXd r = K * u - f;
+  StaticSolution s;
+  s.displacement.resize(n);
+  s.reaction.assign(n, Vec3::Zero());
+  for (int32_t p = 0; p < n; ++p) {
+    s.displacement[p] = u.segment<3>(3 * p);
+    for (int a = 0; a < 3; ++a)
+      if (held[3 * p + a]) s.reaction[p][a] = r[3 * p + a];
+  }
+  return s;
+}
+
+}  // namespace organsim

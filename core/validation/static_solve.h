@@ -1,0 +1,51 @@
+#pragma once
+// Small-strain static equilibrium of a Model: the stiffness of its force law
+// linearised at rest (springs k u u^T, volume term k_v g_i g_j^T), solved
+// directly. This is the response every backend converges to under a slow
+// (quasi-static) load, without the dynamics: the validation suite uses it to
+// compare the force law with elasticity theory in milliseconds.
+#include <vector>
+
+#include "core/model/model.h"
+
+namespace organsim {
+
+// Displacement `value` (m) prescribed on one coordinate (0 x, 1 y, 2 z) of a
+// point (internal numbering). The Model's fixed points are held at zero.
+struct PrescribedDof {
+  int32_t point = 0;
+  int axis = 0;
+  double value = 0;
+};
+
+// A one-directional spring on a point: energy k/2 (n . u - target)^2, i.e.
+// force k (target - n . u) n. Models rigid frictionless contact (penalty).
+struct PointSpring {
+  int32_t point = 0;
+  Vec3 direction{0, 0, 1};  // unit
+  double k = 0;             // N/m
+  double target = 0;        // m
+};
+
+struct StaticProblem {
+  std::vector<PrescribedDof> prescribed;
+  std::vector<Vec3> load;                 // external force per point, N (npoint, or empty)
+  std::vector<PointSpring> point_springs;
+};
+
+struct StaticSolution {
+  std::vector<Vec3> displacement;  // u, m (npoint)
+  // Force the supports exert on each point, N (npoint): K u - load - springs'
+  // force; non-zero only at prescribed coordinates.
+  std::vector<Vec3> reaction;
+};
+
+// Throws Error(Numerical) when the free part of the stiffness is singular
+// (e.g. a rigid motion left unconstrained).
+StaticSolution solve_static(const Model& model, const StaticProblem& problem);
+
+// The linearised stiffness's diagonal 3x3 block trace per point, N/m (npoint):
+// a scale for penalty springs.
+std::vector<double> stiffness_diagonal(const Model& model);
+
+}  // namespace organsim

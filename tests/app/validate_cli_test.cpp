@@ -1,0 +1,57 @@
+// `organsim validate` end to end at one coarse cell size: the three files
+// are there, parse, and hold every case with measured, theory and error.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+
+#include "tests/app/run_cli_test_util.h"
+
+namespace organsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli";
+  fs::remove_all(dir);
+  const auto r = test::run_organsim("validate --cell-size 0.02 --poisson-ratio springs,0.4 -o " + (dir / "out").string(),
+                                    dir / "log");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(test::slurp(dir / "out" / "validation.json"));
+  std::set<std::string> tests;
+  for (const auto& row : j["rows"]) {
+    tests.insert(row["test"].get<std::string>());
+    const double measured = row["measured"], theory = row["theory"], error = row["error"];
+    const double expected = row["error_kind"] == "ratio" ? measured / theory : measured - theory;
+    EXPECT_NEAR(error, expected, 1e-12);
+    EXPECT_GT(row["points"].get<int>(), 0);
+  }
+  for (const char* t : {"uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"})
+    EXPECT_TRUE(tests.count(t)) << t;
+  EXPECT_EQ(j["rows"].size(), 2u * 7u);  // 2 materials x 7 quantities
+  // The asked nu is the theory of the uniaxial nu row.
+  for (const auto& row : j["rows"]) {
+    if (row["test"] == "uniaxial nu" && row["material"] == "nu 0.40") {
+      EXPECT_DOUBLE_EQ(row["theory"].get<double>(), 0.4);
+    }
+  }
+  const std::string csv = test::slurp(dir / "out" / "validation.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 14);
+  const std::string png = test::slurp(dir / "out" / "validation.png");
+  ASSERT_GT(png.size(), 8u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+}
+
+TEST(ValidateCli, BadPoissonRatioIsAUsageError) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_bad";
+  const auto r = test::run_organsim("validate --poisson-ratio 0.5 -o " + (dir / "out").string(), dir / "log");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--poisson-ratio"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace organsim

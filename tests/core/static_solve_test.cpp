@@ -1,0 +1,73 @@
+// The small-strain static solve (core/validation/static_solve.h) against the
+// dynamic CPU backend relaxed to rest, and against a hand-solved spring.
+#include <gtest/gtest.h>
+
+#include "core/sim/cpu_backend.h"
+#include "core/util/error.h"
+#include "core/validation/static_solve.h"
+#include "tests/core/test_models.h"
+
+namespace organsim {
+namespace {
+
+TEST(StaticSolve, SpringPulledAtOneEndGivesHookesReaction) {
+  // Two points 1 cm apart, k = 50 N/m, point 0 fixed, point 1 moved 1 mm
+  // along the spring: the support must push back with k * 1 mm.
+  const Model m = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0.01, 0, 0)}, {1, 1}, {{0, 1}}, 50, 0, {0});
+  StaticProblem problem;
+  for (int a = 0; a < 3; ++a) problem.prescribed.push_back({1, a, a == 0 ? 1e-3 : 0.0});
+  const StaticSolution s = solve_static(m, problem);
+  EXPECT_NEAR(s.reaction[1].x(), 50 * 1e-3, 1e-12);
+  EXPECT_NEAR(s.reaction[0].x(), -50 * 1e-3, 1e-12);  // the fixed point holds the other end
+}
+
+TEST(StaticSolve, UnheldRigidMotionIsReported) {
+  const Model m = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0.01, 0, 0)}, {1, 1}, {{0, 1}}, 50, 0, {});
+  EXPECT_THROW(solve_static(m, StaticProblem{}), Error);
+}
+
+TEST(StaticSolve, MatchesTheCpuBackendRelaxedUnderGravity) {
+  // A 4 cm block held at its base sags under a weak gravity (0.2 m/s^2, so
+  // strains stay ~1e-4 and the springs' geometric nonlinearity is ~1e-4 of the
+  // answer). Heavy drag brings the dynamic run to rest; the static solve of
+  // the linearised force law (springs and volume term) must give the same
+  // displacement within 1 % of its largest value.
+  Material material;
+  material.density = 1000;
+  material.young_modulus = 5000;
+  material.poisson_ratio = 0.4;  // with a volume term
+  material.spring_damping_time = 0;
+  material.viscous_damping = 300;
+  ModelOptions options;
+  options.gravity = Vec3(0, 0, -0.2);
+  FixedSelector base;
+  base.kind = FixedSelector::Kind::Plane;
+  base.point = Vec3(0, 0, 1e-6);
+  base.normal = Vec3(0, 0, -1);
+  options.fixed = {base};
+  const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 4, 4, 4), material, options);
+
+  StaticProblem problem;
+  problem.load.resize(model.npoint());
+  for (int32_t p = 0; p < model.npoint(); ++p) problem.load[p] = model.mass[p] * options.gravity;
+  const StaticSolution s = solve_static(model, problem);
+
+  auto backend = make_cpu_backend(model, BackendTool{}, {});
+  testing::run_ticks(*backend, 1000, 2e-4, 10);  // 2 s: the slowest mode decays by e^-50
+  std::vector<Vec3> x;
+  backend->positions(x);
+  double largest = 0, worst = 0;
+  for (int32_t p = 0; p < model.npoint(); ++p) {
+    largest = std::max(largest, s.displacement[p].norm());
+    worst = std::max(worst, (x[p] - model.rest_position[p] - s.displacement[p]).norm());
+  }
+  ASSERT_GT(largest, 1e-6);
+  EXPECT_LT(worst, 0.01 * largest) << "largest static displacement " << largest << " m";
+  // And the supports carry the weight.
+  double held = 0;
+  for (const Vec3& r : s.reaction) held += r.z();
+  EXPECT_NEAR(held, 0.2 * model.total_mass(), 1e-9);
+}
+
+}  // namespace
+}  // namespace organsim

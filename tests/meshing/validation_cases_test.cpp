@@ -1,0 +1,68 @@
+// The force law against elasticity theory on CGAL meshes at the liver
+// scenarios' resolution (8 mm cells: liver.off at 2500 points), the small
+// version of `organsim validate` (docs/validation.md has the full tables).
+#include <gtest/gtest.h>
+
+#include "core/mesh/example_shapes.h"
+#include "core/validation/elastic_cases.h"
+#include "meshing/mesh_surface.h"
+
+namespace organsim {
+namespace {
+
+constexpr double kLiverCellSize = 0.008;  // m
+
+TetMesh box(const Vec3& size, double cell_size) {
+  MeshOptions options;
+  options.cell_size = cell_size;
+  return mesh_surface(make_box_surface(Vec3::Zero(), size), options, "test box");
+}
+
+Material material(double nu) {
+  Material m;
+  m.young_modulus = 10e3;
+  m.poisson_ratio = nu;
+  return m;
+}
+
+TEST(ValidationCases, UniaxialCompressionGivesTheAskedPoissonRatioAndModulus) {
+  const TetMesh block = box(Vec3(0.06, 0.06, 0.09), kLiverCellSize);
+  for (double nu : {0.25, 0.35, 0.45}) {
+    const UniaxialResult r = uniaxial_compression(block, material(nu));
+    // The target: measured nu within 0.03 of the asked one.
+    EXPECT_NEAR(r.poisson_ratio, nu, 0.03) << "asked nu " << nu;
+    // E within 10 % from nu 0.3 up. The springs-only lattice (nu 0.25,
+    // no volume term) is ~10 % soft here (0.90 measured): the irregular
+    // network relaxes non-affinely (docs/validation.md), so 12 % for it.
+    const double tolerance = nu < 0.3 ? 0.12 : 0.10;
+    EXPECT_NEAR(r.young_modulus / 10e3, 1.0, tolerance) << "asked nu " << nu;
+  }
+}
+
+TEST(ValidationCases, CantileverMatchesBeamTheoryWithinTenPercent) {
+  // 0.2 x 0.02 x 0.02 m: 2-3 cells through the thickness at 8 mm. nu 0.3; at
+  // nu 0.45 the per-tet volume term locks in bending (docs/validation.md).
+  const TetMesh beam = box(Vec3(0.2, 0.02, 0.02), kLiverCellSize);
+  const BeamResult tip = cantilever(beam, material(0.3), BeamEnd::TipLoad);
+  EXPECT_NEAR(tip.stiffness / tip.timoshenko, 1.0, 0.10);
+  const BeamResult guided = cantilever(beam, material(0.3), BeamEnd::Guided);
+  EXPECT_NEAR(guided.stiffness / guided.timoshenko, 1.0, 0.10);
+  // The guided end is four times stiffer in bending (12 vs 3 E I / L^3).
+  EXPECT_NEAR(guided.euler_bernoulli / tip.euler_bernoulli, 4.0, 1e-12);
+}
+
+TEST(ValidationCases, HertzContactConvergesOnceTheContactIsResolved) {
+  // A 2 cm sphere 2 mm deep (d/R = 0.1, contact radius 6.3 mm). At 8 mm
+  // cells the contact is under one cell and the force is far below Hertz;
+  // at 5 mm it is within 10 % (measured 1.04-1.07). The coarse run is the
+  // reason docs/validation.md gives the contact radius a cell size needs.
+  const Vec3 slab(0.10, 0.08, 0.06);
+  const IndentationResult coarse = sphere_indentation(box(slab, kLiverCellSize), material(0.3), 0.02, {0.002});
+  const IndentationResult fine = sphere_indentation(box(slab, 0.005), material(0.3), 0.02, {0.002});
+  EXPECT_NEAR(fine.force[0] / fine.hertz[0], 1.0, 0.10);
+  EXPECT_LT(coarse.force[0] / coarse.hertz[0], 0.9);
+  EXPECT_GT(fine.contacts[0], coarse.contacts[0]);
+}
+
+}  // namespace
+}  // namespace organsim
