@@ -30,6 +30,7 @@ const Regression kCases[] = {
     {"ply_binary/end_header_at_eof.ply", "PLY element 'vertex' lacks an x, y or z property"},
     {"ply_binary/float_list_length.ply", "fake 0: list length 2.406e-38, expected a count >= 0"},
     {"vtk/huge_point_count.vtk", "line 5: 5750106523498388593 points cannot fit in the rest of the file"},
+    {"scenario/number_overflow.json", "invalid JSON: number overflow parsing '4223372036854E7580' (too large for a number)"},
 };
 
 // Reads the input the way its harness does (the extension picks the reader).
