@@ -9,6 +9,7 @@
 
 #include "core/mesh/mesh_io.h"
 #include "core/scenario/scenario.h"
+#include "core/stability/critical_step.h"
 #include "core/util/atomic_file.h"
 #include "mesh_io_test_util.h"
 
@@ -62,6 +63,17 @@ TEST(FuzzRegressions, EverySavedInputIsListed) {
     const std::string rel = fs::relative(e.path(), kRegressions).string();
     EXPECT_TRUE(listed.count(rel)) << rel << " has no row in kCases";
   }
+}
+
+// The scenario harness's input tests/fuzz/corpus/scenario/extreme_volume_modulus.json
+// (volume_modulus 4.4e13) made the suggested substep count 7e60, cast to an
+// int: undefined behaviour. It is clamped to the int range now.
+TEST(FuzzRegressions, AStepSuggestionForAnExtremeStiffnessStaysInRange) {
+  StabilityReport report;
+  report.dt_crit = 1e-70;  // s
+  const StepSuggestion s = suggest_step(report, 1e-3, 0.9);
+  EXPECT_EQ(s.substeps, 2147483647);
+  EXPECT_GT(s.dt, 0.0);
 }
 
 }  // namespace
