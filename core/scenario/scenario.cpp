@@ -222,6 +222,10 @@ Scenario parse_scenario_text(std::string_view text, const std::filesystem::path&
       if (text[i] == '\n') { ++line; col = 1; } else { ++col; }
     }
     throw input_error(source, "invalid JSON at line " + std::to_string(line) + ", column " + std::to_string(col));
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number beyond the double range (1e7580): the parser gives no position.
+    const std::string what = e.what();
+    throw input_error(source, "invalid JSON: " + what.substr(what.find(']') + 2) + " (too large for a number)");
   }
   return parse_scenario(j, base_dir, source);
 }

@@ -388,8 +388,11 @@ StepSuggestion suggest_step(const StabilityReport& report, double tick, double s
   StepSuggestion s;
   s.tick = tick;
   const double limit = safety * report.dt_crit;
-  s.substeps = std::isfinite(limit) && limit > 0 ? std::max<int32_t>(1, static_cast<int32_t>(std::ceil(tick / limit)))
-                                                 : 1;
+  // Clamped before the cast: an extreme stiffness can ask for more substeps
+  // than an int holds (found by the scenario fuzz harness).
+  s.substeps = std::isfinite(limit) && limit > 0
+                   ? std::max<int32_t>(1, static_cast<int32_t>(std::min(std::ceil(tick / limit), 2147483647.0)))
+                   : 1;
   s.dt = tick / s.substeps;
   return s;
 }

@@ -9,6 +9,7 @@
 
 #include "core/mesh/mesh_io.h"
 #include "core/scenario/scenario.h"
+#include "core/stability/critical_step.h"
 #include "core/util/atomic_file.h"
 #include "mesh_io_test_util.h"
 
@@ -30,6 +31,7 @@ const Regression kCases[] = {
     {"ply_binary/end_header_at_eof.ply", "PLY element 'vertex' lacks an x, y or z property"},
     {"ply_binary/float_list_length.ply", "fake 0: list length 2.406e-38, expected a count >= 0"},
     {"vtk/huge_point_count.vtk", "line 5: 5750106523498388593 points cannot fit in the rest of the file"},
+    {"scenario/number_overflow.json", "invalid JSON: number overflow parsing '4223372036854E7580' (too large for a number)"},
 };
 
 // Reads the input the way its harness does (the extension picks the reader).
@@ -61,6 +63,17 @@ TEST(FuzzRegressions, EverySavedInputIsListed) {
     const std::string rel = fs::relative(e.path(), kRegressions).string();
     EXPECT_TRUE(listed.count(rel)) << rel << " has no row in kCases";
   }
+}
+
+// The scenario harness's input tests/fuzz/corpus/scenario/extreme_volume_modulus.json
+// (volume_modulus 4.4e13) made the suggested substep count 7e60, cast to an
+// int: undefined behaviour. It is clamped to the int range now.
+TEST(FuzzRegressions, AStepSuggestionForAnExtremeStiffnessStaysInRange) {
+  StabilityReport report;
+  report.dt_crit = 1e-70;  // s
+  const StepSuggestion s = suggest_step(report, 1e-3, 0.9);
+  EXPECT_EQ(s.substeps, 2147483647);
+  EXPECT_GT(s.dt, 0.0);
 }
 
 }  // namespace

@@ -133,8 +133,9 @@ TEST(RunLoop, PushGivesNoForceBeforeContactThenAnOpposingForceGrowingWithDepth) 
   EXPECT_GT(r.samples.contacts.back(), 0);
 }
 
-TEST(RunLoop, PullGraspsNearbyPointsDragsThemAndReleases) {
-  Scenario s = cube_scenario();
+// A grasper sitting on the top face's centre closes at 0.05 s, lifts 2 cm
+// by 0.25 s (the keyframes hold before the first) and lets go at 0.3 s.
+void add_pull_tool(Scenario& s) {
   ToolDef tool;
   tool.spec.mode = ToolMode::Pull;
   tool.spec.radius = 0.01;
@@ -142,10 +143,13 @@ TEST(RunLoop, PullGraspsNearbyPointsDragsThemAndReleases) {
   tool.spec.contact_stiffness = 200;
   tool.spec.grasp_time = 0.05;
   tool.spec.release_time = 0.3;
-  // Sit on the top face's centre, then lift 2 cm by t = 0.25 s.
-  tool.spec.keyframes = {{0.0, Vec3(0.05, 0.05, 0.1)}, {0.05, Vec3(0.05, 0.05, 0.1)},
-                         {0.25, Vec3(0.05, 0.05, 0.12)}};
+  tool.spec.keyframes = {{0.05, Vec3(0.05, 0.05, 0.1)}, {0.25, Vec3(0.05, 0.05, 0.12)}};
   s.tool = tool;
+}
+
+TEST(RunLoop, PullGraspsNearbyPointsDragsThemAndReleases) {
+  Scenario s = cube_scenario();
+  add_pull_tool(s);
   s.time.duration = 0.4;
   const Model model = cube_model(s);
   auto backend = make_cpu_backend(model, backend_tool(s), single_thread());
@@ -185,16 +189,7 @@ class PositionProbe : public RunObserver {
 
 TEST(RunLoop, GraspedPointsMoveWithTheToolAndFixedPointsStay) {
   Scenario s = cube_scenario();
-  ToolDef tool;
-  tool.spec.mode = ToolMode::Pull;
-  tool.spec.radius = 0.01;
-  tool.spec.grasp_radius = 0.025;
-  tool.spec.contact_stiffness = 200;
-  tool.spec.grasp_time = 0.05;
-  tool.spec.release_time = 0.3;
-  // Grasp at the top face's centre at 0.05 s, lift 2 cm by 0.25 s, hold.
-  tool.spec.keyframes = {{0.05, Vec3(0.05, 0.05, 0.1)}, {0.25, Vec3(0.05, 0.05, 0.12)}};
-  s.tool = tool;
+  add_pull_tool(s);
   s.time.duration = 0.3;
   const Model model = cube_model(s);
   auto backend = make_cpu_backend(model, backend_tool(s), single_thread());
