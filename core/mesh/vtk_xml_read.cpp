@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/mesh/vtk_legacy.h"  // vtk_index
+#include "core/util/format.h"
 
 namespace organsim::mesh_io {
 
@@ -341,8 +342,10 @@ class VtkXmlReader {
     const size_t hsize = static_cast<size_t>(header_.size);
     if (data.size() < hsize) fail(a.begin, what + ": data shorter than its byte-count header");
     const double declared = load_value(data.data(), header_, swap_);
-    if (declared > static_cast<double>(data.size() - hsize)) {
-      fail(a.begin, what + ": header declares " + std::to_string(static_cast<uint64_t>(declared)) + " bytes, only " +
+    // Compared as a double: a UInt64 header can hold more than size_t or
+    // uint64_t round-trips through a double (2^64 - 1 becomes 2^64).
+    if (!(declared >= 0) || declared > static_cast<double>(data.size() - hsize)) {
+      fail(a.begin, what + ": header declares " + format_number(declared) + " bytes, only " +
                         std::to_string(data.size() - hsize) + " present");
     }
     const auto nbytes = static_cast<size_t>(declared);
