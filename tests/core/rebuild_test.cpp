@@ -34,29 +34,6 @@ Model box(bool volume, const Vec3& gravity, bool fixed_base, double jitter = 0) 
   return build_model(testing::jittered_box(4, 0.04, jitter, 3), material, options);
 }
 
-// Separates the box along the plane x = 0.02 (a through cut along tet faces
-// of the Kuhn mesh): every point on the plane gets one copy, which the tets
-// on the +x side use from then on.
-TopologyChange split_at_mid_x(const Model& model) {
-  TopologyChange change;
-  change.tet_points = model.tet_points;
-  std::vector<int32_t> copy_of(model.npoint(), -1);
-  for (Tet& tet : change.tet_points) {
-    Vec3 centroid = Vec3::Zero();
-    for (int32_t p : tet) centroid += model.rest_position[p] / 4;
-    if (centroid.x() < 0.02) continue;
-    for (int32_t& p : tet) {
-      if (std::abs(model.rest_position[p].x() - 0.02) > 1e-9) continue;
-      if (copy_of[p] < 0) {
-        copy_of[p] = model.npoint() + static_cast<int32_t>(change.appended_origin.size());
-        change.appended_origin.push_back(p);
-      }
-      p = copy_of[p];
-    }
-  }
-  return change;
-}
-
 std::vector<Vec3> positions_of(const Backend& backend) {
   std::vector<Vec3> x;
   backend.positions(x);
@@ -101,7 +78,7 @@ TEST(Rebuild, IdentityRebuildKeepsTheTrajectoryBitIdentical) {
 
 TEST(Rebuild, SplitConservesMassAndSeparatesTheSides) {
   const Model model = box(true, Vec3(0, 0, -9.81), true);
-  const TopologyChange change = split_at_mid_x(model);
+  const TopologyChange change = testing::split_across_plane_x(model, 0.02);
   ASSERT_EQ(change.appended_origin.size(), 25u);  // the 5 x 5 points of the plane x = 0.02
   const Model cut = rebuild_model(model, change);
   EXPECT_EQ(cut.npoint(), model.npoint() + 25);
@@ -137,7 +114,7 @@ TEST(Rebuild, SplitConservesMassAndSeparatesTheSides) {
 // increment d (a velocity jump at the cut) would lag behind.
 TEST(Rebuild, CopiesStartWithTheirOriginsPositionAndVelocity) {
   const Model model = box(true, Vec3::Zero(), false);
-  const Model cut = rebuild_model(model, split_at_mid_x(model));
+  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.02));
   const Vec3 offset(0.003, -0.001, 0.002), velocity(0.2, 0.1, -0.3);
   const double dt = 1e-4;
   std::vector<Vec3> x(model.rest_position), x_prev(x.size());

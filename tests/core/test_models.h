@@ -1,10 +1,12 @@
 #pragma once
 // Small hand-built models for physics tests (no meshing needed).
+#include <cmath>
 #include <random>
 
 #include "core/mesh/tet_mesh.h"
 #include "core/model/layout_build.h"
 #include "core/model/model.h"
+#include "core/model/model_rebuild.h"
 #include "core/sim/backend.h"
 
 namespace organsim::testing {
@@ -47,6 +49,29 @@ inline TetMesh jittered_box(int n, double size, double jitter, unsigned seed) {
     if (interior) p += jitter * h * Vec3(u(rng), u(rng), u(rng));
   }
   return mesh;
+}
+
+// Separates a grid-aligned box model along the plane x = x_cut, which must be
+// a plane of tet faces: tets whose centroid lies beyond it take a copy of
+// every point on the plane (a through cut made by hand, for rebuild tests).
+inline TopologyChange split_across_plane_x(const Model& model, double x_cut) {
+  TopologyChange change;
+  change.tet_points = model.tet_points;
+  std::vector<int32_t> copy_of(model.npoint(), -1);
+  for (Tet& tet : change.tet_points) {
+    Vec3 centroid = Vec3::Zero();
+    for (int32_t p : tet) centroid += model.rest_position[p] / 4;
+    if (centroid.x() < x_cut) continue;
+    for (int32_t& p : tet) {
+      if (std::abs(model.rest_position[p].x() - x_cut) > 1e-9) continue;
+      if (copy_of[p] < 0) {
+        copy_of[p] = model.npoint() + static_cast<int32_t>(change.appended_origin.size());
+        change.appended_origin.push_back(p);
+      }
+      p = copy_of[p];
+    }
+  }
+  return change;
 }
 
 inline void run_ticks(Backend& backend, int ticks, double dt, int substeps) {

@@ -8,34 +8,13 @@
 #include "core/model/model_rebuild.h"
 #include "core/sim/cpu_backend.h"
 #include "gl_test_scenes.h"
+#include "tests/core/test_models.h"
 
 namespace organsim {
 namespace {
 
 constexpr double kDt = 1e-4;
 constexpr int kSubsteps = 10;
-
-// Separates the box along x = 0.05 (a plane of tet faces of the 4 x 4 x 2
-// box): tets on the +x side take a copy of every point on the plane.
-TopologyChange split_at_mid_x(const Model& model) {
-  TopologyChange change;
-  change.tet_points = model.tet_points;
-  std::vector<int32_t> copy_of(model.npoint(), -1);
-  for (Tet& tet : change.tet_points) {
-    Vec3 centroid = Vec3::Zero();
-    for (int32_t p : tet) centroid += model.rest_position[p] / 4;
-    if (centroid.x() < 0.05) continue;
-    for (int32_t& p : tet) {
-      if (std::abs(model.rest_position[p].x() - 0.05) > 1e-9) continue;
-      if (copy_of[p] < 0) {
-        copy_of[p] = model.npoint() + static_cast<int32_t>(change.appended_origin.size());
-        change.appended_origin.push_back(p);
-      }
-      p = copy_of[p];
-    }
-  }
-  return change;
-}
 
 void run(Backend& backend, int ticks) {
   TickRequest r;
@@ -68,7 +47,7 @@ TEST(GlRebuild, IdentityRebuildKeepsTheTrajectory) {
 // velocity or a wrongly re-uploaded buffer moves points by millimetres).
 TEST(GlRebuild, MatchesTheCpuReferenceAcrossACut) {
   const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
-  const Model cut = rebuild_model(model, split_at_mid_x(model));
+  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.05));
   ASSERT_GT(cut.npoint(), model.npoint());
   auto cpu = make_cpu_backend(model, {}, {Precision::Double, 1});
   GlBackend gl(model, {}, {});
