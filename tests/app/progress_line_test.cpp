@@ -8,18 +8,13 @@
 #include "core/mesh/example_shapes.h"
 #include "core/mesh/mesh_io.h"
 #include "run_cli_test_util.h"
+#include "tests/core/mesh_io_test_util.h"
 
 namespace organsim {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path fresh(const std::string& name) {
-  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 // Runs `organsim ARGS` on a pseudo-terminal: stdout and stderr both go to
 // the terminal, whose transcript is returned.
@@ -45,7 +40,7 @@ fs::path short_scenario(const fs::path& dir) {
 }
 
 TEST(ProgressLine, RunShowsTicksRealTimeFactorAndTimeLeftOnATerminal) {
-  const fs::path dir = fresh("progress_run_tty");
+  const fs::path dir = testing::fresh_test_dir("app");
   const test::CliResult r = run_on_terminal("run " + short_scenario(dir).string() + " -o " + (dir / "out").string(), dir);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("\rorgansim run: tick 300/300 (100 %), real-time factor "), std::string::npos) << r.out;
@@ -54,7 +49,7 @@ TEST(ProgressLine, RunShowsTicksRealTimeFactorAndTimeLeftOnATerminal) {
 }
 
 TEST(ProgressLine, RunPrintsNothingExtraWhenStderrIsNotATerminal) {
-  const fs::path dir = fresh("progress_run_file");
+  const fs::path dir = testing::fresh_test_dir("app");
   const test::CliResult r = test::run_organsim("run " + short_scenario(dir).string() + " -o " + (dir / "out").string(), dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("tick"), std::string::npos) << r.err;
@@ -63,7 +58,7 @@ TEST(ProgressLine, RunPrintsNothingExtraWhenStderrIsNotATerminal) {
 }
 
 TEST(ProgressLine, MeshShowsItsStageOnATerminalOnly) {
-  const fs::path dir = fresh("progress_mesh");
+  const fs::path dir = testing::fresh_test_dir("app");
   write_surface(dir / "sphere.off", make_sphere_surface(0.05, 2));
   const std::string args = "mesh " + (dir / "sphere.off").string() + " -o " + (dir / "out.mesh").string() +
                            " --target-points 300 --no-exude";

@@ -8,21 +8,16 @@
 
 #include "core/render/video_sink.h"
 #include "core/util/error.h"
+#include "tests/core/mesh_io_test_util.h"
 
 namespace organsim {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path fresh(const std::string& name) {
-  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 TEST(VideoSink, ACodecTheContainerCannotTakeIsAnOutputErrorAndLeavesNothing) {
-  const fs::path dir = fresh("video_bad_codec");
+  const fs::path dir = testing::fresh_test_dir("render");
   try {
     VideoSink sink(dir / "v.mp4", "zzzz", 10, {64, 48});
     FAIL() << "an unknown codec was accepted";
@@ -44,7 +39,7 @@ TEST(VideoSink, ACodecTheContainerCannotTakeIsAnOutputErrorAndLeavesNothing) {
 }
 
 TEST(VideoSink, AFrameOfAnotherSizeIsRefusedAndTheUnfinishedVideoRemoved) {
-  const fs::path dir = fresh("video_bad_size");
+  const fs::path dir = testing::fresh_test_dir("render");
   {
     VideoSink sink(dir / "v.mp4", "mp4v", 10, {64, 48});
     sink.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(0, 0, 255)));
@@ -62,7 +57,7 @@ TEST(VideoSink, AFrameOfAnotherSizeIsRefusedAndTheUnfinishedVideoRemoved) {
 }
 
 TEST(VideoSink, AFinishedVideoHasItsFramesUnderTheFinalName) {
-  const fs::path dir = fresh("video_ok");
+  const fs::path dir = testing::fresh_test_dir("render");
   VideoSink sink(dir / "v.mp4", "mp4v", 10, {64, 48});
   for (int i = 0; i < 3; ++i) sink.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(0, 80 * i, 255)));
   sink.finish();
