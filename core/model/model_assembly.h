@@ -10,7 +10,7 @@
 namespace organsim {
 
 // Fills masses, inverse masses and fixed flags, springs (ends, rest length,
-// stiffness, damper), tet volume stiffness and the gather layout of `model`,
+// stiffness, damper), the volume term (per tet or nodal) and the gather layout of `model`,
 // whose rest_position, tet_points, tet_rest_volume, material, gravity and
 // viscous_damping are set. `held` (npoint) marks points the scene holds
 // fixed; points used by no tet have no mass and are held too.

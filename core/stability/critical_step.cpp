@@ -77,7 +77,23 @@ void apply_stiffness(const Model& model, const RestStiffness& k, const std::vect
       out[b] += f;
     }
   }
-  if ((terms & kVolume) && model.has_volume()) {
+  if ((terms & kVolume) && model.has_nodal_volume()) {
+    // Energy k_a/2 (V_a - V_a^r)^2 on nodal volumes: at rest G^T diag(k_a) G,
+    // applied as nodal volume changes, nodal pressures, then tet forces.
+    std::vector<double> q(model.npoint(), 0.0);
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const auto& g = k.tet_grad[t];
+      const double dv = g[0].dot(x[p[0]]) + g[1].dot(x[p[1]]) + g[2].dot(x[p[2]]) + g[3].dot(x[p[3]]);
+      for (int i = 0; i < 4; ++i) q[p[i]] += dv / 4;
+    }
+    for (int32_t a = 0; a < model.npoint(); ++a) q[a] *= model.point_volume_k[a];
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const double s = (q[p[0]] + q[p[1]] + q[p[2]] + q[p[3]]) / 4;
+      for (int i = 0; i < 4; ++i) out[p[i]] += s * k.tet_grad[t][i];
+    }
+  } else if ((terms & kVolume) && model.has_volume()) {
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
       const auto& g = k.tet_grad[t];
@@ -122,14 +138,33 @@ std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k, 
     row[a] += ks * (free(b) ? 2 : 1);
     row[b] += ks * (free(a) ? 2 : 1);
   }
-  if ((terms & kVolume) && model.has_volume()) {
+  if ((terms & kVolume) && model.has_nodal_volume()) {
+    // K_ij = sum_a k_a G_ai G_aj^T with G_ai = sum over the tets holding a and
+    // i of g_ti / 4, so |K_ij| <= sum_a |k_a| |G_ai| |G_aj| and row i is below
+    // sum over the tets t of i of |g_ti| / 4 * sum over a in t of |k_a| S_a,
+    // with S_a = sum over the tets of a of their free |g_tj| / 4 >= sum_j |G_aj|.
+    std::vector<double> reach(n, 0.0);
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      double sum_free = 0;
+      for (int j = 0; j < 4; ++j)
+        if (free(p[j])) sum_free += k.tet_grad[t][j].norm();
+      for (int32_t a : p) reach[a] += sum_free / 4;
+    }
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      double patch = 0;
+      for (int32_t a : p) patch += std::abs(model.point_volume_k[a]) * reach[a];
+      for (int i = 0; i < 4; ++i) row[p[i]] += k.tet_grad[t][i].norm() / 4 * patch;
+    }
+  } else if ((terms & kVolume) && model.has_volume()) {
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
       const auto& g = k.tet_grad[t];
       double sum_free = 0;
       for (int j = 0; j < 4; ++j)
         if (free(p[j])) sum_free += g[j].norm();
-      for (int i = 0; i < 4; ++i) row[p[i]] += model.tet_k[t] * g[i].norm() * sum_free;
+      for (int i = 0; i < 4; ++i) row[p[i]] += std::abs(model.tet_k[t]) * g[i].norm() * sum_free;
     }
   }
   for (int32_t i = 0; i < n; ++i)
