@@ -13,6 +13,7 @@
 #include "core/sim/cpu_backend.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/reference_forces.h"
+#include "core/stability/step_after_change.h"
 #include "core/util/error.h"
 #include "tests/core/suture_test_util.h"
 #include "tests/core/test_models.h"
@@ -300,6 +301,24 @@ TEST(Suture, ModelsWithSuturesRunOnTheGenericKernel) {
   moving->positions(after);
   EXPECT_EQ(before, after);
   for (const PassInfo& p : moving->plan().passes) EXPECT_EQ(p.detail.find("avx512"), std::string::npos) << p.detail;
+}
+
+// The run's dt check after a change keeps its Gershgorin rows and recomputes
+// only the touched ones: tying sutures must recompute their ends' rows (a
+// stiff suture on a light point lowers the guaranteed step), exactly as a
+// fresh computation gives them.
+TEST(Suture, TheDtCheckAfterTyingSuturesSeesTheirStiffness) {
+  const SutureCase c = one_suture(0.5);
+  ChangeStepCheck check(c.plain);
+  const double before = check.guaranteed_step(c.plain, {});
+  Suture stiff = c.sutured.sutures[0];
+  stiff.k = 1e5;  // N/m on points of 1e-4 kg: far stiffer than the tissue
+  const Model next = add_sutures(c.plain, {stiff});
+  check.update(c.plain, next);
+  const GershgorinRows fresh = gershgorin_rows(next);
+  EXPECT_EQ(check.rows().all, fresh.all);
+  EXPECT_EQ(check.rows().springs, fresh.springs);
+  EXPECT_LT(check.guaranteed_step(next, {}), 0.5 * before);
 }
 
 std::string run_error(const Scenario& s, const std::string& name) {
