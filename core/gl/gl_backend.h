@@ -105,7 +105,6 @@ class GlBackend final : public Backend {
   std::vector<float> attach_upload_;  // sized once (npad x 4)
   std::vector<int32_t> suture_entries_;  // spring entries of sutures (2 per suture)
   std::vector<float> suture_rest_;       // the rest length last uploaded to each
-
   mutable std::vector<float> readback_;  // positions() scratch (npad x 4)
 };
 

@@ -97,8 +97,7 @@ class CpuBackend final : public Backend {
     pack();
     std::string how;
     if (options.threads <= 0 && omp_get_max_threads() > 1) how = choose_threads_by_timing();
-    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how +
-              ", " + (fast_ ? "avx512" : "generic") + " kernel";
+    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how;
   }
 
   void rebuild(const Model& next) override {
@@ -119,7 +118,8 @@ class CpuBackend final : public Backend {
   }
 
   std::string name() const override { return "cpu"; }
-  std::string device() const override { return device_; }
+  // The kernel as of now: a rebuild may move a model to the generic one (sutures).
+  std::string device() const override { return device_ + ", " + (fast_ ? "avx512" : "generic") + " kernel"; }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }

@@ -300,6 +300,7 @@ TEST(Suture, ModelsWithSuturesRunOnTheGenericKernel) {
   moving->rebuild(c.sutured);
   moving->positions(after);
   EXPECT_EQ(before, after);
+  EXPECT_NE(moving->device().find("generic kernel"), std::string::npos) << moving->device();
   for (const PassInfo& p : moving->plan().passes) EXPECT_EQ(p.detail.find("avx512"), std::string::npos) << p.detail;
 }
 
