@@ -181,6 +181,14 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   // Stiffness from the material by the one rule in core/model/stiffness.h.
   model.spring_k = spring_stiffness(material, model.rest_position, model.spring_ends, edges.volume);
   for (int32_t s = 0; s < nspring; ++s) model.spring_d[s] = material.spring_damping_time * model.spring_k[s];
+  // Sutures after the tissue's springs: they have no tets, so the edge rule
+  // above would drop them; a suture's damper follows the same damping time.
+  for (const Suture& u : model.sutures) {
+    model.spring_ends.push_back(u.ends);
+    model.spring_rest.push_back(u.length);
+    model.spring_k.push_back(u.k);
+    model.spring_d.push_back(material.spring_damping_time * u.k);
+  }
   model.tet_k = tet_volume_stiffness(material, model.tet_rest_volume);
 
   model.layout = build_gather_layout(model, chunk_size, sort_window);

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/util/error.h"
@@ -31,6 +32,12 @@ std::string avx512_refusal(const Model& model) {
   if (sizeof(Real) != sizeof(float)) return "the avx512 kernel computes in float";
   if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
   return avx512_kernel_unsupported(model);
+}
+
+// What the springs pass does with sutures, if the model has any.
+std::string sutures_detail(const Model& m) {
+  if (m.nsuture() == 0) return "";
+  return ", " + std::to_string(m.nsuture()) + " of them sutures (tension only, rest length refreshed per tick)";
 }
 
 // Step-invariant inputs of one substep.
@@ -90,8 +97,7 @@ class CpuBackend final : public Backend {
     pack();
     std::string how;
     if (options.threads <= 0 && omp_get_max_threads() > 1) how = choose_threads_by_timing();
-    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how +
-              ", " + (fast_ ? "avx512" : "generic") + " kernel";
+    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how;
   }
 
   void rebuild(const Model& next) override {
@@ -112,7 +118,8 @@ class CpuBackend final : public Backend {
   }
 
   std::string name() const override { return "cpu"; }
-  std::string device() const override { return device_; }
+  // The kernel as of now: a rebuild may move a model to the generic one (sutures).
+  std::string device() const override { return device_ + ", " + (fast_ ? "avx512" : "generic") + " kernel"; }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
@@ -122,7 +129,8 @@ class CpuBackend final : public Backend {
     const auto& m = *model_;
     const size_t real = sizeof(Real);
     plan.passes.push_back({"springs", std::to_string(m.nspring()) + " springs gathered from both ends (" +
-                                          std::to_string(m.layout.springs.item.size()) + " slots)"});
+                                          std::to_string(m.layout.springs.item.size()) + " slots)" +
+                                          sutures_detail(m)});
     if (m.has_volume())
       plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
@@ -214,6 +222,7 @@ class CpuBackend final : public Backend {
     const int tool_kind = !(tool_.present && request.tool_active) ? kNoTool
                           : tool_.mode == ToolMode::Push         ? kPush
                                                                  : kPull;
+    refresh_suture_rest();
     Reaction reaction;
     for (int32_t s = 0; s < request.substeps; ++s) {
       // The force of substep s acts at its start: tool centre interpolated there.
@@ -270,6 +279,7 @@ class CpuBackend final : public Backend {
     spring_rest_.assign(springs.item.size(), 0);
     spring_k_.assign(springs.item.size(), 0);
     spring_d_.assign(springs.item.size(), 0);
+    suture_slots_.clear();
     for_each_slot(springs, [&](int32_t e, int32_t p) {
       const int32_t s = springs.item[e];
       spring_other_[e] = s < 0 ? p : layout.spring_other[e];
@@ -277,7 +287,15 @@ class CpuBackend final : public Backend {
       spring_rest_[e] = rest_distance(p, spring_other_[e]);
       spring_k_[e] = static_cast<Real>(model.spring_k[s]);
       spring_d_[e] = static_cast<Real>(model.spring_d[s]);
+      if (s >= model.first_suture()) {
+        // A suture: tension only, marked by a negative stiffness in its slot
+        // (no extra stream for the loop to read); its rest length follows
+        // the schedule (refresh_suture_rest).
+        spring_k_[e] = -spring_k_[e];
+        suture_slots_.push_back({e, s});
+      }
     });
+    refresh_suture_rest();
     if (model.has_volume()) {
       const auto& tets = layout.tets;
       for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
@@ -320,6 +338,12 @@ class CpuBackend final : public Backend {
     groups_per_chunk_ = groups_per_chunk;
     partial_.resize(layout.nchunk);
     pack_fast();
+  }
+
+  // Sutures tighten on their schedule: rest lengths at the start of the tick,
+  // constant over its substeps. The few suture slots only; nothing allocates.
+  void refresh_suture_rest() {
+    for (const auto& [e, s] : suture_slots_) spring_rest_[e] = static_cast<Real>(model_->spring_rest_at(s, time_));
   }
 
   // The AVX-512 kernel packs its own streams from the same Model; while it
@@ -510,6 +534,8 @@ class CpuBackend final : public Backend {
       }
 
       // Springs + dampers: f = [k (L - r) + d (dv . l/L)] l/L, l = x_q - x_p.
+      // A suture (k < 0 in its slot, stiffness |k|) pulls only: no force while
+      // slack (L <= r), and a closing damper never turns the pull into a push.
       const int32_t* __restrict other = spring_other_.data();
       const Real* __restrict rest = spring_rest_.data();
       const Real* __restrict k = spring_k_.data();
@@ -525,7 +551,9 @@ class CpuBackend final : public Backend {
           const Real inv = length > Real(0) ? Real(1) / length : Real(0);
           const Real dvx = dx[q] - dx[p], dvy = dy[q] - dy[p], dvz = dz[q] - dz[p];
           const Real along = (dvx * lx + dvy * ly + dvz * lz) * inv * ctx.inv_dt;
-          const Real s = (k[e] * (length - rest[e]) + d[e] * along) * inv;
+          const Real ke = k[e];
+          const Real pull = (std::abs(ke) * (length - rest[e]) + d[e] * along) * inv;
+          const Real s = ke < Real(0) && !(length > rest[e] && pull > Real(0)) ? Real(0) : pull;
           fx[l] += s * lx;
           fy[l] += s * ly;
           fz[l] += s * lz;
@@ -626,7 +654,8 @@ class CpuBackend final : public Backend {
   Soa3<Real> u_, u_next_;             // displacements from rest at t, t+1 (npoint)
   Soa3<Real> d_, d_next_;             // step increments u_t - u_{t-1}, u_{t+1} - u_t (npoint)
   std::vector<int32_t> spring_other_;  // per slot, self for padding (nentry)
-  std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry)
+  std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry); k < 0 marks a suture
+  std::vector<std::pair<int32_t, int32_t>> suture_slots_;  // (slot, spring) of every suture slot
   std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
   std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry)
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)

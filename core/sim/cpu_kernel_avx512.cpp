@@ -41,6 +41,9 @@ using AlignedVector = std::vector<T, AlignedAllocator<T>>;
 }  // namespace
 
 std::string avx512_kernel_unsupported(const Model& model) {
+  // Sutures are tension-only springs with a rest length on a schedule; this
+  // kernel has neither, so the generic kernel runs a model that has them.
+  if (model.nsuture() > 0) return "the model has sutures (tension-only springs), which only the generic kernel runs";
   if (model.layout.chunk_size % kLanes != 0)
     return "layout chunk size " + std::to_string(model.layout.chunk_size) + " is not a multiple of " +
            std::to_string(kLanes);

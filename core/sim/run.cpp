@@ -220,6 +220,10 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
     result.meta.extra["events"] = topology->log();
     result.meta.extra["final_points"] = current->npoint();
     result.meta.extra["final_springs"] = current->nspring();
+    if (!failure && !scenario.events.sutures.empty()) {
+      backend.positions(event_positions);
+      result.meta.extra["sutures"] = suture_summary(*current, event_positions, backend.time());
+    }
   }
 
   if (failure) {

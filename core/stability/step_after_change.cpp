@@ -20,6 +20,10 @@ void ChangeStepCheck::update(const Model& previous, const Model& next) {
   for (int32_t p = old_n; p < n; ++p)
     for (int32_t q : {p, next.origin[p]})
       if (!touched_[q]) touched_[q] = 1, changed.push_back(q);
+  // The ends of sutures tied by this change (sutures are append-only).
+  for (int32_t s = previous.nsuture(); s < next.nsuture(); ++s)
+    for (int32_t q : next.sutures[s].ends)
+      if (!touched_[q]) touched_[q] = 1, changed.push_back(q);
   // Their spring neighbours: a neighbour's spring to a split point may now be
   // two springs (one per side) whose stiffnesses sum to the old one.
   const GatherLayout& layout = next.layout;

@@ -21,9 +21,9 @@ class ChangeStepCheck {
  public:
   explicit ChangeStepCheck(const Model& initial);
 
-  // Follows `next`, made from `previous` by appending copies (ids kept):
-  // recomputes the rows of the copies, their origins and every spring
-  // neighbour of those. Every other row is computed from the same springs
+  // Follows `next`, made from `previous` by appending copies (ids kept) and
+  // sutures: recomputes the rows of the copies, their origins, the new
+  // sutures' ends and every spring neighbour of those. Every other row is computed from the same springs
   // (same stiffness, same order), tets and mass as before, so the rows equal
   // gershgorin_rows(next) exactly.
   void update(const Model& previous, const Model& next);
