@@ -232,6 +232,16 @@ class CpuBackend final : public Backend {
     int32_t contacts;
   };
 
+  // Calls f(entry, p) for every slot of `table`, padding included, with the
+  // point p whose lane holds it (chunk by chunk, no search per entry).
+  template <class F>
+  void for_each_slot(const GatherTable& table, F f) const {
+    const int32_t c = model_->layout.chunk_size;
+    for (int32_t chunk = 0; chunk + 1 < static_cast<int32_t>(table.chunk_offset.size()); ++chunk)
+      for (int32_t e = table.chunk_offset[chunk]; e < table.chunk_offset[chunk + 1]; ++e)
+        f(e, chunk * c + (e - table.chunk_offset[chunk]) % c);
+  }
+
   // Everything derived from the Model, in the backend's precision and slot
   // order; the constructor and rebuild() share it, so a topology change needs
   // no code of its own here.
@@ -260,31 +270,29 @@ class CpuBackend final : public Backend {
     spring_rest_.assign(springs.item.size(), 0);
     spring_k_.assign(springs.item.size(), 0);
     spring_d_.assign(springs.item.size(), 0);
-    for (int32_t e = 0; e < static_cast<int32_t>(springs.item.size()); ++e) {
-      const int32_t p = point_of_entry(springs, layout.chunk_size, e);
+    for_each_slot(springs, [&](int32_t e, int32_t p) {
       const int32_t s = springs.item[e];
       spring_other_[e] = s < 0 ? p : layout.spring_other[e];
-      if (s < 0) continue;
+      if (s < 0) return;
       spring_rest_[e] = rest_distance(p, spring_other_[e]);
       spring_k_[e] = static_cast<Real>(model.spring_k[s]);
       spring_d_[e] = static_cast<Real>(model.spring_d[s]);
-    }
+    });
     if (model.has_volume()) {
       const auto& tets = layout.tets;
       for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
       tet_rest_.assign(tets.item.size(), 0);
       tet_k_.assign(tets.item.size(), 0);
-      for (int32_t e = 0; e < static_cast<int32_t>(tets.item.size()); ++e) {
-        const int32_t p = point_of_entry(tets, layout.chunk_size, e);
+      for_each_slot(tets, [&](int32_t e, int32_t p) {
         const int32_t t = tets.item[e];
         const auto& o = layout.tet_others[e];
         tet_a_[e] = t < 0 ? p : o[0];
         tet_b_[e] = t < 0 ? p : o[1];
         tet_c_[e] = t < 0 ? p : o[2];
-        if (t < 0) continue;
+        if (t < 0) return;
         tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
-      }
+      });
     }
     mass_.resize(n);
     inv_mass_.resize(n);

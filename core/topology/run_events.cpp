@@ -7,7 +7,8 @@
 
 namespace organsim {
 
-TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial) : events_(events), editor_(initial) {
+TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)
+    : events_(events), editor_(initial), step_check_(initial) {
   if (events.tear) {
     TearSettings s;
     s.strain = events.tear->strain;
@@ -76,10 +77,19 @@ bool TopologyEvents::before_tick(double t0, double t1, const Model& current, con
   return true;
 }
 
-void TopologyEvents::changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit) {
+double TopologyEvents::guaranteed_step(const Model& previous, const Model& next, const CriticalStepOptions& options) {
+  step_check_.update(previous, next);
+  return step_check_.guaranteed_step(next, options);
+}
+
+void TopologyEvents::changed(const Model& previous, const Model& next, double rebuild_seconds,
+                             double dt_crit_guaranteed, const StabilityReport* full, double check_seconds) {
   if (tear_) tear_->model_changed(previous, next);
   pending_["backend_rebuild_ms"] = 1e3 * rebuild_seconds;
-  pending_["dt_crit"] = dt_crit;
+  pending_["dt_crit_guaranteed"] = dt_crit_guaranteed;
+  pending_["dt_check"] = full ? "power iteration" : "gershgorin";
+  if (full) pending_["dt_crit"] = full->dt_crit;
+  pending_["dt_check_ms"] = 1e3 * check_seconds;
   log_.push_back(std::move(pending_));
   pending_ = nlohmann::json();
 }

@@ -9,6 +9,8 @@
 
 #include "core/model/model.h"
 #include "core/scenario/events.h"
+#include "core/stability/critical_step.h"
+#include "core/stability/step_after_change.h"
 #include "core/topology/tear.h"
 #include "core/topology/topology_editor.h"
 
@@ -27,9 +29,17 @@ class TopologyEvents {
   // version (the backend must be rebuilt from it before the tick).
   bool before_tick(double t0, double t1, const Model& current, const std::vector<Vec3>& x, Model& next);
 
+  // The guaranteed-stable step of `next`, the version just made from
+  // `previous` (core/stability/step_after_change.h: only the rows the change
+  // touched are recomputed).
+  double guaranteed_step(const Model& previous, const Model& next, const CriticalStepOptions& options);
+
   // Records the change just made (time, kinds, counts, the backend's rebuild
-  // time and the new dt_crit) and carries the tear counters over.
-  void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit);
+  // time, the guaranteed step and, when the run needed it, the new dt_crit
+  // from the full estimate, and how long the check took) and carries the
+  // tear counters over.
+  void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit_guaranteed,
+               const StabilityReport* full, double check_seconds);
 
   // meta.events of the force log: one entry per change.
   const nlohmann::json& log() const { return log_; }
@@ -39,6 +49,7 @@ class TopologyEvents {
   const EventsDef& events_;
   TopologyEditor editor_;
   std::optional<TearDetector> tear_;
+  ChangeStepCheck step_check_;
   nlohmann::json log_ = nlohmann::json::array();
   nlohmann::json pending_;  // the entry of the change before_tick just made
   int32_t unopened_faces_ = 0;  // separated with no point split yet (at a blade's tip)

@@ -62,7 +62,7 @@ bool TopologyEditor::separate(const Model& current, const std::vector<int32_t>& 
   PointSplit split;
   for (;;) {
     split = split_points(current.tet_points, faces_, separated_, fresh, current.npoint());
-    const std::vector<Edge> bad = nonmanifold_boundary_edges(split.tet_points, faces_);
+    const std::vector<Edge> bad = nonmanifold_boundary_edges_near(split, current.layout, faces_);
     if (bad.empty()) break;
     // Opening these faces would leave an edge with more than two boundary
     // faces (a point's tets wrapping around an opened edge): keep joined the
