@@ -428,7 +428,6 @@ void write_record(Avx512FloatKernel::Data& D, int b, int32_t p) {
   r[3] = r[7] = 0;
 }
 
-
 // Deals `run` (tets in order of their lowest vertex) out to batches of 16
 // lanes so that no two tets of a batch share a vertex and each batch holds
 // tets from one small part of the mesh: each tet goes to the oldest open
