@@ -83,6 +83,13 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
     out << "between ticks:\n  - topology: " << s.events.cuts.size() << " cut" << (s.events.cuts.size() == 1 ? "" : "s");
     if (s.events.tear) out << ", tear past strain " << s.events.tear->strain;
     out << " (faces separated, points split, backend rebuilt, dt_crit checked; see docs/topology.md)\n";
+    for (const SutureEvent& u : s.events.sutures) {
+      out << "  - sutures at t = " << u.t << " s: "
+          << (u.along.empty() ? std::to_string(u.pairs.size()) + " given pairs" : "along cut \"" + u.along + "\"")
+          << ", " << u.stiffness << " N/m each, tightening " << u.rate << " m/s to " << u.min_length
+          << " m (springs added to the Model, tension only on the generic CPU kernel and step.comp; the "
+             "backend refreshes their rest lengths per tick; dt_crit checked)\n";
+    }
   }
   out << "left out of this scene:\n";
   int32_t left_out = 0;

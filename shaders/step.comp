@@ -12,7 +12,7 @@ layout(local_size_x = ORGANSIM_GL_CHUNK) in;
 struct SpringEntry {
   int other;   // other end; the point itself for padding (zero length: no force)
   float rest;  // m
-  float k;     // N/m
+  float k;     // N/m; negative for a suture (stiffness -k, tension only)
   float d;     // N s/m
 };
 struct TetEntry {
@@ -78,7 +78,8 @@ void main() {
   const vec3 vi = di * inv_dt;
   vec3 f = vec3(0.0);
 
-  // Springs + dampers: f = [k (L - r) + d ((v_q - v_p) . u)] u.
+  // Springs + dampers: f = [k (L - r) + d ((v_q - v_p) . u)] u. A suture
+  // pulls only: no force while slack (L <= r), and its damper never pushes.
   for (int j = 0; j < info.y; ++j) {
     const SpringEntry e = springs[info.x + j * ORGANSIM_GL_CHUNK + int(lane)];
     const vec3 xq = x_cur[e.other].xyz;
@@ -87,7 +88,8 @@ void main() {
     if (len > 0.0) {  // coincident points (and padding): no direction, no force
       const vec3 u = l / len;
       const vec3 dv = d_cur[e.other].xyz * inv_dt - vi;
-      f += (e.k * (len - e.rest) + e.d * dot(dv, u)) * u;
+      const float pull = abs(e.k) * (len - e.rest) + e.d * dot(dv, u);
+      f += (e.k < 0.0 && !(len > e.rest && pull > 0.0) ? 0.0 : pull) * u;
     }
   }
 

@@ -2,6 +2,7 @@
 
 #include <EGL/egl.h>
 
+#include <cstddef>
 #include <cstring>
 #include <string>
 
@@ -98,8 +99,11 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   d_[1] = create_buffer("x_{t+1} - x_t", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
   mass_ = create_buffer("mass {1/m, m, tool k scale, 0}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
   chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
+  // Sutures' rest lengths are rewritten per tick (refresh_suture_rest).
+  suture_entries_ = packed.suture_entries;
+  suture_rest_.assign(suture_entries_.size(), -1.0f);
   springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
-                           packed.springs.data(), 0);
+                           packed.springs.data(), suture_entries_.empty() ? 0 : GL_DYNAMIC_STORAGE_BIT);
   if (volume_) {
     tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
                           packed.tets.data(), 0);
@@ -213,6 +217,7 @@ Plan GlBackend::plan() const {
   const auto& m = *model_;
   std::string fused = std::to_string(m.nspring()) + " springs gathered from both ends (" +
                       std::to_string(m.layout.springs.item.size()) + " slots)";
+  if (m.nsuture() > 0) fused += " of which " + std::to_string(m.nsuture()) + " sutures (tension only, rest length per tick)";
   if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
   if (gravity_) fused += ", gravity";
   if (push_) fused += ", sphere penalty contact";
@@ -283,6 +288,19 @@ void GlBackend::release() {
                        attach_upload_.data());
 }
 
+void GlBackend::refresh_suture_rest() {
+  // At the start of the tick, as on the CPU; only entries whose float value
+  // changed are uploaded (4 bytes each, ordered before this tick's dispatches).
+  for (size_t k = 0; k < suture_entries_.size(); ++k) {
+    const int32_t e = suture_entries_[k];
+    const float rest = static_cast<float>(model_->spring_rest_at(model_->layout.springs.item[e], time_));
+    if (rest == suture_rest_[k]) continue;
+    suture_rest_[k] = rest;
+    glNamedBufferSubData(springs_, static_cast<GLintptr>(e * sizeof(gl::SpringEntry) + offsetof(gl::SpringEntry, rest)),
+                         sizeof(float), &rest);
+  }
+}
+
 Reaction GlBackend::tick(const TickRequest& request) {
   make_current();
   const GLuint program = step_.id();
@@ -299,6 +317,7 @@ Reaction GlBackend::tick(const TickRequest& request) {
   glProgramUniform1i(program, ORGANSIM_GL_U_SLOT, slot);
   glClearNamedBufferSubData(status_, GL_R32UI, static_cast<GLintptr>(slot * sizeof(uint32_t)), sizeof(uint32_t),
                             GL_RED_INTEGER, GL_UNSIGNED_INT, &kNoPoint);
+  refresh_suture_rest();
 
   for (int32_t s = 0; s < request.substeps; ++s) {
     if (tool_.present) {

@@ -70,6 +70,8 @@ class GlBackend final : public Backend {
   // Creates the buffers sized by the model (state x_t, d_t given, npad x 4).
   void upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d);
   void delete_model_buffers();
+  // Writes the sutures' rest lengths at time_ into their spring entries.
+  void refresh_suture_rest();
 
   const Model* model_;  // the current version (rebuild() moves it on)
   BackendTool tool_;
@@ -101,6 +103,8 @@ class GlBackend final : public Backend {
   double time_ = 0;
   int64_t dispatches_ = 0, blocked_readbacks_ = 0;
   std::vector<float> attach_upload_;  // sized once (npad x 4)
+  std::vector<int32_t> suture_entries_;  // spring entries of sutures (2 per suture)
+  std::vector<float> suture_rest_;       // the rest length last uploaded to each
   mutable std::vector<float> readback_;  // positions() scratch (npad x 4)
 };
 

@@ -54,6 +54,10 @@ PackedModel pack_model(const Model& model) {
       p.springs[e] = s < 0 ? SpringEntry{self(L.springs, c, e), 0, 0, 0}
                            : SpringEntry{L.spring_other[e], static_cast<float>(model.spring_rest[s]),
                                          static_cast<float>(model.spring_k[s]), static_cast<float>(model.spring_d[s])};
+      if (s >= model.first_suture()) {
+        p.springs[e].k = -p.springs[e].k;
+        p.suture_entries.push_back(e);
+      }
     }
   }
   if (volume) {

@@ -12,8 +12,8 @@ namespace organsim::gl {
 // One gathered spring seen from its point: mirrors `SpringEntry` in step.comp.
 struct SpringEntry {
   int32_t other;  // other end (internal id); the point itself for padding
-  float rest;     // m
-  float k;        // N/m
+  float rest;     // m (a suture's follows its schedule, see GlBackend::tick)
+  float k;        // N/m; -k for a suture (tension only)
   float d;        // N s/m
 };
 static_assert(sizeof(SpringEntry) == 16);
@@ -33,6 +33,7 @@ struct PackedModel {
   std::vector<int32_t> chunks;    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk x 4)
   std::vector<SpringEntry> springs;  // per (chunk, slot, lane) (nspring_entry)
   std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume (ntet_entry)
+  std::vector<int32_t> suture_entries;  // entries of suture springs, 2 per suture
   // Nodal volume term: vec2 {k_a (N/m^5), V_a^r (m^3)} per point, zero for
   // padding (npad x 2); empty unless the model has it.
   std::vector<float> nodal;
@@ -41,7 +42,8 @@ struct PackedModel {
 // Padding entries point at the lane's own point with zero parameters: a
 // zero-length spring and a zero-volume tet with k_v = 0 add no force, so
 // every lane of a chunk runs the same number of slots (uniform control
-// flow). Throws Error(Backend) when the layout's chunk size is not the
+// flow). A suture's entry has k < 0 (it pulls only) and its rest length when
+// tied. Throws Error(Backend) when the layout's chunk size is not the
 // kernel's workgroup size.
 PackedModel pack_model(const Model& model);
 

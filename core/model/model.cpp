@@ -9,6 +9,7 @@
 #include "core/model/model_assembly.h"
 #include "core/model/ordering.h"
 #include "core/model/stiffness.h"
+#include "core/model/tet_edges.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -83,17 +84,6 @@ std::vector<uint8_t> select_fixed(const TetMesh& mesh, const std::vector<FixedSe
   return fixed;
 }
 
-std::vector<Edge> unique_edges(const std::vector<Tet>& tets) {
-  std::vector<Edge> edges;
-  edges.reserve(tets.size() * 6);
-  for (const Tet& t : tets)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) edges.push_back({std::min(t[i], t[j]), std::max(t[i], t[j])});
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  return edges;
-}
-
 }  // namespace
 
 double Model::total_mass() const { return std::accumulate(mass.begin(), mass.end(), 0.0); }
@@ -108,7 +98,7 @@ Model build_model(const TetMesh& mesh, const Material& material, const ModelOpti
   const int32_t npoint = static_cast<int32_t>(mesh.points.size());
 
   // Internal order: locality first (RCM), then valence within windows.
-  const std::vector<Edge> input_edges = unique_edges(mesh.tets);
+  const std::vector<Edge> input_edges = tet_edges(mesh.tets, npoint).ends;
   std::vector<int32_t> order(npoint);
   if (options.reorder_for_locality)
     order = reverse_cuthill_mckee(npoint, input_edges);
@@ -179,7 +169,8 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   model.tool_k_scale = tool_stiffness_scale(model.mass, model.fixed);
 
   // Springs: one per unique tet edge, sorted.
-  model.spring_ends = unique_edges(model.tet_points);
+  TetEdges edges = tet_edges(model.tet_points, npoint, model.tet_rest_volume);
+  model.spring_ends = std::move(edges.ends);
   const int32_t nspring = model.nspring();
   model.spring_rest.resize(nspring);
   model.spring_d.resize(nspring);
@@ -188,9 +179,16 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
     model.spring_rest[s] = (model.rest_position[b] - model.rest_position[a]).norm();
   }
   // Stiffness from the material by the one rule in core/model/stiffness.h.
-  model.spring_k = spring_stiffness(material, model.rest_position, model.spring_ends, model.tet_points,
-                                    model.tet_rest_volume);
+  model.spring_k = spring_stiffness(material, model.rest_position, model.spring_ends, edges.volume);
   for (int32_t s = 0; s < nspring; ++s) model.spring_d[s] = material.spring_damping_time * model.spring_k[s];
+  // Sutures after the tissue's springs: they have no tets, so the edge rule
+  // above would drop them; a suture's damper follows the same damping time.
+  for (const Suture& u : model.sutures) {
+    model.spring_ends.push_back(u.ends);
+    model.spring_rest.push_back(u.length);
+    model.spring_k.push_back(u.k);
+    model.spring_d.push_back(material.spring_damping_time * u.k);
+  }
   model.tet_k = tet_volume_stiffness(material, model.tet_rest_volume);
   // A cut splits a node patch: nodal volumes follow the new tets.
   model.point_rest_volume = nodal_rest_volume(npoint, model.tet_points, model.tet_rest_volume);

@@ -9,6 +9,7 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/layout.h"
 #include "core/model/material.h"
+#include "core/model/suture.h"
 #include "core/util/vec.h"
 
 namespace organsim {
@@ -33,11 +34,15 @@ struct Model {
   int32_t mesh_points = 0;           // points read from the mesh
   std::vector<int32_t> origin;       // internal id of the point each point was copied from, itself for mesh points (npoint)
 
-  // Springs: one per unique tet edge, ends in internal numbering.
+  // Springs: one per unique tet edge (sorted by ends), then one per suture
+  // (in the order of `sutures`), ends in internal numbering.
   std::vector<Edge> spring_ends;     // (nspring x 2), ends[0] < ends[1]
-  std::vector<double> spring_rest;   // rest length, m (nspring)
+  std::vector<double> spring_rest;   // rest length, m (nspring); a suture's when tied (see spring_rest_at)
   std::vector<double> spring_k;      // stiffness, N/m (nspring)
   std::vector<double> spring_d;      // damper, N s/m (nspring)
+  // Sutures: springs first_suture().. are these, tension only, rest length
+  // on a schedule. Empty for a model no suture event touched.
+  std::vector<Suture> sutures;
 
   // Tetrahedra, positively oriented, internal numbering.
   std::vector<Tet> tet_points;       // (ntet x 4)
@@ -60,6 +65,14 @@ struct Model {
 
   int32_t npoint() const { return static_cast<int32_t>(rest_position.size()); }
   int32_t nspring() const { return static_cast<int32_t>(spring_ends.size()); }
+  int32_t nsuture() const { return static_cast<int32_t>(sutures.size()); }
+  // Springs [0, first_suture()) are the tissue's (tet edges), sorted by ends.
+  int32_t first_suture() const { return nspring() - nsuture(); }
+  const Suture& suture_of_spring(int32_t s) const { return sutures[s - first_suture()]; }
+  // Rest length of spring s at time t (a suture tightens; the tissue's is fixed), m.
+  double spring_rest_at(int32_t s, double t) const {
+    return s < first_suture() ? spring_rest[s] : suture_of_spring(s).rest_at(t);
+  }
   int32_t ntet() const { return static_cast<int32_t>(tet_points.size()); }
   bool has_volume() const { return !tet_k.empty() || !point_volume_k.empty(); }
   bool has_nodal_volume() const { return !point_volume_k.empty(); }

@@ -47,9 +47,23 @@ void validate_change(const Model& previous, const TopologyChange& change) {
   }
 }
 
-}  // namespace
+void validate_sutures(const Model& previous, const std::vector<Suture>& sutures) {
+  const int32_t n = previous.npoint();
+  for (size_t k = 0; k < sutures.size(); ++k) {
+    const Suture& u = sutures[k];
+    if (!(u.ends[0] >= 0 && u.ends[0] < u.ends[1] && u.ends[1] < n))
+      throw Error(ErrorKind::Input, "topology change: suture " + std::to_string(k) + " joins points " +
+                                        std::to_string(u.ends[0]) + " and " + std::to_string(u.ends[1]) +
+                                        ", expected two different points in 0.." + std::to_string(n - 1) +
+                                        " in increasing order");
+    if (!(u.k > 0) || !std::isfinite(u.k) || !(u.length >= 0) || !(u.min_length >= 0) || !(u.rate >= 0))
+      throw Error(ErrorKind::Input, "topology change: suture " + std::to_string(k) +
+                                        " needs k > 0 and length, min_length, rate >= 0");
+  }
+}
 
-Model rebuild_model(const Model& previous, const TopologyChange& change) {
+// rebuild_model with `sutures` tied after the previous version's.
+Model rebuild_with(const Model& previous, const TopologyChange& change, const std::vector<Suture>& sutures) {
   validate_change(previous, change);
   const int32_t old_n = previous.npoint();
   const int32_t new_n = old_n + static_cast<int32_t>(change.appended_origin.size());
@@ -79,8 +93,21 @@ Model rebuild_model(const Model& previous, const TopologyChange& change) {
 
   model.tet_points = change.tet_points;
   model.tet_rest_volume = previous.tet_rest_volume;
+  model.sutures = previous.sutures;
+  model.sutures.insert(model.sutures.end(), sutures.begin(), sutures.end());
   assemble_model(model, held, previous.layout.chunk_size, previous.layout.sort_window);
   return model;
+}
+
+}  // namespace
+
+Model rebuild_model(const Model& previous, const TopologyChange& change) { return rebuild_with(previous, change, {}); }
+
+Model add_sutures(const Model& previous, const std::vector<Suture>& sutures) {
+  validate_sutures(previous, sutures);
+  TopologyChange same;
+  same.tet_points = previous.tet_points;
+  return rebuild_with(previous, same, sutures);
 }
 
 }  // namespace organsim

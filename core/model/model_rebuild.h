@@ -25,9 +25,17 @@ struct TopologyChange {
 // (so total mass is conserved to round-off), springs as the unique edges of
 // the new tets with stiffness from their own tets' volumes (an edge whose tets
 // now lie on both sides of a cut becomes one spring per side, each with its
-// share), unchanged rest volumes and the gather layout rebuilt in full.
+// share), then the previous version's sutures (suture.h), unchanged rest
+// volumes and the gather layout rebuilt in full.
 // Throws Error(Input) for a malformed change (wrong tet count, ids out of
 // range, a tet whose rest volume the new vertices do not reproduce).
 Model rebuild_model(const Model& previous, const TopologyChange& change);
+
+// Version previous.version + 1 with `sutures` tied after the previous ones
+// (same tets, points, masses: a suture adds no mass), through the same
+// assembly. Throws Error(Input) for a suture whose ends are out of range,
+// equal or not in increasing order, or with k <= 0 or a negative length,
+// min_length or rate.
+Model add_sutures(const Model& previous, const std::vector<Suture>& sutures);
 
 }  // namespace organsim

@@ -38,20 +38,9 @@ nlohmann::json elasticity_json(const Material& m) {
 }
 
 std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,
-                                     const std::vector<Edge>& spring_ends, const std::vector<Tet>& tets,
-                                     const std::vector<double>& tet_rest_volume) {
+                                     const std::vector<Edge>& spring_ends, const std::vector<double>& edge_volume) {
   const size_t nspring = spring_ends.size();
   if (material.spring_stiffness) return std::vector<double>(nspring, *material.spring_stiffness);
-  std::vector<double> edge_volume(nspring, 0.0);
-  for (size_t t = 0; t < tets.size(); ++t) {
-    const Tet& tet = tets[t];
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) {
-        const Edge e{std::min(tet[i], tet[j]), std::max(tet[i], tet[j])};
-        const auto it = std::lower_bound(spring_ends.begin(), spring_ends.end(), e);
-        edge_volume[it - spring_ends.begin()] += tet_rest_volume[t];
-      }
-  }
   const double modulus = spring_modulus(material);
   std::vector<double> k(nspring);
   for (size_t s = 0; s < nspring; ++s) {

@@ -59,12 +59,11 @@ EffectiveElasticity effective_elasticity(const Material& material);
 nlohmann::json elasticity_json(const Material& material);
 
 // Stiffness of each spring, N/m: the constant spring_stiffness when given,
-// else E_s * V_e / r_e^2 with V_e the summed rest volume of the tets that
-// contain spring e. `spring_ends` must be sorted (ends[0] < ends[1]) and
-// contain every edge of `tets`; `points` are the rest positions.
+// else E_s * V_e / r_e^2 with V_e (`edge_volume`, nspring) the summed rest
+// volume of the tets that contain spring e (core/model/tet_edges.h);
+// `points` are the rest positions.
 std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,
-                                     const std::vector<Edge>& spring_ends, const std::vector<Tet>& tets,
-                                     const std::vector<double>& tet_rest_volume);
+                                     const std::vector<Edge>& spring_ends, const std::vector<double>& edge_volume);
 
 // Tool contact and grasp: the scenario's contact_stiffness k_c is what a
 // point of the median free mass m_med feels; a lighter point gets

@@ -12,7 +12,7 @@ void point_strain(const Model& model, const std::vector<Vec3>& x, std::vector<fl
   const int32_t n = model.npoint();
   std::vector<double> sum(n, 0.0);
   std::vector<int32_t> count(n, 0);
-  for (int32_t s = 0; s < model.nspring(); ++s) {
+  for (int32_t s = 0; s < model.first_suture(); ++s) {  // the tissue's strain, not the sutures'
     const auto [a, b] = model.spring_ends[s];
     const double strain = std::abs((x[a] - x[b]).norm() / model.spring_rest[s] - 1.0);
     sum[a] += strain;

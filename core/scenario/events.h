@@ -3,6 +3,7 @@
 // tears, sutures). Parsed and validated by parse_scenario(); applied between
 // ticks by the run loop (core/topology/). Documented field by field in
 // docs/scenarios.md. SI units.
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -40,11 +41,31 @@ struct TearEvent {
   int32_t max_per_tick = 4;
 };
 
+// `suture`: at the first tick starting at or after `t`, tension-only springs
+// (core/model/suture.h) join either the given point pairs or, along the
+// named cut, points on its two sides. See docs/scenarios.md#suture.
+struct SutureEvent {
+  std::string where;  // "FILE: events[i].suture", the prefix of errors found during the run
+  double t = 0;                                // s
+  double stiffness = 0;                        // N/m per suture (before the light-point scaling)
+  std::vector<std::array<int32_t, 2>> pairs;   // output numbering; empty when `along` is set
+  std::string along;                           // a cut's name
+  double spacing = 0;                          // m, between sutures along the cut
+  double max_distance = 0;                     // m, from a point to its partner across the cut
+  std::optional<double> length;                // rest length when tied, m; default: the current distance
+  double rate = 0;                             // tightening, m/s
+  double min_length = 0;                       // m
+
+  // Rest length of a suture tied now across `distance` (m).
+  double tied_length(double distance) const { return length ? *length : distance; }
+};
+
 struct EventsDef {
   std::vector<CutEvent> cuts;
   std::optional<TearEvent> tear;
+  std::vector<SutureEvent> sutures;  // in the order given
 
-  bool any() const { return !cuts.empty() || tear.has_value(); }
+  bool any() const { return !cuts.empty() || tear.has_value() || !sutures.empty(); }
 };
 
 }  // namespace organsim

@@ -1,6 +1,8 @@
-// The scenario's `events` section: cuts and tears.
+// The scenario's `events` section: cuts, tears and sutures.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <climits>
 #include <set>
 
 #include "core/scenario/scenario_sections.h"
@@ -77,16 +79,59 @@ TearEvent parse_tear(const nlohmann::json& j, const JsonPath& at) {
   return tear;
 }
 
+SutureEvent parse_suture(const nlohmann::json& j, const JsonPath& at) {
+  ObjectReader r(j, at);
+  SutureEvent s;
+  s.where = at.file.empty() ? at.path : at.file + ": " + at.path;
+  s.t = require_non_negative(read_number(r.require("t"), r.at("t")), r.at("t"));
+  s.stiffness = require_positive(read_number(r.require("stiffness"), r.at("stiffness")), r.at("stiffness"));
+  const nlohmann::json* pairs = r.get("pairs");
+  const std::optional<std::string> along = r.string("along");
+  if ((pairs != nullptr) == along.has_value())
+    throw at.error("expected exactly one of \"pairs\" ([[i, j], ...], point ids) or \"along\" (a cut's name)");
+  if (pairs) {
+    const JsonPath pat = r.at("pairs");
+    if (!pairs->is_array() || pairs->empty()) throw pat.error("expected a non-empty array of point id pairs [[i, j], ...]");
+    for (size_t k = 0; k < pairs->size(); ++k) {
+      const nlohmann::json& p = (*pairs)[k];
+      if (!p.is_array() || p.size() != 2) throw pat.index(k).error("expected a pair of point ids [i, j]");
+      std::array<int32_t, 2> ids{};
+      for (size_t e = 0; e < 2; ++e) {
+        const int64_t id = read_integer(p[e], pat.index(k).index(e));
+        if (id < 0 || id > INT32_MAX)
+          throw pat.index(k).index(e).error("expected a point id >= 0 (got " + std::to_string(id) + ")");
+        ids[e] = static_cast<int32_t>(id);
+      }
+      if (ids[0] == ids[1])
+        throw pat.index(k).error("a suture joins two different points (got " + std::to_string(ids[0]) + " twice)");
+      s.pairs.push_back(ids);
+    }
+    for (const char* key : {"spacing", "max_distance"})
+      if (r.has(key)) throw r.at(key).error("only with \"along\" (explicit pairs are tied as given)");
+  } else {
+    if (along->empty()) throw r.at("along").error("expected a cut's name");
+    s.along = *along;
+    s.spacing = require_positive(read_number(r.require("spacing"), r.at("spacing")), r.at("spacing"));
+    s.max_distance =
+        require_positive(read_number(r.require("max_distance"), r.at("max_distance")), r.at("max_distance"));
+  }
+  if (auto v = r.number("length")) s.length = require_non_negative(*v, r.at("length"));
+  if (auto v = r.number("rate")) s.rate = require_non_negative(*v, r.at("rate"));
+  if (auto v = r.number("min_length")) s.min_length = require_non_negative(*v, r.at("min_length"));
+  r.finish();
+  return s;
+}
+
 }  // namespace
 
 EventsDef parse_events(const nlohmann::json& j, const JsonPath& at) {
-  if (!j.is_array()) throw at.error("expected an array of events ({\"cut\"|\"tear\": {...}})");
+  if (!j.is_array()) throw at.error("expected an array of events ({\"cut\"|\"tear\"|\"suture\": {...}})");
   EventsDef events;
   std::set<std::string> names;
   for (size_t i = 0; i < j.size(); ++i) {
     const JsonPath eat = at.index(i);
     ObjectReader r(j[i], eat);
-    if (j[i].size() != 1) throw eat.error("expected exactly one of \"cut\" or \"tear\"");
+    if (j[i].size() != 1) throw eat.error("expected exactly one of \"cut\", \"tear\" or \"suture\"");
     if (const nlohmann::json* c = r.get("cut")) {
       CutEvent cut = parse_cut(*c, eat.field("cut"));
       if (cut.name.empty()) cut.name = "cut" + std::to_string(events.cuts.size());
@@ -95,8 +140,26 @@ EventsDef parse_events(const nlohmann::json& j, const JsonPath& at) {
     } else if (const nlohmann::json* t = r.get("tear")) {
       if (events.tear) throw eat.error("only one \"tear\" event per scenario");
       events.tear = parse_tear(*t, eat.field("tear"));
+    } else if (const nlohmann::json* u = r.get("suture")) {
+      events.sutures.push_back(parse_suture(*u, eat.field("suture")));
     }
     r.finish();  // names the unknown event kind
+  }
+  // Sutures along a cut: the cut exists (anywhere in the list) and is done.
+  for (size_t i = 0, k = 0; i < j.size(); ++i) {
+    if (!j[i].contains("suture")) continue;
+    const SutureEvent& s = events.sutures[k++];
+    if (s.along.empty()) continue;
+    const JsonPath fat = at.index(i).field("suture").field("along");
+    const auto cut = std::find_if(events.cuts.begin(), events.cuts.end(), [&](const CutEvent& c) { return c.name == s.along; });
+    if (cut == events.cuts.end()) {
+      std::string names;
+      for (const CutEvent& c : events.cuts) names += (names.empty() ? "" : ", ") + ("\"" + c.name + "\"");
+      throw fat.error("no cut named \"" + s.along + "\" (cuts: " + (names.empty() ? "none" : names) + ")");
+    }
+    if (s.t < cut->end())
+      throw fat.error("the cut \"" + s.along + "\" ends at t = " + std::to_string(cut->end()) +
+                      " s; sutures along it need t >= that (got " + std::to_string(s.t) + ")");
   }
   return events;
 }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/util/error.h"
@@ -32,6 +33,12 @@ std::string avx512_refusal(const Model& model) {
   if (sizeof(Real) != sizeof(float)) return "the avx512 kernel computes in float";
   if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
   return avx512_kernel_unsupported(model);
+}
+
+// What the springs pass does with sutures, if the model has any.
+std::string sutures_detail(const Model& m) {
+  if (m.nsuture() == 0) return "";
+  return ", " + std::to_string(m.nsuture()) + " of them sutures (tension only, rest length refreshed per tick)";
 }
 
 // Step-invariant inputs of one substep.
@@ -91,8 +98,7 @@ class CpuBackend final : public Backend {
     pack();
     std::string how;
     if (options.threads <= 0 && omp_get_max_threads() > 1) how = choose_threads_by_timing();
-    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how +
-              ", " + (fast_ ? "avx512" : "generic") + " kernel";
+    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how;
   }
 
   void rebuild(const Model& next) override {
@@ -113,7 +119,8 @@ class CpuBackend final : public Backend {
   }
 
   std::string name() const override { return "cpu"; }
-  std::string device() const override { return device_; }
+  // The kernel as of now: a rebuild may move a model to the generic one (sutures).
+  std::string device() const override { return device_ + ", " + (fast_ ? "avx512" : "generic") + " kernel"; }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
@@ -123,7 +130,8 @@ class CpuBackend final : public Backend {
     const auto& m = *model_;
     const size_t real = sizeof(Real);
     plan.passes.push_back({"springs", std::to_string(m.nspring()) + " springs gathered from both ends (" +
-                                          std::to_string(m.layout.springs.item.size()) + " slots)"});
+                                          std::to_string(m.layout.springs.item.size()) + " slots)" +
+                                          sutures_detail(m)});
     if (m.has_nodal_volume())
       plan.passes.push_back({"nodal-volume", "nodal volumes and pressures, tets gathered per vertex, then a barrier"});
     if (m.has_volume())
@@ -221,6 +229,7 @@ class CpuBackend final : public Backend {
     const int tool_kind = !(tool_.present && request.tool_active) ? kNoTool
                           : tool_.mode == ToolMode::Push         ? kPush
                                                                  : kPull;
+    refresh_suture_rest();
     Reaction reaction;
     for (int32_t s = 0; s < request.substeps; ++s) {
       // The force of substep s acts at its start: tool centre interpolated there.
@@ -238,6 +247,16 @@ class CpuBackend final : public Backend {
     Vec3 force, torque;
     int32_t contacts;
   };
+
+  // Calls f(entry, p) for every slot of `table`, padding included, with the
+  // point p whose lane holds it (chunk by chunk, no search per entry).
+  template <class F>
+  void for_each_slot(const GatherTable& table, F f) const {
+    const int32_t c = model_->layout.chunk_size;
+    for (int32_t chunk = 0; chunk + 1 < static_cast<int32_t>(table.chunk_offset.size()); ++chunk)
+      for (int32_t e = table.chunk_offset[chunk]; e < table.chunk_offset[chunk + 1]; ++e)
+        f(e, chunk * c + (e - table.chunk_offset[chunk]) % c);
+  }
 
   // Everything derived from the Model, in the backend's precision and slot
   // order; the constructor and rebuild() share it, so a topology change needs
@@ -267,15 +286,23 @@ class CpuBackend final : public Backend {
     spring_rest_.assign(springs.item.size(), 0);
     spring_k_.assign(springs.item.size(), 0);
     spring_d_.assign(springs.item.size(), 0);
-    for (int32_t e = 0; e < static_cast<int32_t>(springs.item.size()); ++e) {
-      const int32_t p = point_of_entry(springs, layout.chunk_size, e);
+    suture_slots_.clear();
+    for_each_slot(springs, [&](int32_t e, int32_t p) {
       const int32_t s = springs.item[e];
       spring_other_[e] = s < 0 ? p : layout.spring_other[e];
-      if (s < 0) continue;
+      if (s < 0) return;
       spring_rest_[e] = rest_distance(p, spring_other_[e]);
       spring_k_[e] = static_cast<Real>(model.spring_k[s]);
       spring_d_[e] = static_cast<Real>(model.spring_d[s]);
-    }
+      if (s >= model.first_suture()) {
+        // A suture: tension only, marked by a negative stiffness in its slot
+        // (no extra stream for the loop to read); its rest length follows
+        // the schedule (refresh_suture_rest).
+        spring_k_[e] = -spring_k_[e];
+        suture_slots_.push_back({e, s});
+      }
+    });
+    refresh_suture_rest();
     if (model.has_volume()) {
       const auto& tets = layout.tets;
       for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
@@ -283,17 +310,16 @@ class CpuBackend final : public Backend {
       const size_t per_tet = model.has_nodal_volume() ? 0 : tets.item.size();
       tet_rest_.assign(per_tet, 0);
       tet_k_.assign(per_tet, 0);
-      for (int32_t e = 0; e < static_cast<int32_t>(tets.item.size()); ++e) {
-        const int32_t p = point_of_entry(tets, layout.chunk_size, e);
+      for_each_slot(tets, [&](int32_t e, int32_t p) {
         const int32_t t = tets.item[e];
         const auto& o = layout.tet_others[e];
         tet_a_[e] = t < 0 ? p : o[0];
         tet_b_[e] = t < 0 ? p : o[1];
         tet_c_[e] = t < 0 ? p : o[2];
-        if (t < 0 || model.has_nodal_volume()) continue;
+        if (t < 0 || model.has_nodal_volume()) return;
         tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
-      }
+      });
     }
     mass_.resize(n);
     inv_mass_.resize(n);
@@ -332,6 +358,12 @@ class CpuBackend final : public Backend {
       node_k_.clear(), node_rest_.clear(), node_q_.clear();
     }
     pack_fast();
+  }
+
+  // Sutures tighten on their schedule: rest lengths at the start of the tick,
+  // constant over its substeps. The few suture slots only; nothing allocates.
+  void refresh_suture_rest() {
+    for (const auto& [e, s] : suture_slots_) spring_rest_[e] = static_cast<Real>(model_->spring_rest_at(s, time_));
   }
 
   // The AVX-512 kernel packs its own streams from the same Model; while it
@@ -399,25 +431,29 @@ class CpuBackend final : public Backend {
     return reaction;
   }
 
-  // Times a few steps from rest on 1 thread and on all hardware threads
-  // (alternating, best of three each) and keeps the faster; the state is
-  // put back to rest afterwards. Small models stay on one thread when the
-  // fork/join costs more than it saves. Returns what it measured, for device().
+  // Times steps from rest on 1 thread and on all hardware threads
+  // (alternating, best of five each, at least ~2 ms of steps per timing so
+  // that a liver-size model is timed over several steps, not one) and keeps
+  // the faster; the state is put back to rest afterwards. Small models stay
+  // on one thread when the fork/join costs more than it saves. Returns what
+  // it measured, for device().
   std::string choose_threads_by_timing() {
     const int all = omp_get_max_threads();
     StepContext<Real> ctx{};
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
-    const int32_t steps = std::clamp<int32_t>(200000 / std::max<int32_t>(model_->npoint(), 1), 4, 50);
+    auto time_steps = [&](int threads, int32_t steps) {
+      threads_ = threads;
+      const auto start = std::chrono::steady_clock::now();
+      for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
+      return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / steps;
+    };
+    // Warm-up: the first parallel step also starts the thread pool.
+    time_steps(all, 1);
+    const double estimate = time_steps(1, 1);
+    const int32_t steps = std::clamp(static_cast<int32_t>(2.0 / std::max(estimate, 1e-4)), 4, 200);
     double best[2] = {1e30, 1e30};
-    for (int round = 0; round < 3; ++round) {
-      for (int which = 0; which < 2; ++which) {
-        threads_ = which ? all : 1;
-        const auto start = std::chrono::steady_clock::now();
-        for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
-        const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / steps;
-        best[which] = std::min(best[which], ms);
-      }
-    }
+    for (int round = 0; round < 5; ++round)
+      for (int which = 0; which < 2; ++which) best[which] = std::min(best[which], time_steps(which ? all : 1, steps));
     threads_ = best[1] < best[0] ? all : 1;
     u_.assign(u_.x.size(), 0);
     d_.assign(d_.x.size(), 0);
@@ -573,6 +609,8 @@ class CpuBackend final : public Backend {
       }
 
       // Springs + dampers: f = [k (L - r) + d (dv . l/L)] l/L, l = x_q - x_p.
+      // A suture (k < 0 in its slot, stiffness |k|) pulls only: no force while
+      // slack (L <= r), and a closing damper never turns the pull into a push.
       const int32_t* __restrict other = spring_other_.data();
       const Real* __restrict rest = spring_rest_.data();
       const Real* __restrict k = spring_k_.data();
@@ -588,7 +626,9 @@ class CpuBackend final : public Backend {
           const Real inv = length > Real(0) ? Real(1) / length : Real(0);
           const Real dvx = dx[q] - dx[p], dvy = dy[q] - dy[p], dvz = dz[q] - dz[p];
           const Real along = (dvx * lx + dvy * ly + dvz * lz) * inv * ctx.inv_dt;
-          const Real s = (k[e] * (length - rest[e]) + d[e] * along) * inv;
+          const Real ke = k[e];
+          const Real pull = (std::abs(ke) * (length - rest[e]) + d[e] * along) * inv;
+          const Real s = ke < Real(0) && !(length > rest[e] && pull > Real(0)) ? Real(0) : pull;
           fx[l] += s * lx;
           fy[l] += s * ly;
           fz[l] += s * lz;
@@ -697,7 +737,8 @@ class CpuBackend final : public Backend {
   Soa3<Real> u_, u_next_;             // displacements from rest at t, t+1 (npoint)
   Soa3<Real> d_, d_next_;             // step increments u_t - u_{t-1}, u_{t+1} - u_t (npoint)
   std::vector<int32_t> spring_other_;  // per slot, self for padding (nentry)
-  std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry)
+  std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry); k < 0 marks a suture
+  std::vector<std::pair<int32_t, int32_t>> suture_slots_;  // (slot, spring) of every suture slot
   std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
   std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term
   std::vector<Real> node_k_, node_rest_, node_q_;  // nodal term: k_a, V_a^r, pressure (npoint); else empty

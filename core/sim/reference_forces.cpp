@@ -5,7 +5,7 @@
 namespace organsim {
 
 void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
-                               std::vector<Vec3>& force) {
+                               std::vector<Vec3>& force, double t) {
   force.assign(model.npoint(), Vec3::Zero());
   // Spring + damper: f_a = [k (L - r) + d ((v_b - v_a) . u)] u, f_b = -f_a.
   for (int32_t s = 0; s < model.nspring(); ++s) {
@@ -14,7 +14,10 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
     const double length = l.norm();
     if (length <= 0) continue;  // coincident ends: no defined direction, no force
     const Vec3 u = l / length;
-    const Vec3 f = (model.spring_k[s] * (length - model.spring_rest[s]) + model.spring_d[s] * (v[b] - v[a]).dot(u)) * u;
+    const double rest = model.spring_rest_at(s, t);
+    const double pull = model.spring_k[s] * (length - rest) + model.spring_d[s] * (v[b] - v[a]).dot(u);
+    if (s >= model.first_suture() && !(length > rest && pull > 0)) continue;  // a slack suture
+    const Vec3 f = pull * u;
     force[a] += f;
     force[b] -= f;
   }

@@ -11,10 +11,11 @@ namespace organsim {
 
 // Forces on every point (internal numbering) for positions x and velocities v:
 // springs + dampers, volume conservation (per tet or nodal, if the model has
-// it), gravity.
-// Fixed points get their force too (integration ignores it).
+// it), gravity. Fixed points get their force too (integration ignores it).
+// Sutures pull only (no force while slack, never a push) with their rest
+// length at time t.
 void reference_internal_forces(const Model& model, const std::vector<Vec3>& x,
-                               const std::vector<Vec3>& v, std::vector<Vec3>& force);
+                               const std::vector<Vec3>& v, std::vector<Vec3>& force, double t = 0);
 
 // Push contact of a sphere tool (center c, radius R, stiffness k): for points
 // with |x - c| < R, f_i = k s_i (R - |x - c|) (x - c)/|x - c|, s_i from

@@ -151,10 +151,18 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
           owned = std::move(next);
           current = owned.get();
           for (RunObserver* o : options.observers) o->on_topology_changed(*current, backend);
+          // dt below the guaranteed (Gershgorin) step is stable, and the full
+          // estimate would accept it too; only above it is the power
+          // iteration needed to decide.
+          const auto check_start = Clock::now();
           const ToolSpec* tool_spec = scenario.tool ? &scenario.tool->spec : nullptr;
-          const StabilityReport report = estimate_critical_step(*current, critical_step_options(*current, tool_spec));
-          topology->changed(previous, *current, rebuild_seconds, report.dt_crit);
-          check_step_after_change(report, scenario, t0, options.allow_unstable);
+          const CriticalStepOptions step_options = critical_step_options(*current, tool_spec);
+          const double guaranteed = topology->guaranteed_step(previous, *current, step_options);
+          std::optional<StabilityReport> report;
+          if (!(time.dt <= guaranteed)) report = estimate_critical_step(*current, step_options);
+          topology->changed(previous, *current, rebuild_seconds, guaranteed, report ? &*report : nullptr,
+                            seconds_since(check_start));
+          if (report) check_step_after_change(*report, scenario, t0, options.allow_unstable);
         }
       }
       if (pull && !grasped && starts_at_or_after(t0, tool->grasp_time, time.dt)) {
@@ -212,6 +220,10 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
     result.meta.extra["events"] = topology->log();
     result.meta.extra["final_points"] = current->npoint();
     result.meta.extra["final_springs"] = current->nspring();
+    if (!failure && !scenario.events.sutures.empty()) {
+      backend.positions(event_positions);
+      result.meta.extra["sutures"] = suture_summary(*current, event_positions, backend.time());
+    }
   }
 
   if (failure) {

@@ -26,11 +26,12 @@ std::string kind_name(BlowupFinding::Kind k) {
   return "";
 }
 
-// (L - r) / r > bound, i.e. L^2 > (1 + bound)^2 r^2, for some spring.
+// (L - r) / r > bound, i.e. L^2 > (1 + bound)^2 r^2, for some tissue spring
+// (a suture is a thread, not tissue: its length says nothing of stability).
 bool any_spring_beyond(const Model& model, const std::vector<Vec3>& x, double bound) {
   const double c = (1 + bound) * (1 + bound);
   int found = 0;
-  for (int32_t s = 0; s < model.nspring(); ++s) {
+  for (int32_t s = 0; s < model.first_suture(); ++s) {
     const auto [a, b] = model.spring_ends[s];
     const double r = model.spring_rest[s];
     found |= (x[b] - x[a]).squaredNorm() > c * r * r;
@@ -93,7 +94,7 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
   int32_t worst = -1;
   double worst_strain = options.max_strain;
   if (any_spring_beyond(model, x, options.max_strain)) {
-    for (int32_t s = 0; s < model.nspring(); ++s) {
+    for (int32_t s = 0; s < model.first_suture(); ++s) {
       const auto [a, b] = model.spring_ends[s];
       const double strain = ((x[b] - x[a]).norm() - model.spring_rest[s]) / model.spring_rest[s];
       if (strain > worst_strain) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 
+#include "core/stability/gershgorin.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -124,54 +125,6 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return s;
 }
 
-// Gershgorin with 3x3 blocks: for the block matrix M^-1 K, every eigenvalue
-// lies below max_i (|K_ii| + sum_j |K_ij|) / m_i with spectral norms; we
-// bound the norms by their terms (|k u u^T| = k, |k_v g_i g_j^T| = k_v |g_i| |g_j|,
-// |k_c I| = k_c). Fixed neighbours drop out of the row (their columns are gone).
-std::vector<double> gershgorin_rows(const Model& model, const RestStiffness& k, int terms = kAll) {
-  const int32_t n = model.npoint();
-  std::vector<double> row(n, 0.0);
-  auto free = [&](int32_t i) { return model.inv_mass[i] > 0; };
-  for (int32_t s = 0; s < model.nspring(); ++s) {
-    const auto [a, b] = model.spring_ends[s];
-    const double ks = model.spring_k[s];
-    row[a] += ks * (free(b) ? 2 : 1);
-    row[b] += ks * (free(a) ? 2 : 1);
-  }
-  if ((terms & kVolume) && model.has_nodal_volume()) {
-    // K_ij = sum_a k_a G_ai G_aj^T with G_ai = sum over the tets holding a and
-    // i of g_ti / 4, so |K_ij| <= sum_a |k_a| |G_ai| |G_aj| and row i is below
-    // sum over the tets t of i of |g_ti| / 4 * sum over a in t of |k_a| S_a,
-    // with S_a = sum over the tets of a of their free |g_tj| / 4 >= sum_j |G_aj|.
-    std::vector<double> reach(n, 0.0);
-    for (int32_t t = 0; t < model.ntet(); ++t) {
-      const Tet& p = model.tet_points[t];
-      double sum_free = 0;
-      for (int j = 0; j < 4; ++j)
-        if (free(p[j])) sum_free += k.tet_grad[t][j].norm();
-      for (int32_t a : p) reach[a] += sum_free / 4;
-    }
-    for (int32_t t = 0; t < model.ntet(); ++t) {
-      const Tet& p = model.tet_points[t];
-      double patch = 0;
-      for (int32_t a : p) patch += std::abs(model.point_volume_k[a]) * reach[a];
-      for (int i = 0; i < 4; ++i) row[p[i]] += k.tet_grad[t][i].norm() / 4 * patch;
-    }
-  } else if ((terms & kVolume) && model.has_volume()) {
-    for (int32_t t = 0; t < model.ntet(); ++t) {
-      const Tet& p = model.tet_points[t];
-      const auto& g = k.tet_grad[t];
-      double sum_free = 0;
-      for (int j = 0; j < 4; ++j)
-        if (free(p[j])) sum_free += g[j].norm();
-      for (int i = 0; i < 4; ++i) row[p[i]] += std::abs(model.tet_k[t]) * g[i].norm() * sum_free;
-    }
-  }
-  for (int32_t i = 0; i < n; ++i)
-    row[i] = free(i) ? (row[i] + ((terms & kTool) ? k.tool_k[i] : 0.0)) * model.inv_mass[i] : 0.0;
-  return row;
-}
-
 // Smallest interior dihedral angle of a tet, degrees.
 double min_dihedral_deg(const std::array<Vec3, 4>& x) {
   double best = 180;
@@ -284,9 +237,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   r.viscous_damping = model.viscous_damping;
   // c = d / k from the springs themselves (the largest, to stay safe), so
   // hand-built models with their own dampers are covered too.
-  r.spring_damping_time = 0;
-  for (int32_t s = 0; s < model.nspring(); ++s)
-    if (model.spring_k[s] > 0) r.spring_damping_time = std::max(r.spring_damping_time, model.spring_d[s] / model.spring_k[s]);
+  r.spring_damping_time = spring_damping_time(model);
   r.tool_contact_stiffness = options.tool_contact_stiffness;
 
   const RestStiffness k = rest_stiffness(model, options);
@@ -299,8 +250,9 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
     }
   }
 
-  // Gershgorin bound and its rows.
-  const std::vector<double> rows = gershgorin_rows(model, k);
+  // Gershgorin bound and its rows (core/stability/gershgorin.h).
+  const GershgorinRows gershgorin = gershgorin_rows(model);
+  const std::vector<double> rows = gershgorin_bounds(model, gershgorin, options);
   r.lambda_gershgorin = rows.empty() ? 0 : *std::max_element(rows.begin(), rows.end());
 
   // Candidate 1: the top mode of the full stiffness, with its own damping
@@ -345,9 +297,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   // Rigorous for exact eigenvalues: every mode has omega^2 <= lambda_max and
   // damping rate <= c lambda_springs + alpha.
   r.dt_crit_bound = critical_step_for_mode(r.lambda_max, c * r.lambda_springs + alpha);
-  const std::vector<double> spring_rows = gershgorin_rows(model, k, kSprings);
-  const double spring_bound = spring_rows.empty() ? 0 : *std::max_element(spring_rows.begin(), spring_rows.end());
-  r.dt_crit_gershgorin = critical_step_for_mode(r.lambda_gershgorin, c * spring_bound + alpha);
+  r.dt_crit_gershgorin = guaranteed_critical_step(model, gershgorin, options);
 
 
   // Limiting points: the top mode's largest kinetic-energy shares m_i |x_i|^2 = |y_i|^2,

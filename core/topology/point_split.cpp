@@ -95,14 +95,21 @@ PointSplit split_points(const std::vector<Tet>& tets, const TetFaces& faces, con
   return out;
 }
 
-std::vector<Edge> nonmanifold_boundary_edges(const std::vector<Tet>& tets, const TetFaces& faces) {
+namespace {
+
+// Boundary faces among `tet_ids` (face i of tet t is open when the tet
+// across it no longer shares its vertex ids); calls add(edge) for each of
+// their edges that `keep` accepts, and returns those edges sorted.
+template <class Keep>
+std::vector<Edge> boundary_edges(const std::vector<Tet>& tets, const TetFaces& faces,
+                                 const std::vector<int32_t>& tet_ids, Keep keep) {
   auto sorted_face = [&](int32_t t, int i) {
     Tri f = tet_face(tets[t], i);
     std::sort(f.begin(), f.end());
     return f;
   };
   std::vector<Edge> edges;
-  for (int32_t t = 0; t < static_cast<int32_t>(tets.size()); ++t) {
+  for (int32_t t : tet_ids) {
     for (int i = 0; i < 4; ++i) {
       const int32_t f = faces.face_of_tet[t][i];
       const Tri mine = sorted_face(t, i);
@@ -110,12 +117,16 @@ std::vector<Edge> nonmanifold_boundary_edges(const std::vector<Tet>& tets, const
         const int side = faces.tets[f][0] == t ? 1 : 0;
         if (sorted_face(faces.tets[f][side], faces.local[f][side]) == mine) continue;  // still joined
       }
-      edges.push_back({mine[0], mine[1]});
-      edges.push_back({mine[0], mine[2]});
-      edges.push_back({mine[1], mine[2]});
+      for (const Edge e : {Edge{mine[0], mine[1]}, Edge{mine[0], mine[2]}, Edge{mine[1], mine[2]}})
+        if (keep(e)) edges.push_back(e);
     }
   }
   std::sort(edges.begin(), edges.end());
+  return edges;
+}
+
+// Edges listed more than twice in sorted `edges`.
+std::vector<Edge> listed_more_than_twice(const std::vector<Edge>& edges) {
   std::vector<Edge> bad;
   for (size_t i = 0; i < edges.size();) {
     size_t j = i + 1;
@@ -124,6 +135,44 @@ std::vector<Edge> nonmanifold_boundary_edges(const std::vector<Tet>& tets, const
     i = j;
   }
   return bad;
+}
+
+}  // namespace
+
+std::vector<Edge> nonmanifold_boundary_edges(const std::vector<Tet>& tets, const TetFaces& faces) {
+  std::vector<int32_t> all(tets.size());
+  std::iota(all.begin(), all.end(), 0);
+  return listed_more_than_twice(boundary_edges(tets, faces, all, [](const Edge&) { return true; }));
+}
+
+std::vector<Edge> nonmanifold_boundary_edges_near(const PointSplit& split, const GatherLayout& before,
+                                                  const TetFaces& faces) {
+  const GatherTable& before_tets_of = before.tets;
+  const int32_t chunk_size = before.chunk_size;
+  const int32_t npoint = static_cast<int32_t>(before_tets_of.count.size());
+  auto origin = [&](int32_t p) { return p >= npoint ? split.appended_origin[p - npoint] : p; };
+  // Tets (ids never change) around a point before the split: its own and its copies' now.
+  std::vector<int32_t> marked;
+  std::vector<uint8_t> in(split.tet_points.size(), 0);
+  auto add_tets_of = [&](int32_t p) {
+    p = origin(p);
+    const int32_t first = before_tets_of.chunk_offset[p / chunk_size] + p % chunk_size;
+    for (int32_t j = 0; j < before_tets_of.count[p]; ++j) {
+      const int32_t t = before_tets_of.item[first + j * chunk_size];
+      if (!in[t]) in[t] = 1, marked.push_back(t);
+    }
+  };
+  for (int32_t p : split.appended_origin) add_tets_of(p);
+  const std::vector<int32_t> around_split = marked;
+  const std::vector<Edge> candidates = boundary_edges(split.tet_points, faces, around_split,
+                                                      [](const Edge&) { return true; });
+  // Every tet around the candidates' lower ends, so each candidate is
+  // counted over all the boundary faces that hold it.
+  for (const Edge& e : candidates) add_tets_of(e[0]);
+  std::sort(marked.begin(), marked.end());
+  return listed_more_than_twice(boundary_edges(split.tet_points, faces, marked, [&](const Edge& e) {
+    return std::binary_search(candidates.begin(), candidates.end(), e);
+  }));
 }
 
 }  // namespace organsim

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/model/layout.h"
 #include "core/topology/tet_faces.h"
 
 namespace organsim {
@@ -30,5 +31,16 @@ PointSplit split_points(const std::vector<Tet>& tets, const TetFaces& faces, con
 // Boundary faces are found through `faces` (a face is open when the two tets
 // across it no longer share its vertex ids), O(ntet).
 std::vector<Edge> nonmanifold_boundary_edges(const std::vector<Tet>& tets, const TetFaces& faces);
+
+// The same edges after `split` of `before` (the Model the split started
+// from, whose boundary is manifold; `before` is its gather layout), found
+// without visiting every tet: a
+// face changes (opens, or its ids change) only if it holds a split point, so
+// only edges of boundary faces of the split points' tets can have become
+// non-manifold; each is counted over all tets around one of its ends,
+// taken from `before`'s gather layout (copies: their origin's tets). Cost
+// proportional to the split points' neighbourhood.
+std::vector<Edge> nonmanifold_boundary_edges_near(const PointSplit& split, const GatherLayout& before,
+                                                  const TetFaces& faces);
 
 }  // namespace organsim

@@ -3,11 +3,27 @@
 #include <algorithm>
 #include <chrono>
 
+#include "core/model/model_rebuild.h"
 #include "core/topology/blade.h"
 
 namespace organsim {
 
-TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial) : events_(events), editor_(initial) {
+nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t) {
+  double tied = 0, length = 0, tension = 0;
+  for (int32_t s = model.first_suture(); s < model.nspring(); ++s) {
+    const Suture& u = model.suture_of_spring(s);
+    const double l = (x[u.ends[1]] - x[u.ends[0]]).norm();
+    tied = std::max(tied, u.length);
+    length = std::max(length, l);
+    tension = std::max(tension, u.k * std::max(0.0, l - u.rest_at(t)));
+  }
+  return {{"count", model.nsuture()}, {"tied_length_max_m", tied}, {"length_max_m", length}, {"tension_max_N", tension}};
+}
+
+TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)
+    : events_(events), editor_(initial), cut_records_(events.cuts.size()), tied_(events.sutures.size(), 0),
+      step_check_(initial) {
+  for (size_t i = 0; i < events.cuts.size(); ++i) cut_records_[i].cut = &events.cuts[i];
   if (events.tear) {
     TearSettings s;
     s.strain = events.tear->strain;
@@ -17,18 +33,24 @@ TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial) : 
   }
 }
 
+bool TopologyEvents::suture_due(size_t i, double t0, double t1) const {
+  // The first tick that starts at or after t (a millionth of a tick of slack for rounding in i * tick).
+  return !tied_[i] && t0 + 1e-6 * (t1 - t0) >= events_.sutures[i].t;
+}
+
 bool TopologyEvents::active(double t0, double t1) const {
   for (const CutEvent& c : events_.cuts)
     if (t1 > c.start() && t0 < c.end()) return true;
+  for (size_t i = 0; i < tied_.size(); ++i)
+    if (suture_due(i, t0, t1)) return true;
   return events_.tear && t1 > events_.tear->start;
 }
 
-bool TopologyEvents::before_tick(double t0, double t1, const Model& current, const std::vector<Vec3>& x,
-                                 Model& next) {
-  const auto start = std::chrono::steady_clock::now();
+bool TopologyEvents::separate(double t0, double t1, const Model& current, const std::vector<Vec3>& x, Model& next,
+                              nlohmann::json& sources, ChangeCounts& counts) {
   std::vector<int32_t> faces;
-  nlohmann::json sources = nlohmann::json::array();
-  for (const CutEvent& c : events_.cuts) {
+  for (size_t i = 0; i < events_.cuts.size(); ++i) {
+    const CutEvent& c = events_.cuts[i];
     if (!(t1 > c.start() && t0 < c.end())) continue;
     BladeSweep sweep;
     c.blade_at(t0, sweep.a0, sweep.b0);
@@ -36,6 +58,9 @@ bool TopologyEvents::before_tick(double t0, double t1, const Model& current, con
     const auto cut = faces_cut_by_blade(sweep, editor_.faces(), current.tet_points, x, editor_.separated());
     if (cut.empty()) continue;
     faces.insert(faces.end(), cut.begin(), cut.end());
+    std::vector<int32_t>& record = cut_records_[i].faces;
+    record.insert(record.end(), cut.begin(), cut.end());
+    std::sort(record.begin(), record.end());
     sources.push_back({{"kind", "cut"}, {"name", c.name}, {"faces", cut.size()}});
   }
   if (tear_ && t1 > events_.tear->start) {
@@ -48,12 +73,52 @@ bool TopologyEvents::before_tick(double t0, double t1, const Model& current, con
   if (faces.empty()) return false;
   std::sort(faces.begin(), faces.end());
   faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-  ChangeCounts counts;
   const bool changed = editor_.separate(current, faces, next, counts);
-  if (!changed) {
-    unopened_faces_ += counts.faces_separated;
-    return false;
+  if (!changed) unopened_faces_ += counts.faces_separated;
+  return changed;
+}
+
+bool TopologyEvents::tie_sutures_due(double t0, double t1, const Model& base, const std::vector<Vec3>& x, Model& next,
+                                     nlohmann::json& sources) {
+  std::vector<Suture> added;
+  for (size_t i = 0; i < tied_.size(); ++i) {
+    if (!suture_due(i, t0, t1)) continue;
+    const SutureEvent& event = events_.sutures[i];
+    if (x_base_.size() != static_cast<size_t>(base.npoint())) {
+      // Points this tick's cut appended sit where their origins are.
+      x_base_ = x;
+      for (int32_t p = static_cast<int32_t>(x.size()); p < base.npoint(); ++p) x_base_.push_back(x_base_[base.origin[p]]);
+    }
+    const CutRecord* cut = nullptr;
+    for (const CutRecord& r : cut_records_)
+      if (r.cut->name == event.along) cut = &r;
+    const std::vector<Suture> tied =
+        tie_sutures(event, t0, base, x_base_, cut, editor_.faces(), editor_.separated());
+    added.insert(added.end(), tied.begin(), tied.end());
+    nlohmann::json source = {{"kind", "suture"}, {"sutures", tied.size()}};
+    if (!event.along.empty()) source["along"] = event.along;
+    double longest = 0;
+    for (const Suture& s : tied) longest = std::max(longest, s.length);
+    source["longest_m"] = longest;
+    sources.push_back(std::move(source));
+    tied_[i] = 1;
   }
+  x_base_.clear();
+  if (added.empty()) return false;
+  Model sutured = add_sutures(base, added);  // `base` may be `next`: build first, then move
+  next = std::move(sutured);
+  return true;
+}
+
+bool TopologyEvents::before_tick(double t0, double t1, const Model& current, const std::vector<Vec3>& x,
+                                 Model& next) {
+  const auto start = std::chrono::steady_clock::now();
+  nlohmann::json sources = nlohmann::json::array();
+  ChangeCounts counts;
+  const bool separated = separate(t0, t1, current, x, next, sources, counts);
+  // Sutures due now are tied on the Model this tick's cuts made, if any.
+  const bool sutured = tie_sutures_due(t0, t1, separated ? next : current, x, next, sources);
+  if (!separated && !sutured) return false;
   std::string kind;
   for (const auto& source : sources) {
     const std::string k = source["kind"];
@@ -63,23 +128,34 @@ bool TopologyEvents::before_tick(double t0, double t1, const Model& current, con
       {"t", t0},
       {"kind", kind},
       {"sources", sources},
-      {"faces_separated", counts.faces_separated + unopened_faces_},
+      {"faces_separated", separated ? counts.faces_separated + unopened_faces_ : 0},
       {"points_split", counts.points_split},
       {"points_added", counts.points_added},
       {"springs_added", counts.springs_added},
       {"springs_removed", counts.springs_removed},
+      {"sutures_added", next.nsuture() - current.nsuture()},
       {"points", next.npoint()},
       {"springs", next.nspring()},
+      {"sutures", next.nsuture()},
       {"model_ms", 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()},
   };
-  unopened_faces_ = 0;
+  if (separated) unopened_faces_ = 0;
   return true;
 }
 
-void TopologyEvents::changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit) {
+double TopologyEvents::guaranteed_step(const Model& previous, const Model& next, const CriticalStepOptions& options) {
+  step_check_.update(previous, next);
+  return step_check_.guaranteed_step(next, options);
+}
+
+void TopologyEvents::changed(const Model& previous, const Model& next, double rebuild_seconds,
+                             double dt_crit_guaranteed, const StabilityReport* full, double check_seconds) {
   if (tear_) tear_->model_changed(previous, next);
   pending_["backend_rebuild_ms"] = 1e3 * rebuild_seconds;
-  pending_["dt_crit"] = dt_crit;
+  pending_["dt_crit_guaranteed"] = dt_crit_guaranteed;
+  pending_["dt_check"] = full ? "power iteration" : "gershgorin";
+  if (full) pending_["dt_crit"] = full->dt_crit;
+  pending_["dt_check_ms"] = 1e3 * check_seconds;
   log_.push_back(std::move(pending_));
   pending_ = nlohmann::json();
 }

@@ -1,7 +1,7 @@
 #pragma once
 // The scenario's events during a run: which faces the cuts' blades and the
-// tear criterion separate over each tick, and the Model version that
-// results. The run loop asks before every tick and, when a new version comes
+// tear criterion separate over each tick, which sutures are tied, and the
+// Model version that results. The run loop asks before every tick and, when a new version comes
 // back, rebuilds the backend from it. Built only for a scenario with events.
 #include <nlohmann/json.hpp>
 
@@ -9,10 +9,18 @@
 
 #include "core/model/model.h"
 #include "core/scenario/events.h"
+#include "core/stability/critical_step.h"
+#include "core/stability/step_after_change.h"
+#include "core/topology/suture_select.h"
 #include "core/topology/tear.h"
 #include "core/topology/topology_editor.h"
 
 namespace organsim {
+
+// meta.sutures of the force log at the end of a run: how many, their longest
+// rest length when tied and their longest length and largest tension
+// k max(0, L - r(t)) now (the damper left out), at positions x and time t.
+nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t);
 
 class TopologyEvents {
  public:
@@ -23,22 +31,43 @@ class TopologyEvents {
 
   // The changes over the tick [t0, t1] at positions x (internal numbering of
   // `current`): blades sweep from their pose at t0 to their pose at t1, the
-  // tear criterion looks at x. Returns true when `next` holds a new Model
+  // tear criterion looks at x, sutures due are tied at t0 (after this tick's
+  // cuts, on the Model they made). Returns true when `next` holds a new Model
   // version (the backend must be rebuilt from it before the tick).
   bool before_tick(double t0, double t1, const Model& current, const std::vector<Vec3>& x, Model& next);
 
-  // Records the change just made (time, kinds, counts, the backend's rebuild
-  // time and the new dt_crit) and carries the tear counters over.
-  void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit);
+  // The guaranteed-stable step of `next`, the version just made from
+  // `previous` (core/stability/step_after_change.h: only the rows the change
+  // touched are recomputed).
+  double guaranteed_step(const Model& previous, const Model& next, const CriticalStepOptions& options);
+
+  // Records the change just made (time, kinds, counts incl. sutures, the backend's rebuild
+  // time, the guaranteed step and, when the run needed it, the new dt_crit
+  // from the full estimate, and how long the check took) and carries the
+  // tear counters over.
+  void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit_guaranteed,
+               const StabilityReport* full, double check_seconds);
 
   // meta.events of the force log: one entry per change.
   const nlohmann::json& log() const { return log_; }
   const TopologyEditor& editor() const { return editor_; }
 
  private:
+  bool suture_due(size_t i, double t0, double t1) const;
+  // Cuts and tear: true when `next` holds the split Model.
+  bool separate(double t0, double t1, const Model& current, const std::vector<Vec3>& x, Model& next,
+                nlohmann::json& sources, ChangeCounts& counts);
+  // Sutures due: true when `next` holds `base` with them added (`base` may be `next`).
+  bool tie_sutures_due(double t0, double t1, const Model& base, const std::vector<Vec3>& x, Model& next,
+                       nlohmann::json& sources);
+
   const EventsDef& events_;
   TopologyEditor editor_;
+  std::vector<CutRecord> cut_records_;  // per cut: the faces its blade separated
+  std::vector<uint8_t> tied_;           // per suture event: done
+  std::vector<Vec3> x_base_;            // positions extended to the points a cut appended this tick
   std::optional<TearDetector> tear_;
+  ChangeStepCheck step_check_;
   nlohmann::json log_ = nlohmann::json::array();
   nlohmann::json pending_;  // the entry of the change before_tick just made
   int32_t unopened_faces_ = 0;  // separated with no point split yet (at a blade's tip)

@@ -43,7 +43,7 @@ std::vector<int32_t> TearDetector::update(const Model& model, const std::vector<
   over_.resize(model.nspring(), 0);
   std::vector<int32_t> out;
   std::vector<uint8_t> chosen;
-  for (int32_t s = 0; s < model.nspring(); ++s) {
+  for (int32_t s = 0; s < model.first_suture(); ++s) {  // tissue tears; a suture has no face to separate
     const auto [a, b] = model.spring_ends[s];
     const Vec3 l = x[b] - x[a];
     const double strain = (l.norm() - model.spring_rest[s]) / model.spring_rest[s];
@@ -63,8 +63,8 @@ std::vector<int32_t> TearDetector::update(const Model& model, const std::vector<
 void TearDetector::model_changed(const Model& previous, const Model& next) {
   std::vector<int32_t> carried(next.nspring(), 0);
   over_.resize(previous.nspring(), 0);
-  // Spring ends are sorted in both models: one merge pass.
-  for (int32_t i = 0, j = 0; i < previous.nspring() && j < next.nspring();) {
+  // The tissue's spring ends are sorted in both models: one merge pass.
+  for (int32_t i = 0, j = 0; i < previous.first_suture() && j < next.first_suture();) {
     if (previous.spring_ends[i] < next.spring_ends[j]) {
       ++i;
     } else if (next.spring_ends[j] < previous.spring_ends[i]) {

@@ -7,14 +7,15 @@
 namespace organsim {
 
 void count_spring_changes(const Model& previous, const Model& next, ChangeCounts& counts) {
-  // Spring ends are sorted in every Model version (build_model, rebuild_model).
-  const std::vector<Edge>& a = previous.spring_ends;
-  const std::vector<Edge>& b = next.spring_ends;
+  // The tissue's spring ends are sorted in every Model version (build_model,
+  // rebuild_model); sutures follow them and are counted on their own.
+  const auto a = previous.spring_ends.begin(), a_end = a + previous.first_suture();
+  const auto b = next.spring_ends.begin(), b_end = b + next.first_suture();
   std::vector<Edge> only;
-  std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(only));
+  std::set_difference(b, b_end, a, a_end, std::back_inserter(only));
   counts.springs_added = static_cast<int32_t>(only.size());
   only.clear();
-  std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(only));
+  std::set_difference(a, a_end, b, b_end, std::back_inserter(only));
   counts.springs_removed = static_cast<int32_t>(only.size());
 }
 
@@ -62,7 +63,7 @@ bool TopologyEditor::separate(const Model& current, const std::vector<int32_t>& 
   PointSplit split;
   for (;;) {
     split = split_points(current.tet_points, faces_, separated_, fresh, current.npoint());
-    const std::vector<Edge> bad = nonmanifold_boundary_edges(split.tet_points, faces_);
+    const std::vector<Edge> bad = nonmanifold_boundary_edges_near(split, current.layout, faces_);
     if (bad.empty()) break;
     // Opening these faces would leave an edge with more than two boundary
     // faces (a point's tets wrapping around an opened edge): keep joined the

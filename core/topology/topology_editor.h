@@ -21,7 +21,8 @@ struct ChangeCounts {
   int32_t springs_removed = 0;  // springs in the old Model and not the new
 };
 
-// Springs (by their end ids) present in `next` and not in `previous`, and the reverse.
+// Tissue springs (by their end ids) present in `next` and not in `previous`,
+// and the reverse; sutures are not counted here.
 void count_spring_changes(const Model& previous, const Model& next, ChangeCounts& counts);
 
 class TopologyEditor {

@@ -87,5 +87,65 @@ TEST(ScenarioEvents, ErrorsNameTheFileAndPath) {
   expect_error(json::array({tear, tear}), "events[1]: only one \"tear\"");
 }
 
+const json kSuture = json::parse(R"({"suture": {"t": 0.4, "along": "incision", "spacing": 0.005,
+    "max_distance": 0.02, "stiffness": 50, "rate": 0.01, "min_length": 0.001}})");
+
+TEST(ScenarioEvents, SuturesAsWritten) {
+  const json pairs = json::parse(R"({"suture": {"t": 0.5, "pairs": [[3, 7], [12, 2]], "stiffness": 20, "length": 0.004}})");
+  const Scenario s = parse_scenario(with_events(json::array({kSuture, kCut, pairs})), "/data", "scene.json");
+  ASSERT_EQ(s.events.sutures.size(), 2u);
+  const SutureEvent& a = s.events.sutures[0];
+  EXPECT_EQ(a.where, "scene.json: events[0].suture");
+  EXPECT_DOUBLE_EQ(a.t, 0.4);
+  EXPECT_EQ(a.along, "incision");  // a cut later in the list is fine
+  EXPECT_DOUBLE_EQ(a.spacing, 0.005);
+  EXPECT_DOUBLE_EQ(a.max_distance, 0.02);
+  EXPECT_DOUBLE_EQ(a.stiffness, 50);
+  EXPECT_DOUBLE_EQ(a.rate, 0.01);
+  EXPECT_DOUBLE_EQ(a.min_length, 0.001);
+  EXPECT_FALSE(a.length.has_value());
+  EXPECT_DOUBLE_EQ(a.tied_length(0.03), 0.03);  // the current distance by default
+  const SutureEvent& b = s.events.sutures[1];
+  EXPECT_EQ(b.pairs, (std::vector<std::array<int32_t, 2>>{{3, 7}, {12, 2}}));
+  EXPECT_TRUE(b.along.empty());
+  EXPECT_DOUBLE_EQ(b.rate, 0);  // no tightening unless asked
+  EXPECT_DOUBLE_EQ(b.tied_length(0.03), 0.004);
+  EXPECT_TRUE(s.events.any());
+}
+
+TEST(ScenarioEvents, SutureErrorsNameTheField) {
+  auto with = [](const char* key, const json& value) {
+    json j = kSuture;
+    if (value.is_null())
+      j["suture"].erase(key);
+    else
+      j["suture"][key] = value;
+    return json::array({kCut, j});
+  };
+  expect_error(with("stiffness", 0), "events[1].suture.stiffness: expected a value > 0");
+  expect_error(with("stiffness", nullptr), "events[1].suture.stiffness: missing (required)");
+  expect_error(with("t", nullptr), "events[1].suture.t: missing (required)");
+  expect_error(with("rate", -1), "events[1].suture.rate: expected a value >= 0");
+  expect_error(with("min_length", -0.1), "events[1].suture.min_length: expected a value >= 0");
+  expect_error(with("length", -0.1), "events[1].suture.length: expected a value >= 0");
+  expect_error(with("spacing", nullptr), "events[1].suture.spacing: missing (required)");
+  expect_error(with("max_distance", 0), "events[1].suture.max_distance: expected a value > 0");
+  expect_error(with("knot", "square"), "events[1].suture.knot: unknown field");
+  expect_error(with("along", "other"), "events[1].suture.along: no cut named \"other\" (cuts: \"incision\")");
+  expect_error(json::array({kSuture}), "events[0].suture.along: no cut named \"incision\" (cuts: none)");
+  expect_error(with("t", 0.2), "events[1].suture.along: the cut \"incision\" ends at t = 0.3");
+  expect_error(with("pairs", json::parse("[[1, 2]]")), "events[1].suture: expected exactly one of \"pairs\"");
+  const auto pairs = [](const json& p) {
+    return json::array({json{{"suture", {{"t", 0}, {"stiffness", 1}, {"pairs", p}}}}});
+  };
+  expect_error(pairs(json::array()), "events[0].suture.pairs: expected a non-empty array");
+  expect_error(pairs(json::parse("[[1, 2, 3]]")), "events[0].suture.pairs[0]: expected a pair of point ids");
+  expect_error(pairs(json::parse("[[1, -2]]")), "events[0].suture.pairs[0][1]: expected a point id >= 0");
+  expect_error(pairs(json::parse("[[4, 4]]")), "events[0].suture.pairs[0]: a suture joins two different points");
+  json spaced = pairs(json::parse("[[1, 2]]"));
+  spaced[0]["suture"]["spacing"] = 0.01;
+  expect_error(spaced, "events[0].suture.spacing: only with \"along\"");
+}
+
 }  // namespace
 }  // namespace organsim

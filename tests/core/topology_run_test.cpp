@@ -162,6 +162,9 @@ TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {
   const auto log = nlohmann::json::parse(read_text_file(options.outdir / "forces.json"));
   EXPECT_EQ(log["meta"]["completed"], false);
   ASSERT_EQ(log["meta"]["events"].size(), 1u);
+  // dt is above the guaranteed step, so the full estimate decided.
+  EXPECT_EQ(log["meta"]["events"][0]["dt_check"], "power iteration");
+  EXPECT_LT(log["meta"]["events"][0]["dt_crit_guaranteed"].get<double>(), s.time.dt);
   EXPECT_LT(log["meta"]["events"][0]["dt_crit"].get<double>(), s.time.dt);
   // With allow_unstable the run goes on (and only warns).
   auto again = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});

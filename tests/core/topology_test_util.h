@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <random>
 #include <set>
 #include <string>
 
@@ -13,8 +14,19 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model.h"
 #include "core/sim/run_observer.h"
+#include "core/topology/blade.h"
 
 namespace organsim::testing {
+
+// A blade 0.8 long somewhere in the unit box, moving a short way (up to 0.3
+// per axis) in a random direction: the random cuts of the topology tests.
+inline BladeSweep random_short_blade(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0, 1);
+  const Vec3 a0(u(rng), u(rng), u(rng));
+  const Vec3 b0 = a0 + 0.8 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+  const Vec3 move = 0.6 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+  return {a0, b0, a0 + move, b0 + move};
+}
 
 inline std::string topology_problems(const Model& m) {
   const int32_t n = m.npoint();
@@ -35,13 +47,19 @@ inline std::string topology_problems(const Model& m) {
       if (++face_count[f] > 2) return "a face of tet " + std::to_string(t) + " is shared by more than two tets";
     }
   }
-  // Springs are exactly the unique tet edges (no sutures in these models).
+  // The tissue's springs are exactly the unique tet edges; the sutures follow
+  // them, each joining two different points in range.
   std::set<Edge> edges;
   for (const Tet& k : m.tet_points)
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) edges.insert({std::min(k[i], k[j]), std::max(k[i], k[j])});
-  const std::set<Edge> springs(m.spring_ends.begin(), m.spring_ends.end());
-  if (springs.size() != m.spring_ends.size()) return "duplicate springs";
+  const std::set<Edge> springs(m.spring_ends.begin(), m.spring_ends.begin() + m.first_suture());
+  if (springs.size() != static_cast<size_t>(m.first_suture())) return "duplicate springs";
+  for (int32_t s = m.first_suture(); s < m.nspring(); ++s) {
+    const Edge e = m.spring_ends[s];
+    if (e != m.suture_of_spring(s).ends || !(0 <= e[0] && e[0] < e[1] && e[1] < n))
+      return "suture spring " + std::to_string(s) + " does not join its suture's two points";
+  }
   if (springs != edges) return "the springs are not the tets' edges (" + std::to_string(springs.size()) + " vs " +
                                std::to_string(edges.size()) + ")";
   // Masses from each point's own tets.
