@@ -411,25 +411,29 @@ class CpuBackend final : public Backend {
     return reaction;
   }
 
-  // Times a few steps from rest on 1 thread and on all hardware threads
-  // (alternating, best of three each) and keeps the faster; the state is
-  // put back to rest afterwards. Small models stay on one thread when the
-  // fork/join costs more than it saves. Returns what it measured, for device().
+  // Times steps from rest on 1 thread and on all hardware threads
+  // (alternating, best of five each, at least ~2 ms of steps per timing so
+  // that a liver-size model is timed over several steps, not one) and keeps
+  // the faster; the state is put back to rest afterwards. Small models stay
+  // on one thread when the fork/join costs more than it saves. Returns what
+  // it measured, for device().
   std::string choose_threads_by_timing() {
     const int all = omp_get_max_threads();
     StepContext<Real> ctx{};
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
-    const int32_t steps = std::clamp<int32_t>(200000 / std::max<int32_t>(model_->npoint(), 1), 4, 50);
+    auto time_steps = [&](int threads, int32_t steps) {
+      threads_ = threads;
+      const auto start = std::chrono::steady_clock::now();
+      for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
+      return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / steps;
+    };
+    // Warm-up: the first parallel step also starts the thread pool.
+    time_steps(all, 1);
+    const double estimate = time_steps(1, 1);
+    const int32_t steps = std::clamp(static_cast<int32_t>(2.0 / std::max(estimate, 1e-4)), 4, 200);
     double best[2] = {1e30, 1e30};
-    for (int round = 0; round < 3; ++round) {
-      for (int which = 0; which < 2; ++which) {
-        threads_ = which ? all : 1;
-        const auto start = std::chrono::steady_clock::now();
-        for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
-        const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / steps;
-        best[which] = std::min(best[which], ms);
-      }
-    }
+    for (int round = 0; round < 5; ++round)
+      for (int which = 0; which < 2; ++which) best[which] = std::min(best[which], time_steps(which ? all : 1, steps));
     threads_ = best[1] < best[0] ? all : 1;
     u_.assign(u_.x.size(), 0);
     d_.assign(d_.x.size(), 0);

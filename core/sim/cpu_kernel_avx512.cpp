@@ -1,6 +1,7 @@
 #include "core/sim/cpu_kernel_avx512.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <new>
 
@@ -61,12 +62,13 @@ struct Avx512FloatKernel::Data {
   int cur = 0;                                   // which buffer holds step t
   std::vector<int32_t> spring_offset;            // first entry of each chunk (nchunk)
   std::vector<int32_t> spring_width;             // slots per group of 16 (nchunk x groups)
-  AlignedVector<int32_t> spring_other;           // per entry; padding points at itself
+  // Indices are kept pre-scaled to float offsets (8 p into the records, 4 p
+  // into the force slices), so an address costs no shift in the inner loops.
+  AlignedVector<int32_t> spring_other;           // 8 x other end per entry; padding points at itself
   AlignedVector<float> spring_rest, spring_k, spring_d;
-  // Tets, each evaluated once, 16 per batch: lane j of batch b of a slice is
-  // tet j * nbatch + b of that slice (sorted by lowest vertex), so the 16
-  // lanes lie in 16 distant parts of the mesh and rarely share a vertex.
-  AlignedVector<int32_t> tet_v[4];               // vertices per batch lane; padding lanes: npad
+  // Tets, each evaluated once, 16 per batch: 16 nearby tets that share no
+  // vertex (batch_tets()); each slice is a run of tets by lowest vertex.
+  AlignedVector<int32_t> tet_v[4];               // 4 x vertex per batch lane; padding lanes: 4 npad
   AlignedVector<float> tet_k36, tet_det_rest;    // k_v / 36 and 6 V_r as the kernel computes it
   int32_t slice_begin[kSlices + 1] = {};         // batches of each slice
   AlignedVector<float> tet_force[kSlices];       // (x, y, z, 0) per point, zero between steps (4 (npad + 16))
@@ -107,8 +109,7 @@ using V = __m512;
 // (q_{i+4}, q_{i+8}) above, so the shuffles below leave lanes in q order.
 [[gnu::always_inline]] inline void gather6(const float* rec, const int32_t* q, V& x, V& y, V& z, V& dx, V& dy, V& dz) {
   auto pair = [&](int a, int b) {
-    return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_load_ps(rec + 8 * q[a])), _mm256_load_ps(rec + 8 * q[b]),
-                              1);
+    return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_load_ps(rec + q[a])), _mm256_load_ps(rec + q[b]), 1);
   };
   const V r0 = pair(0, 4), r1 = pair(1, 5), r2 = pair(2, 6), r3 = pair(3, 7);
   const V r4 = pair(8, 12), r5 = pair(9, 13), r6 = pair(10, 14), r7 = pair(11, 15);
@@ -135,10 +136,10 @@ using V = __m512;
 // 4 x 4 transpose inside each 128-bit quarter.
 [[gnu::always_inline]] inline void gather3(const float* rec, const int32_t* q, V& x, V& y, V& z) {
   auto quad = [&](int i) {
-    V r = _mm512_castps128_ps512(_mm_load_ps(rec + 8 * q[i]));
-    r = _mm512_insertf32x4(r, _mm_load_ps(rec + 8 * q[i + 4]), 1);
-    r = _mm512_insertf32x4(r, _mm_load_ps(rec + 8 * q[i + 8]), 2);
-    return _mm512_insertf32x4(r, _mm_load_ps(rec + 8 * q[i + 12]), 3);
+    V r = _mm512_castps128_ps512(_mm_load_ps(rec + 2 * q[i]));
+    r = _mm512_insertf32x4(r, _mm_load_ps(rec + 2 * q[i + 4]), 1);
+    r = _mm512_insertf32x4(r, _mm_load_ps(rec + 2 * q[i + 8]), 2);
+    return _mm512_insertf32x4(r, _mm_load_ps(rec + 2 * q[i + 12]), 3);
   };
   const V r0 = quad(0), r1 = quad(1), r2 = quad(2), r3 = quad(3);
   const V t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpackhi_ps(r0, r1);
@@ -170,14 +171,15 @@ using V = __m512;
   }
 }
 
-// Adds lane l of (x, y, z) to the 16-byte force of point q[l], lane by lane
-// in order (so a point twice in one batch is still right).
+// Adds lane l of (x, y, z) to the 16-byte force of point q[l]. The 16
+// points of a batch are distinct (batch_tets()), so all 16 forces are loaded
+// before any is stored; padding lanes all point at npad, whose force stays
+// zero (they add zero).
 template <int Quarter>
-[[gnu::always_inline]] inline void add_quarter(float* force, const int32_t* q, const V (&r)[4]) {
-  for (int i = 0; i < 4; ++i) {
-    float* f = force + 4 * static_cast<size_t>(q[4 * Quarter + i]);
-    _mm_store_ps(f, _mm_add_ps(_mm_load_ps(f), _mm512_extractf32x4_ps(r[i], Quarter)));
-  }
+[[gnu::always_inline]] inline void add_quarter(const float* force, const int32_t* q, const V (&r)[4], __m128 (&sum)[kLanes]) {
+  for (int i = 0; i < 4; ++i)
+    sum[4 * Quarter + i] = _mm_add_ps(_mm_load_ps(force + q[4 * Quarter + i]),
+                                      _mm512_extractf32x4_ps(r[i], Quarter));
 }
 [[gnu::always_inline]] inline void scatter_add(float* force, const int32_t* q, V x, V y, V z) {
   // The inverse of gather3: quarter k of r[i] is (x, y, z, 0) of lane 4k + i.
@@ -186,10 +188,12 @@ template <int Quarter>
   const V u2 = _mm512_unpacklo_ps(z, zero), u3 = _mm512_unpackhi_ps(z, zero);
   const V r[4] = {_mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(3, 2, 3, 2)),
                   _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(3, 2, 3, 2))};
-  add_quarter<0>(force, q, r);
-  add_quarter<1>(force, q, r);
-  add_quarter<2>(force, q, r);
-  add_quarter<3>(force, q, r);
+  __m128 sum[kLanes];
+  add_quarter<0>(force, q, r, sum);
+  add_quarter<1>(force, q, r, sum);
+  add_quarter<2>(force, q, r, sum);
+  add_quarter<3>(force, q, r, sum);
+  for (int l = 0; l < kLanes; ++l) _mm_store_ps(force + q[l], sum[l]);
 }
 
 // Adds the 16-byte forces of 16 consecutive points to (fx, fy, fz) and clears them.
@@ -347,20 +351,27 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
 // f_i = k_v (V_r - V) dV/dx_i with V = e1 . (e2 x e3) / 6, e_i = x_i - x_0,
 // so dV/dx_1 = e2 x e3 / 6 (and cyclically) and f_0 = -(f_1 + f_2 + f_3).
 void tet_slice(Avx512FloatKernel::Data& D, int slice) {
-  const float* rec = D.rec[D.cur].data();
-  float* force = D.tet_force[slice].data();
-  for (int32_t b = D.slice_begin[slice]; b < D.slice_begin[slice + 1]; ++b) {
+  // Local pointers: the intrinsic stores may alias anything, so pointers
+  // read through D would be reloaded after every store.
+  const float* const rec = D.rec[D.cur].data();
+  float* const force = D.tet_force[slice].data();
+  const int32_t* const tet_v[4] = {D.tet_v[0].data(), D.tet_v[1].data(), D.tet_v[2].data(), D.tet_v[3].data()};
+  const float* const k36 = D.tet_k36.data();
+  const float* const det_rest = D.tet_det_rest.data();
+  const int32_t end = D.slice_begin[slice + 1];
+  for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
     const size_t e = static_cast<size_t>(b) * kLanes;
+    const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
     V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
-    gather3(rec, &D.tet_v[0][e], x0, y0, z0);
-    gather3(rec, &D.tet_v[1][e], x1, y1, z1);
-    gather3(rec, &D.tet_v[2][e], x2, y2, z2);
-    gather3(rec, &D.tet_v[3][e], x3, y3, z3);
+    gather3(rec, q[0], x0, y0, z0);
+    gather3(rec, q[1], x1, y1, z1);
+    gather3(rec, q[2], x2, y2, z2);
+    gather3(rec, q[3], x3, y3, z3);
     x1 = _mm512_sub_ps(x1, x0), y1 = _mm512_sub_ps(y1, y0), z1 = _mm512_sub_ps(z1, z0);
     x2 = _mm512_sub_ps(x2, x0), y2 = _mm512_sub_ps(y2, y0), z2 = _mm512_sub_ps(z2, z0);
     x3 = _mm512_sub_ps(x3, x0), y3 = _mm512_sub_ps(y3, y0), z3 = _mm512_sub_ps(z3, z0);
     const V det = det6(x1, y1, z1, x2, y2, z2, x3, y3, z3);
-    const V s = _mm512_mul_ps(_mm512_load_ps(&D.tet_k36[e]), _mm512_sub_ps(_mm512_load_ps(&D.tet_det_rest[e]), det));
+    const V s = _mm512_mul_ps(_mm512_load_ps(k36 + e), _mm512_sub_ps(_mm512_load_ps(det_rest + e), det));
     auto cross_scaled = [&](V ax, V ay, V az, V bx, V by, V bz, V& fx, V& fy, V& fz) {
       fx = _mm512_mul_ps(s, _mm512_fmsub_ps(ay, bz, _mm512_mul_ps(az, by)));
       fy = _mm512_mul_ps(s, _mm512_fmsub_ps(az, bx, _mm512_mul_ps(ax, bz)));
@@ -374,10 +385,10 @@ void tet_slice(Avx512FloatKernel::Data& D, int slice) {
     const V f0x = _mm512_sub_ps(zero, _mm512_add_ps(_mm512_add_ps(f1x, f2x), f3x));
     const V f0y = _mm512_sub_ps(zero, _mm512_add_ps(_mm512_add_ps(f1y, f2y), f3y));
     const V f0z = _mm512_sub_ps(zero, _mm512_add_ps(_mm512_add_ps(f1z, f2z), f3z));
-    scatter_add(force, &D.tet_v[0][e], f0x, f0y, f0z);
-    scatter_add(force, &D.tet_v[1][e], f1x, f1y, f1z);
-    scatter_add(force, &D.tet_v[2][e], f2x, f2y, f2z);
-    scatter_add(force, &D.tet_v[3][e], f3x, f3y, f3z);
+    scatter_add(force, q[0], f0x, f0y, f0z);
+    scatter_add(force, q[1], f1x, f1y, f1z);
+    scatter_add(force, q[2], f2x, f2y, f2z);
+    scatter_add(force, q[3], f3x, f3y, f3z);
   }
 }
 
@@ -418,6 +429,46 @@ void write_record(Avx512FloatKernel::Data& D, int b, int32_t p) {
     r[4 + k] = D.d[b][k][p];
   }
   r[3] = r[7] = 0;
+}
+
+// Deals `run` (tets in order of their lowest vertex) out to batches of 16
+// lanes so that no two tets of a batch share a vertex and each batch holds
+// tets from one small part of the mesh: each tet goes to the oldest open
+// batch that holds none of its vertices, and at most kOpenBatches are open
+// at once (the oldest is closed, padded, when another must open). Sharing
+// no vertex lets scatter_add() load all 16 forces before storing any;
+// locality keeps a batch's records and forces in cache (16 lanes from 16
+// distant parts of the mesh, the first version, made the tet pass memory
+// bound at Bunny7 size). Returns the tet of each lane, -1 for padding.
+std::vector<int32_t> batch_tets(const std::vector<int32_t>& run, const std::vector<std::array<int32_t, 4>>& tets,
+                                int32_t npoint) {
+  constexpr int32_t kOpenBatches = 32;  // one bit each in a point's mask
+  std::vector<int32_t> lane_tet, fill;  // fill: lanes used per batch
+  // Bit b % kOpenBatches is set for the open batches b holding the point.
+  std::vector<uint32_t> in_open(static_cast<size_t>(npoint), 0);
+  int32_t oldest = 0;  // batches before it are closed
+  auto close_oldest = [&] {
+    for (int32_t l = 0; l < fill[oldest]; ++l)
+      for (const int32_t v : tets[lane_tet[static_cast<size_t>(oldest) * kLanes + l]])
+        in_open[v] &= ~(1u << (oldest % kOpenBatches));
+    ++oldest;
+  };
+  for (const int32_t t : run) {
+    uint32_t taken = 0;
+    for (const int32_t v : tets[t]) taken |= in_open[v];
+    int32_t b = oldest;
+    const int32_t nbatch = static_cast<int32_t>(fill.size());
+    while (b < nbatch && (fill[b] == kLanes || (taken >> (b % kOpenBatches) & 1))) ++b;
+    if (b == nbatch) {
+      if (nbatch - oldest == kOpenBatches) close_oldest();
+      fill.push_back(0);
+      lane_tet.resize(lane_tet.size() + kLanes, -1);
+    }
+    lane_tet[static_cast<size_t>(b) * kLanes + fill[b]++] = t;
+    for (const int32_t v : tets[t]) in_open[v] |= 1u << (b % kOpenBatches);
+    while (oldest < static_cast<int32_t>(fill.size()) && fill[oldest] == kLanes) close_oldest();
+  }
+  return lane_tet;
 }
 
 }  // namespace
@@ -502,7 +553,7 @@ void Avx512FloatKernel::pack(const Model& model) {
   D.spring_d.assign(ns, 0.f);
   for (size_t e = 0; e < ns; ++e) {
     const int32_t s = L.springs.item[e];
-    D.spring_other[e] = s < 0 ? point_of_entry(L.springs, D.chunk, static_cast<int32_t>(e)) : L.spring_other[e];
+    D.spring_other[e] = 8 * (s < 0 ? point_of_entry(L.springs, D.chunk, static_cast<int32_t>(e)) : L.spring_other[e]);
     if (s < 0) continue;
     D.spring_k[e] = static_cast<float>(model.spring_k[s]);
     D.spring_d[e] = static_cast<float>(model.spring_d[s]);
@@ -518,8 +569,8 @@ void Avx512FloatKernel::pack(const Model& model) {
     _mm512_store_ps(&D.spring_rest[e0], _mm512_mul_ps(len2, inv_length(len2)));
   }
 
-  // Tets in batches of 16 (see Data): sorted by lowest vertex for locality,
-  // cut into kSlices equal runs, each run dealt out to 16 lanes.
+  // Tets in batches of 16 (see Data): sorted by lowest vertex, cut into
+  // kSlices equal runs, each run dealt out to batches by batch_tets().
   std::vector<int32_t> order;
   if (D.volume) {
     order.resize(model.ntet());
@@ -528,26 +579,24 @@ void Avx512FloatKernel::pack(const Model& model) {
     std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
   }
   const int32_t nt = static_cast<int32_t>(order.size());
-  std::vector<int32_t> batches(kSlices);
+  std::vector<int32_t> lane_tet;  // tet per batch lane, -1 for padding
   D.slice_begin[0] = 0;
   for (int sl = 0; sl < kSlices; ++sl) {
-    const int32_t count = (nt * (sl + 1)) / kSlices - (nt * sl) / kSlices;
-    batches[sl] = (count + kLanes - 1) / kLanes;
-    D.slice_begin[sl + 1] = D.slice_begin[sl] + batches[sl];
+    const int32_t first = (nt * sl) / kSlices, last = (nt * (sl + 1)) / kSlices;
+    const std::vector<int32_t> run(order.begin() + first, order.begin() + last);
+    const std::vector<int32_t> slice = batch_tets(run, model.tet_points, D.npoint);
+    lane_tet.insert(lane_tet.end(), slice.begin(), slice.end());
+    D.slice_begin[sl + 1] = static_cast<int32_t>(lane_tet.size() / kLanes);
   }
-  const size_t lanes = static_cast<size_t>(D.slice_begin[kSlices]) * kLanes;
-  for (auto& v : D.tet_v) v.assign(lanes, D.npad);  // padding lanes: the zero record at npad
+  const size_t lanes = lane_tet.size();
+  for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
   D.tet_k36.assign(lanes, 0.f);
   D.tet_det_rest.assign(lanes, 0.f);
-  for (int sl = 0; sl < kSlices; ++sl) {
-    const int32_t first = (nt * sl) / kSlices, count = (nt * (sl + 1)) / kSlices - first;
-    for (int32_t i = 0; i < count; ++i) {
-      const int32_t lane = i / batches[sl], batch = D.slice_begin[sl] + i % batches[sl];
-      const size_t e = static_cast<size_t>(batch) * kLanes + lane;
-      const int32_t t = order[first + i];
-      for (int k = 0; k < 4; ++k) D.tet_v[k][e] = model.tet_points[t][k];
-      D.tet_k36[e] = static_cast<float>(model.tet_k[t] / 36);
-    }
+  for (size_t e = 0; e < lanes; ++e) {
+    const int32_t t = lane_tet[e];
+    if (t < 0) continue;
+    for (int k = 0; k < 4; ++k) D.tet_v[k][e] = 4 * model.tet_points[t][k];
+    D.tet_k36[e] = static_cast<float>(model.tet_k[t] / 36);
   }
   for (size_t e0 = 0; e0 < lanes; e0 += kLanes) {
     V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;

@@ -109,6 +109,7 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return s;
 }
 
+// Smallest interior dihedral angle of a tet, degrees.
 double min_dihedral_deg(const std::array<Vec3, 4>& x) {
   double best = 180;
   static const int kEdges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};

@@ -82,6 +82,12 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
 }
 
 GershgorinRows gershgorin_rows(const Model& model) {
+  // The rows walk each point's springs and tets through the gather layout.
+  if (model.layout.springs.count.size() != static_cast<size_t>(model.npoint()) ||
+      model.layout.tets.count.size() != static_cast<size_t>(model.npoint()))
+    throw Error(ErrorKind::Usage, "gershgorin_rows: the Model's gather layout covers " +
+                                      std::to_string(model.layout.springs.count.size()) + " points, expected " +
+                                      std::to_string(model.npoint()) + " (build_gather_layout)");
   GershgorinRows rows;
   rows.all.assign(model.npoint(), 0.0);
   rows.springs.assign(model.npoint(), 0.0);

@@ -13,6 +13,7 @@
 #include "core/topology/blade.h"
 #include "core/topology/topology_editor.h"
 #include "tests/core/test_models.h"
+#include "tests/core/topology_test_util.h"
 
 namespace organsim {
 namespace {
@@ -120,13 +121,9 @@ TEST(ModelAssembly, LinearTimeAssemblyEqualsTheStraightforwardOneAcrossRandomCut
   expect_reference_assembly(current);
   TopologyEditor editor(current);
   std::mt19937 rng(31);
-  std::uniform_real_distribution<double> u(0, 1);
   int changes = 0;
   for (int i = 0; i < 300 && changes < 15; ++i) {
-    const Vec3 a0(u(rng), u(rng), u(rng));
-    const Vec3 b0 = a0 + 0.8 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
-    const Vec3 move = 0.6 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
-    const BladeSweep sweep{a0, b0, a0 + move, b0 + move};
+    const BladeSweep sweep = testing::random_short_blade(rng);
     Model next;
     ChangeCounts counts;
     const auto faces = faces_cut_by_blade(sweep, editor.faces(), current.tet_points, current.rest_position,

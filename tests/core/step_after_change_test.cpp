@@ -11,6 +11,7 @@
 #include "core/topology/blade.h"
 #include "core/topology/topology_editor.h"
 #include "tests/core/test_models.h"
+#include "tests/core/topology_test_util.h"
 
 namespace organsim {
 namespace {
@@ -33,15 +34,11 @@ TEST(StepAfterChange, KeptRowsEqualFreshOnesAndTheGuaranteedStepNeverExceedsDtCr
   ChangeStepCheck check(current);
   TopologyEditor editor(current);
   std::mt19937 rng(41);
-  std::uniform_real_distribution<double> u(0, 1);
   int changes = 0, below = 0;
   for (int i = 0; i < 400 && changes < 12; ++i) {
-    const Vec3 a0(u(rng), u(rng), u(rng));
-    const Vec3 b0 = a0 + 0.8 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
-    const Vec3 move = 0.6 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
     Model next;
     ChangeCounts counts;
-    const auto faces = faces_cut_by_blade({a0, b0, a0 + move, b0 + move}, editor.faces(), current.tet_points,
+    const auto faces = faces_cut_by_blade(testing::random_short_blade(rng), editor.faces(), current.tet_points,
                                           current.rest_position, editor.separated());
     if (!editor.separate(current, faces, next, counts)) continue;
     ++changes;

@@ -128,19 +128,13 @@ TEST(Cut, HundredCutsConserveMassAndKeepInvariants) {
   const double mass0 = current.total_mass();
   TopologyEditor editor(current);
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(0, 1);
   int changes = 0;
   // 100 cuts that each change the Model (blades that only crack the inside
   // without splitting a point change nothing and are not counted).
   for (int i = 0; i < 1000 && changes < 100; ++i) {
-    // A short blade somewhere in the box, moving a short way in a random direction.
-    const Vec3 a0(u(rng), u(rng), u(rng));
-    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
-    const Vec3 b0 = a0 + 0.8 * dir;
-    const Vec3 move = 0.6 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
     Model next;
     ChangeCounts counts;
-    if (!cut(editor, current, {a0, b0, a0 + move, b0 + move}, current.rest_position, next, counts)) continue;
+    if (!cut(editor, current, testing::random_short_blade(rng), current.rest_position, next, counts)) continue;
     ++changes;
     ASSERT_EQ(testing::topology_problems(next), "") << "after cut " << i;
     // 1e-12 relative: sums of a few thousand positive terms in double.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <random>
 #include <set>
 #include <string>
 
@@ -13,8 +14,19 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model.h"
 #include "core/sim/run_observer.h"
+#include "core/topology/blade.h"
 
 namespace organsim::testing {
+
+// A blade 0.8 long somewhere in the unit box, moving a short way (up to 0.3
+// per axis) in a random direction: the random cuts of the topology tests.
+inline BladeSweep random_short_blade(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0, 1);
+  const Vec3 a0(u(rng), u(rng), u(rng));
+  const Vec3 b0 = a0 + 0.8 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+  const Vec3 move = 0.6 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+  return {a0, b0, a0 + move, b0 + move};
+}
 
 inline std::string topology_problems(const Model& m) {
   const int32_t n = m.npoint();
