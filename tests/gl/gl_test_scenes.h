@@ -7,6 +7,7 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model.h"
 #include "core/sim/backend.h"
+#include "core/sim/run_observer.h"
 
 namespace organsim::gl_test {
 
@@ -55,5 +56,14 @@ inline std::vector<Vec3> perturbed(const Model& model, double amplitude, unsigne
   for (Vec3& p : x) p += Vec3(u(rng), u(rng), u(rng));
   return round_to_float(x);
 }
+
+// Counts a run's topology changes and keeps its final positions.
+struct FinalState final : RunObserver {
+  std::vector<Vec3> x;
+  int changes = 0;
+  void on_tick(const Model&, Backend&, const TickInfo&) override {}
+  void on_topology_changed(const Model&, Backend&) override { ++changes; }
+  void on_finish(const Model&, Backend& backend) override { backend.positions(x); }
+};
 
 }  // namespace organsim::gl_test

@@ -69,14 +69,6 @@ TEST(GlSuture, TensionOnlySuturesOnTheirScheduleMatchTheReference) {
   EXPECT_GT(schedule, 0.1 * scale);  // the schedule changes the forces: the test can tell
 }
 
-struct FinalState final : RunObserver {
-  std::vector<Vec3> x;
-  int changes = 0;
-  void on_tick(const Model&, Backend&, const TickInfo&) override {}
-  void on_topology_changed(const Model&, Backend&) override { ++changes; }
-  void on_finish(const Model&, Backend& backend) override { backend.positions(x); }
-};
-
 // The beam of tests/core/suture_test_util.h, cut at 0-10 ms and sutured at
 // 50 ms, to 150 ms: the GL run makes the same changes and ends where the
 // double CPU run does. Tolerance 1e-5 of the beam's diagonal as
@@ -86,7 +78,7 @@ TEST(GlSuture, CutThenSutureRunMatchesTheCpuReference) {
   const Model model = testing::beam_model(s);
   auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   GlBackend gl(model, backend_tool(s), {});
-  FinalState cpu_end, gl_end;
+  gl_test::FinalState cpu_end, gl_end;
   RunOptions options;
   options.outdir = fs::path(ORGANSIM_TEST_TMP) / "gl_suture_cpu";
   options.observers = {&cpu_end};

@@ -47,14 +47,6 @@ Scenario cut_block() {
   return s;
 }
 
-struct FinalState final : RunObserver {
-  std::vector<Vec3> x;
-  int changes = 0;
-  void on_tick(const Model&, Backend&, const TickInfo&) override {}
-  void on_topology_changed(const Model&, Backend&) override { ++changes; }
-  void on_finish(const Model&, Backend& backend) override { backend.positions(x); }
-};
-
 // Tolerances as tests/gl/parity_test.cpp: positions 1e-5 of the box
 // diagonal, tool force 1e-4 of the peak reaction (float rounding); a copy
 // that lost its state or a stale buffer after a rebuild is off by far more.
@@ -64,7 +56,7 @@ TEST(GlTopology, CutRunMatchesTheCpuReference) {
                                   model_options(s), "block");
   auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   GlBackend gl(model, backend_tool(s), {});
-  FinalState cpu_end, gl_end;
+  gl_test::FinalState cpu_end, gl_end;
   RunOptions options;
   options.outdir = fs::path(ORGANSIM_TEST_TMP) / "gl_topology_cpu";
   options.observers = {&cpu_end};
