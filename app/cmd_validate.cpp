@@ -30,6 +30,7 @@ struct ValidateArgs {
   std::vector<double> cell_sizes;
   std::vector<std::string> poisson_ratios;
   double young_modulus = 10e3;
+  std::string volume_formulation;
 };
 
 std::string fmt(double v, const char* spec = "%.4g") {
@@ -60,6 +61,13 @@ void validate_command(const ValidateArgs& args) {
   }
   if (!(args.young_modulus > 0)) throw Error(ErrorKind::Usage, "--young-modulus: expected a positive number (Pa)");
   options.young_modulus = args.young_modulus;
+  if (args.volume_formulation == "nodal")
+    options.volume_formulation = VolumeFormulation::Nodal;
+  else if (args.volume_formulation == "per_tet")
+    options.volume_formulation = VolumeFormulation::PerTet;
+  else if (!args.volume_formulation.empty())
+    throw Error(ErrorKind::Usage,
+                "--volume-formulation: expected 'nodal' or 'per_tet', got '" + args.volume_formulation + "'");
 
   const bool tty = isatty(2);
   const auto rows = run_validation_suite(options, [tty](int done, int total, const std::string& what) {
@@ -128,6 +136,9 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
                   "(comma-separated; default springs,0.3,0.45)")
       ->delimiter(',');
   cmd->add_option("--young-modulus", args->young_modulus, "Young's modulus, Pa (default 10000)");
+  cmd->add_option("--volume-formulation", args->volume_formulation,
+                  "Volume term of the Poisson-ratio materials: 'nodal' or 'per_tet' (default: the material's "
+                  "default, docs/scenarios.md)");
   cmd->callback([args] { validate_command(*args); });
 });
 

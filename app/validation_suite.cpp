@@ -40,6 +40,7 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
       Material m;
       m.young_modulus = options.young_modulus;
       m.poisson_ratio = nu;
+      if (nu) m.volume_formulation = options.volume_formulation;
       const std::string name = material_name(nu);
       if (progress) progress(done, total, name + ", cell size " + std::to_string(h) + " m");
       const double asked_nu = nu.value_or(0.25);

@@ -18,6 +18,9 @@ struct SuiteOptions {
   // One material per entry, E = young_modulus: an empty optional is the
   // springs-only rule (no Poisson ratio, nu = 1/4), else that Poisson ratio.
   std::vector<std::optional<double>> poisson_ratios{std::nullopt, 0.3, 0.45};
+  // Form of the volume term for the Poisson-ratio materials; unset = the
+  // material's default (volume_formulation() in core/model/stiffness.h).
+  std::optional<VolumeFormulation> volume_formulation;
   double young_modulus = 10e3;   // Pa
   double indenter_radius = 0.02; // m
 };

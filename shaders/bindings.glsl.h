@@ -29,6 +29,8 @@
 #define ORGANSIM_GL_B_REACTION 10 // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
 #define ORGANSIM_GL_B_FORCE 11    // vec4 total force per point, N (npad); RECORD_FORCE variant (tests) only
 #define ORGANSIM_GL_B_STATUS 12   // uint per ring slot: lowest point whose x_{t+1} is not finite, or ~0u; mapped
+#define ORGANSIM_GL_B_NODAL 13    // vec2 {k_a (N/m^5), V_a^r (m^3)} of the nodal volume term (npad); 0 for padding
+#define ORGANSIM_GL_B_PRESSURE 14 // float nodal pressure q_a = k_a (V_a - V_a^r), Pa (npad); nodal_pressure.comp
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s

@@ -3,8 +3,9 @@
 // and tool contact, then writes x_{t+1}. Chunk = workgroup, so entry
 // (slot j, lane l) of chunk c is at chunk offset + j * C + l: neighbouring
 // lanes read neighbouring entries. No atomics: every point writes only itself.
-// Variants (prepended #defines): HAS_VOLUME, HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
-// and RECORD_FORCE (tests: also store each point's total force).
+// Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
+// nodal term, pressures from nodal_pressure.comp), HAS_GRAVITY, TOOL_PUSH,
+// TOOL_PULL, and RECORD_FORCE (tests: also store each point's total force).
 // Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
 layout(local_size_x = ORGANSIM_GL_CHUNK) in;
 
@@ -29,6 +30,9 @@ layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 ch
 layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
 #ifdef HAS_VOLUME
 layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
+#endif
+#ifdef NODAL_VOLUME
+layout(std430, binding = ORGANSIM_GL_B_PRESSURE) readonly buffer Pressure { float pressure[]; };
 #endif
 #ifdef TOOL_PULL
 layout(std430, binding = ORGANSIM_GL_B_ATTACH) readonly buffer Attach { vec4 attach[]; };
@@ -90,16 +94,21 @@ void main() {
   }
 
 #ifdef HAS_VOLUME
-  // Volume: f = k_v (V_r - V) dV/dx_p, with V = a.(b x c)/6 relative to p and
-  // dV/dx_p = (c - a) x (b - a) / 6.
+  // Volume per tet: f = k_v (V_r - V) dV/dx_p, with V = a.(b x c)/6 relative
+  // to p and dV/dx_p = (c - a) x (b - a) / 6. Nodal: f = -p_t dV/dx_p with p_t
+  // the mean of the tet's four nodal pressures.
   for (int j = 0; j < info.w; ++j) {
     const TetEntry e = tets[info.z + j * ORGANSIM_GL_CHUNK + int(lane)];
     const vec3 a = x_cur[e.a].xyz - xi;
     const vec3 b = x_cur[e.b].xyz - xi;
     const vec3 c = x_cur[e.c].xyz - xi;
-    const float v = dot(a, cross(b, c)) * (1.0 / 6.0);
     const vec3 grad = cross(c - a, b - a) * (1.0 / 6.0);
+#ifdef NODAL_VOLUME
+    f -= 0.25 * (pressure[p] + pressure[e.a] + pressure[e.b] + pressure[e.c]) * grad;
+#else
+    const float v = dot(a, cross(b, c)) * (1.0 / 6.0);
     f += e.k_v * (e.v_r - v) * grad;
+#endif
   }
 #endif
 

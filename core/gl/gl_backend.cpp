@@ -26,6 +26,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   context_ = std::make_unique<gl::EglContext>(context_options);
 
   volume_ = model.has_volume();
+  nodal_ = model.has_nodal_volume();
   gravity_ = model.has_gravity();
   push_ = tool.present && tool.mode == ToolMode::Push;
   pull_ = tool.present && tool.mode == ToolMode::Pull;
@@ -33,12 +34,14 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   // Lean scenes: code for absent physics is compiled out (STYLE #12).
   std::vector<std::string> defines;
   if (volume_) defines.push_back("HAS_VOLUME");
+  if (nodal_) defines.push_back("NODAL_VOLUME");
   if (gravity_) defines.push_back("HAS_GRAVITY");
   if (push_) defines.push_back("TOOL_PUSH");
   if (pull_) defines.push_back("TOOL_PULL");
   if (options.record_forces) defines.push_back("RECORD_FORCE");
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
+  if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {});
 
   // Buffers that do not depend on the model's size: the readback rings.
   const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
@@ -105,6 +108,10 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
     tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
                           packed.tets.data(), 0);
   }
+  if (nodal_) {
+    nodal_params_ = create_buffer("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
+    pressure_ = create_buffer("nodal pressures", static_cast<size_t>(npad_) * sizeof(float), nullptr, 0);
+  }
   if (pull_) {
     // Attachments survive a rebuild: the ids they name are kept.
     attach_upload_.resize(static_cast<size_t>(npad_) * 4, 0.0f);
@@ -127,13 +134,15 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CHUNKS, chunks_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SPRINGS, springs_);
   if (tets_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_TETS, tets_);
+  if (nodal_params_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_NODAL, nodal_params_);
+  if (pressure_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PRESSURE, pressure_);
   if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
 }
 
 void GlBackend::delete_model_buffers() {
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &attach_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &attach_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -180,6 +189,7 @@ GlBackend::~GlBackend() {
   }
   step_ = gl::ComputeProgram();
   reduce_ = gl::ComputeProgram();
+  nodal_pressure_ = gl::ComputeProgram();
 }
 
 void GlBackend::make_current() const {
@@ -215,6 +225,12 @@ Plan GlBackend::plan() const {
   plan.passes.push_back({"step (step.comp)", "one fused dispatch per substep, " + std::to_string(nchunk_) +
                                                  " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + ": " + fused +
                                                  ", position Verlet"});
+  if (nodal_) {
+    plan.passes.insert(plan.passes.begin(),
+                       {"nodal-pressure (nodal_pressure.comp)",
+                        "one dispatch per substep before the step, then a storage barrier: nodal volumes from " +
+                            std::to_string(m.ntet()) + " tets per vertex, pressure per point"});
+  }
   if (tool_.present) {
     plan.passes.push_back({"reduce-reaction (reduce_reaction.comp)",
                            "once per tick while the tool acts: " + std::to_string(nchunk_) +
@@ -223,7 +239,7 @@ Plan GlBackend::plan() const {
   plan.passes.push_back({"readback", "fence per tick; the CPU reads tick n-1's reaction after submitting tick n "
                                      "(latency 1 tick, no wait unless the device is a full tick behind)"});
   for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
-  plan.dispatches_per_step = 1;  // + 1 reduce per tick with a tool
+  plan.dispatches_per_step = nodal_ ? 2 : 1;  // + 1 reduce per tick with a tool
   plan.syncs_per_step = 0;
   return plan;
 }
@@ -316,6 +332,14 @@ Reaction GlBackend::tick(const TickRequest& request) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_[cur_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[1 - cur_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[1 - cur_]);
+    if (nodal_) {
+      // Every nodal pressure before any force that reads it.
+      glUseProgram(nodal_pressure_.id());
+      glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      glUseProgram(program);
+      ++dispatches_;
+    }
     glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     ++dispatches_;

@@ -70,10 +70,19 @@ PackedModel pack_model(const Model& model) {
           p.tets[e] = {q, q, q, 0, 0};
         } else {
           const auto& o = L.tet_others[e];
-          p.tets[e] = {o[0], o[1], o[2], static_cast<float>(model.tet_k[t]),
+          // The nodal term reads only the vertices here (its k and V^r are per point).
+          const bool per_tet = !model.has_nodal_volume();
+          p.tets[e] = {o[0], o[1], o[2], per_tet ? static_cast<float>(model.tet_k[t]) : 0.0f,
                        static_cast<float>(model.tet_rest_volume[t])};
         }
       }
+    }
+  }
+  if (model.has_nodal_volume()) {
+    p.nodal.assign(static_cast<size_t>(p.npad) * 2, 0.0f);
+    for (int32_t i = 0; i < p.npoint; ++i) {
+      p.nodal[2 * i] = static_cast<float>(model.point_volume_k[i]);
+      p.nodal[2 * i + 1] = static_cast<float>(model.point_rest_volume[i]);
     }
   }
   return p;

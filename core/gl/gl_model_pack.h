@@ -34,6 +34,9 @@ struct PackedModel {
   std::vector<SpringEntry> springs;  // per (chunk, slot, lane) (nspring_entry)
   std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume (ntet_entry)
   std::vector<int32_t> suture_entries;  // entries of suture springs, 2 per suture
+  // Nodal volume term: vec2 {k_a (N/m^5), V_a^r (m^3)} per point, zero for
+  // padding (npad x 2); empty unless the model has it.
+  std::vector<float> nodal;
 };
 
 // Padding entries point at the lane's own point with zero parameters: a

@@ -9,6 +9,13 @@
 
 namespace organsim {
 
+// Form of the volume term (docs/physics.md): per tet, energy K/2 (V_t - V_t^r)^2 / V_t^r
+// on every tet; or averaged nodal, energy K/2 (V_a - V_a^r)^2 / V_a^r on every
+// point's nodal volume V_a = sum of V_t / 4 over its tets (Bonet and Burton
+// 1998), which does not lock in bending near nu = 1/2. Both add K to lambda at
+// small strain.
+enum class VolumeFormulation { PerTet, Nodal };
+
 struct Material {
   double density = 1060.0;  // kg/m^3 (soft tissue ~1000-1100)
   // Spring stiffness: from Young's modulus (default) or an explicit constant.
@@ -26,6 +33,9 @@ struct Material {
   // Volume conservation: energy K/2 (V - V_r)^2 / V_r per tet, i.e. per-tet
   // k_v = K / V_r (N/m^5). 0 switches the volume pass off.
   double volume_modulus = 0.0;                  // Pa
+  // Unset: nodal with poisson_ratio, per tet without (existing scenarios keep
+  // their forces); see volume_formulation() in core/model/stiffness.h.
+  std::optional<VolumeFormulation> volume_formulation;
 };
 
 // One fixed-point selector; a point is fixed when any selector matches it.

@@ -190,6 +190,9 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
     model.spring_d.push_back(material.spring_damping_time * u.k);
   }
   model.tet_k = tet_volume_stiffness(material, model.tet_rest_volume);
+  // A cut splits a node patch: nodal volumes follow the new tets.
+  model.point_rest_volume = nodal_rest_volume(npoint, model.tet_points, model.tet_rest_volume);
+  model.point_volume_k = nodal_volume_stiffness(material, model.point_rest_volume);
 
   model.layout = build_gather_layout(model, chunk_size, sort_window);
 }

@@ -47,7 +47,13 @@ struct Model {
   // Tetrahedra, positively oriented, internal numbering.
   std::vector<Tet> tet_points;       // (ntet x 4)
   std::vector<double> tet_rest_volume;  // m^3 (ntet)
-  std::vector<double> tet_k;         // volume stiffness K / V_r, N/m^5 (ntet); empty if volume off
+  // The volume term (Material::volume_formulation) in one of two forms:
+  // per tet, energy k_t/2 (V_t - V_t^r)^2 with tet_k; or averaged nodal,
+  // energy k_a/2 (V_a - V_a^r)^2 on the nodal volumes V_a = sum of V_t / 4
+  // over the tets of a, with point_volume_k. At most one of the two is set.
+  std::vector<double> tet_k;         // per-tet K / V_r, N/m^5 (ntet); empty unless the per-tet term is on
+  std::vector<double> point_rest_volume;  // nodal rest volume V_a^r, m^3 (npoint; 0 in no tet)
+  std::vector<double> point_volume_k;     // nodal K / V_a^r, N/m^5 (npoint); empty unless the nodal term is on
 
   // Scene parameters.
   Vec3 gravity{0, 0, 0};             // m/s^2
@@ -68,7 +74,8 @@ struct Model {
     return s < first_suture() ? spring_rest[s] : suture_of_spring(s).rest_at(t);
   }
   int32_t ntet() const { return static_cast<int32_t>(tet_points.size()); }
-  bool has_volume() const { return !tet_k.empty(); }
+  bool has_volume() const { return !tet_k.empty() || !point_volume_k.empty(); }
+  bool has_nodal_volume() const { return !point_volume_k.empty(); }
   bool has_gravity() const { return gravity.squaredNorm() > 0; }
   double tool_scale(int32_t i) const { return tool_k_scale.empty() ? 1.0 : tool_k_scale[i]; }
   double total_mass() const;

@@ -30,6 +30,7 @@ nlohmann::json elasticity_json(const Material& m) {
   if (m.spring_stiffness) return {{"rule", "spring_stiffness"}, {"spring_stiffness", *m.spring_stiffness}};
   const EffectiveElasticity e = effective_elasticity(m);
   return {{"rule", m.poisson_ratio ? "poisson_ratio" : "springs + volume_modulus"},
+          {"volume_formulation", volume_formulation_name(volume_formulation(m))},
           {"young_modulus", e.young_modulus},
           {"poisson_ratio", e.poisson_ratio},
           {"spring_modulus", spring_modulus(m)},
@@ -62,12 +63,38 @@ std::vector<double> tool_stiffness_scale(const std::vector<double>& mass, const 
   return scale;
 }
 
+VolumeFormulation volume_formulation(const Material& m) {
+  if (m.volume_formulation) return *m.volume_formulation;
+  return m.poisson_ratio ? VolumeFormulation::Nodal : VolumeFormulation::PerTet;
+}
+
+const char* volume_formulation_name(VolumeFormulation f) {
+  return f == VolumeFormulation::Nodal ? "nodal" : "per_tet";
+}
+
 std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume) {
   const double modulus = volume_term_modulus(material);
   std::vector<double> k;
-  if (modulus == 0) return k;
+  if (modulus == 0 || volume_formulation(material) != VolumeFormulation::PerTet) return k;
   k.resize(tet_rest_volume.size());
   for (size_t t = 0; t < k.size(); ++t) k[t] = modulus / tet_rest_volume[t];
+  return k;
+}
+
+std::vector<double> nodal_rest_volume(int32_t npoint, const std::vector<Tet>& tets,
+                                      const std::vector<double>& tet_rest_volume) {
+  std::vector<double> v(static_cast<size_t>(npoint), 0.0);
+  for (size_t t = 0; t < tets.size(); ++t)
+    for (int32_t p : tets[t]) v[p] += tet_rest_volume[t] / 4;
+  return v;
+}
+
+std::vector<double> nodal_volume_stiffness(const Material& material, const std::vector<double>& nodal_rest_volume) {
+  const double modulus = volume_term_modulus(material);
+  std::vector<double> k;
+  if (modulus == 0 || volume_formulation(material) != VolumeFormulation::Nodal) return k;
+  k.resize(nodal_rest_volume.size());
+  for (size_t a = 0; a < k.size(); ++a) k[a] = nodal_rest_volume[a] > 0 ? modulus / nodal_rest_volume[a] : 0.0;
   return k;
 }
 

@@ -21,9 +21,13 @@
 namespace organsim {
 
 // Below 1/4 the volume term would be negative, and on real meshes that makes
-// the stiffness indefinite (measured: a CGAL box at 8 mm cells has a
-// negative-energy mode already at nu = 0.22, docs/validation.md), i.e. an
-// unstable model. Such materials are refused.
+// the stiffness indefinite, i.e. an unstable model (measured with the static
+// solve's pivots, docs/validation.md: per tet from nu = 0.240-0.248 on CGAL
+// boxes, beams and the liver at 500-4000 points; the nodal term, with one
+// volume constraint per point instead of about six, only from 0.18-0.242,
+// too little and too mesh-dependent a gain to accept). Such materials are
+// refused: below 1/4 a spring lattice needs another element (see
+// docs/validation.md).
 inline constexpr double kMinPoissonRatio = 0.25;
 inline constexpr const char* kPoissonRatioFloorReason =
     " (a spring lattice's own ratio is 1/4; lower values need a negative volume term, which makes the model "
@@ -68,8 +72,22 @@ std::vector<double> spring_stiffness(const Material& material, const std::vector
 // Returns min(1, m_i / m_med) per point (npoint); 1 where nothing is free.
 std::vector<double> tool_stiffness_scale(const std::vector<double>& mass, const std::vector<uint8_t>& fixed);
 
+// The volume term's form: material.volume_formulation when given, else
+// nodal with a Poisson ratio and per tet without one.
+VolumeFormulation volume_formulation(const Material& material);
+const char* volume_formulation_name(VolumeFormulation formulation);  // "per_tet" or "nodal"
+
 // Per-tet volume stiffness K_v / V_r, N/m^5; empty when the volume term is off
-// (K_v == 0).
+// (K_v == 0) or nodal.
 std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume);
+
+// Nodal rest volumes V_a^r = sum of V_t^r / 4 over the tets of a, m^3 (npoint;
+// 0 for a point in no tet).
+std::vector<double> nodal_rest_volume(int32_t npoint, const std::vector<Tet>& tets,
+                                      const std::vector<double>& tet_rest_volume);
+
+// Per-point nodal volume stiffness K_v / V_a^r, N/m^5 (0 for a point in no
+// tet); empty when the volume term is off or per tet.
+std::vector<double> nodal_volume_stiffness(const Material& material, const std::vector<double>& nodal_rest_volume);
 
 }  // namespace organsim

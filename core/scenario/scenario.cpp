@@ -82,6 +82,14 @@ Material parse_material(const nlohmann::json& j, const JsonPath& at) {
   if (auto v = r.number("spring_damping_time")) m.spring_damping_time = require_non_negative(*v, r.at("spring_damping_time"));
   if (auto v = r.number("viscous_damping")) m.viscous_damping = require_non_negative(*v, r.at("viscous_damping"));
   if (auto v = r.number("volume_modulus")) m.volume_modulus = require_non_negative(*v, r.at("volume_modulus"));
+  if (auto f = r.string("volume_formulation")) {
+    if (*f == "per_tet")
+      m.volume_formulation = VolumeFormulation::PerTet;
+    else if (*f == "nodal")
+      m.volume_formulation = VolumeFormulation::Nodal;
+    else
+      throw r.at("volume_formulation").error("expected " + one_of({"per_tet", "nodal"}) + " (got \"" + *f + "\")");
+  }
   if (auto v = r.number("poisson_ratio")) {
     if (!(*v >= kMinPoissonRatio && *v < 0.5))
       throw r.at("poisson_ratio").error("expected a number in [0.25, 0.5) (got " + std::to_string(*v) + ")" + kPoissonRatioFloorReason);

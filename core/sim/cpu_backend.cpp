@@ -25,6 +25,7 @@ std::string cpu_model_name() {
 }
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
+enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
 
 // Why the AVX-512 kernel cannot run `model` in `precision` here ("" if it can).
 template <class Real>
@@ -131,6 +132,8 @@ class CpuBackend final : public Backend {
     plan.passes.push_back({"springs", std::to_string(m.nspring()) + " springs gathered from both ends (" +
                                           std::to_string(m.layout.springs.item.size()) + " slots)" +
                                           sutures_detail(m)});
+    if (m.has_nodal_volume())
+      plan.passes.push_back({"nodal-volume", "nodal volumes and pressures, tets gathered per vertex, then a barrier"});
     if (m.has_volume())
       plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
@@ -145,9 +148,13 @@ class CpuBackend final : public Backend {
     plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
     plan.buffers.push_back({"spring slots (other, rest, k, d)",
                             m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
-    if (m.has_volume())
+    if (m.has_nodal_volume()) {
+      plan.buffers.push_back({"tet slots (3 others)", m.layout.tets.item.size() * 3 * sizeof(int32_t)});
+      plan.buffers.push_back({"nodal k, rest volume, pressure", 3 * n * real});
+    } else if (m.has_volume()) {
       plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)",
                               m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
+    }
     if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
     plan.dispatches_per_step = 1;
     if (fast_) {
@@ -299,15 +306,17 @@ class CpuBackend final : public Backend {
     if (model.has_volume()) {
       const auto& tets = layout.tets;
       for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
-      tet_rest_.assign(tets.item.size(), 0);
-      tet_k_.assign(tets.item.size(), 0);
+      // The nodal term reads only the vertices of each slot.
+      const size_t per_tet = model.has_nodal_volume() ? 0 : tets.item.size();
+      tet_rest_.assign(per_tet, 0);
+      tet_k_.assign(per_tet, 0);
       for_each_slot(tets, [&](int32_t e, int32_t p) {
         const int32_t t = tets.item[e];
         const auto& o = layout.tet_others[e];
         tet_a_[e] = t < 0 ? p : o[0];
         tet_b_[e] = t < 0 ? p : o[1];
         tet_c_[e] = t < 0 ? p : o[2];
-        if (t < 0) return;
+        if (t < 0 || model.has_nodal_volume()) return;
         tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
       });
@@ -337,6 +346,17 @@ class CpuBackend final : public Backend {
     }
     groups_per_chunk_ = groups_per_chunk;
     partial_.resize(layout.nchunk);
+    if (model.has_nodal_volume()) {
+      // Rest nodal volumes by the very pass the step runs (pos_ is at rest
+      // here), so the rest state is exactly pressure-free in either precision.
+      node_k_.resize(n);
+      for (int32_t i = 0; i < n; ++i) node_k_[i] = static_cast<Real>(model.point_volume_k[i]);
+      node_rest_.assign(n, 0);
+      node_q_.assign(n, 0);
+      for (int32_t c = 0; c < layout.nchunk; ++c) nodal_volume_chunk(c, node_rest_.data());
+    } else {
+      node_k_.clear(), node_rest_.clear(), node_q_.clear();
+    }
     pack_fast();
   }
 
@@ -459,18 +479,22 @@ class CpuBackend final : public Backend {
   }
 
   Reaction step(const StepContext<Real>& ctx, int tool_kind) {
-    const bool volume = model_->has_volume(), gravity = model_->has_gravity();
+    const bool gravity = model_->has_gravity();
     // Lean scenes: each combination of passes is its own compiled loop, so a
     // scene without volume or tool never touches that code or data.
-    if (volume) {
-      if (gravity) return dispatch_tool<true, true>(ctx, tool_kind);
-      return dispatch_tool<true, false>(ctx, tool_kind);
+    if (model_->has_nodal_volume()) {
+      if (gravity) return dispatch_tool<kNodalVolume, true>(ctx, tool_kind);
+      return dispatch_tool<kNodalVolume, false>(ctx, tool_kind);
     }
-    if (gravity) return dispatch_tool<false, true>(ctx, tool_kind);
-    return dispatch_tool<false, false>(ctx, tool_kind);
+    if (model_->has_volume()) {
+      if (gravity) return dispatch_tool<kTetVolume, true>(ctx, tool_kind);
+      return dispatch_tool<kTetVolume, false>(ctx, tool_kind);
+    }
+    if (gravity) return dispatch_tool<kNoVolume, true>(ctx, tool_kind);
+    return dispatch_tool<kNoVolume, false>(ctx, tool_kind);
   }
 
-  template <bool Volume, bool Gravity>
+  template <int Volume, bool Gravity>
   Reaction dispatch_tool(const StepContext<Real>& ctx, int tool_kind) {
     switch (tool_kind) {
       case kPush: return run<Volume, Gravity, kPush>(ctx);
@@ -479,7 +503,7 @@ class CpuBackend final : public Backend {
     }
   }
 
-  template <bool Volume, bool Gravity, int Tool>
+  template <int Volume, bool Gravity, int Tool>
   Reaction run(const StepContext<Real>& ctx) {
     const int32_t nchunk = model_->layout.nchunk, npoint = model_->npoint();
 #pragma omp parallel num_threads(threads_)
@@ -491,6 +515,11 @@ class CpuBackend final : public Backend {
         pos_.x[p] = rest_.x[p] + u_.x[p];
         pos_.y[p] = rest_.y[p] + u_.y[p];
         pos_.z[p] = rest_.z[p] + u_.z[p];
+      }
+      if constexpr (Volume == kNodalVolume) {
+        // The nodal term's extra pass: every point's pressure before any force.
+#pragma omp for schedule(static)
+        for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(c);
       }
 #pragma omp for schedule(static)
       for (int32_t c = 0; c < nchunk; ++c) chunk<Volume, Gravity, Tool>(ctx, c);
@@ -509,7 +538,49 @@ class CpuBackend final : public Backend {
     return reaction;
   }
 
-  template <bool Volume, bool Gravity, int Tool>
+  // Nodal volumes V_p = sum over the tets of p of V_t / 4 at pos_, for the
+  // points of chunk c, into out. Not inlined: pack() and the step must run
+  // the same instructions so the rest state gives exactly V_p^r.
+  __attribute__((noinline)) void nodal_volume_chunk(int32_t c, Real* __restrict out) const {
+    const auto& L = model_->layout;
+    const int32_t C = L.chunk_size;
+    const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
+    const Real* __restrict X = pos_.x.data();
+    const Real* __restrict Y = pos_.y.data();
+    const Real* __restrict Z = pos_.z.data();
+    const int32_t* __restrict ta = tet_a_.data();
+    const int32_t* __restrict tb = tet_b_.data();
+    const int32_t* __restrict tc = tet_c_.data();
+    for (int32_t g0 = first; g0 < last; g0 += kLanes) {
+      const int32_t lanes = std::min(kLanes, last - g0);
+      const int32_t lane0 = g0 - first;
+      const int32_t group = c * groups_per_chunk_ + lane0 / kLanes;
+      alignas(64) Real v[kLanes] = {};
+      for (int32_t j = 0; j < tet_width_[group]; ++j) {
+        const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
+#pragma omp simd
+        for (int32_t l = 0; l < lanes; ++l) {
+          const int32_t e = e0 + l, p = g0 + l, a = ta[e], b = tb[e], cc = tc[e];
+          const Real ax = X[a] - X[p], ay = Y[a] - Y[p], az = Z[a] - Z[p];
+          const Real bx = X[b] - X[p], by = Y[b] - Y[p], bz = Z[b] - Z[p];
+          const Real cx = X[cc] - X[p], cy = Y[cc] - Y[p], cz = Z[cc] - Z[p];
+          v[l] += (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(24);
+        }
+      }
+      for (int32_t l = 0; l < lanes; ++l) out[g0 + l] = v[l];
+    }
+  }
+
+  // Nodal pressures q_p = k_p (V_p - V_p^r) of chunk c into node_q_.
+  void nodal_pressure_chunk(int32_t c) {
+    nodal_volume_chunk(c, node_q_.data());
+    const int32_t first = c * model_->layout.chunk_size;
+    const int32_t last = std::min(model_->npoint(), first + model_->layout.chunk_size);
+#pragma omp simd
+    for (int32_t p = first; p < last; ++p) node_q_[p] = node_k_[p] * (node_q_[p] - node_rest_[p]);
+  }
+
+  template <int Volume, bool Gravity, int Tool>
   void chunk(const StepContext<Real>& ctx, int32_t c) {
     const auto& L = model_->layout;
     const int32_t C = L.chunk_size;
@@ -564,8 +635,10 @@ class CpuBackend final : public Backend {
         }
       }
 
-      if constexpr (Volume) {
-        // f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
+      if constexpr (Volume != kNoVolume) {
+        // Per tet: f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
+        // Nodal: f_p = -p_t dV/dx_p, p_t the mean of the 4 nodal pressures.
+        const Real* __restrict q = node_q_.data();
         const int32_t* __restrict ta = tet_a_.data();
         const int32_t* __restrict tb = tet_b_.data();
         const int32_t* __restrict tc = tet_c_.data();
@@ -579,8 +652,14 @@ class CpuBackend final : public Backend {
             const Real ax = X[a] - X[p], ay = Y[a] - Y[p], az = Z[a] - Z[p];
             const Real bx = X[b] - X[p], by = Y[b] - Y[p], bz = Z[b] - Z[p];
             const Real cx = X[cc] - X[p], cy = Y[cc] - Y[p], cz = Z[cc] - Z[p];
-            const Real volume = (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
-            const Real s = kv[e] * (vr[e] - volume) / Real(6);
+            Real s;
+            if constexpr (Volume == kNodalVolume) {
+              s = -(q[p] + q[a] + q[b] + q[cc]) / Real(24);
+            } else {
+              const Real volume =
+                  (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
+              s = kv[e] * (vr[e] - volume) / Real(6);
+            }
             const Real ex = cx - ax, ey = cy - ay, ez = cz - az;  // c - a
             const Real gx = bx - ax, gy = by - ay, gz = bz - az;  // b - a
             fx[l] += s * (ey * gz - ez * gy);
@@ -661,7 +740,8 @@ class CpuBackend final : public Backend {
   std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry); k < 0 marks a suture
   std::vector<std::pair<int32_t, int32_t>> suture_slots_;  // (slot, spring) of every suture slot
   std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
-  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry)
+  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term
+  std::vector<Real> node_k_, node_rest_, node_q_;  // nodal term: k_a, V_a^r, pressure (npoint); else empty
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;

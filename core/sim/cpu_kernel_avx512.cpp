@@ -48,6 +48,7 @@ std::string avx512_kernel_unsupported(const Model& model) {
   if (model.layout.chunk_size % kLanes != 0)
     return "layout chunk size " + std::to_string(model.layout.chunk_size) + " is not a multiple of " +
            std::to_string(kLanes);
+  if (model.has_nodal_volume()) return "the nodal volume term runs on the generic kernel only";
   return "";
 }
 

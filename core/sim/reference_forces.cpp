@@ -1,5 +1,7 @@
 #include "core/sim/reference_forces.h"
 
+#include "core/model/nodal_volume.h"
+
 namespace organsim {
 
 void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
@@ -19,12 +21,17 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
     force[a] += f;
     force[b] -= f;
   }
-  // Volume: f_i = k_v (V_r - V) dV/dx_i, gradient of E = k_v/2 (V - V_r)^2.
+  // Volume, per tet: f_i = k_v (V_r - V) dV/dx_i, gradient of E = k_v/2 (V - V_r)^2.
+  // Nodal: f_i = -p_t dV/dx_i with p_t the mean of the tet's nodal pressures.
   if (model.has_volume()) {
+    std::vector<double> q;
+    if (model.has_nodal_volume()) nodal_pressures(model, x, q);
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& tet = model.tet_points[t];
       const Vec3 &p0 = x[tet[0]], &p1 = x[tet[1]], &p2 = x[tet[2]], &p3 = x[tet[3]];
-      const double scale = model.tet_k[t] * (model.tet_rest_volume[t] - signed_volume(p0, p1, p2, p3));
+      const double scale = model.has_nodal_volume()
+                               ? -(q[tet[0]] + q[tet[1]] + q[tet[2]] + q[tet[3]]) / 4
+                               : model.tet_k[t] * (model.tet_rest_volume[t] - signed_volume(p0, p1, p2, p3));
       // dV/dp1 = (p2-p0)x(p3-p0)/6, dV/dp2 = (p3-p0)x(p1-p0)/6, dV/dp3 = (p1-p0)x(p2-p0)/6, dV/dp0 = -sum.
       const Vec3 g1 = (p2 - p0).cross(p3 - p0) / 6.0;
       const Vec3 g2 = (p3 - p0).cross(p1 - p0) / 6.0;

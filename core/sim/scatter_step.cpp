@@ -4,7 +4,8 @@ namespace organsim {
 
 template <class Real>
 ScatterStep<Real>::ScatterStep(const Model& model)
-    : model_(model), u_(model.npoint(), V3::Zero()), d_(model.npoint(), V3::Zero()), force_(model.npoint()) {
+    : model_(model), u_(model.npoint(), V3::Zero()), d_(model.npoint(), V3::Zero()), force_(model.npoint()),
+      nodal_(model.has_nodal_volume() ? model.npoint() : 0) {
   rest_.reserve(model.npoint());
   for (const Vec3& x : model.rest_position) rest_.push_back(x.cast<Real>());
 }
@@ -30,13 +31,30 @@ void ScatterStep<Real>::step(double dt_seconds) {
     force_[a] += f;
     force_[b] -= f;
   }
-  // Volume: f_i = k_v (V_r - V) dV/dx_i.
+  auto tet_volume = [&](const Tet& tet) {
+    const V3 p0 = x(tet[0]);
+    return (x(tet[1]) - p0).dot((x(tet[2]) - p0).cross(x(tet[3]) - p0)) / 6;
+  };
+  // Nodal volume term, first pass: pressures q_a = k_a (V_a - V_a^r), V_a = sum of V_t / 4.
+  if (m.has_nodal_volume()) {
+    std::fill(nodal_.begin(), nodal_.end(), Real(0));
+    for (const Tet& tet : m.tet_points) {
+      const Real quarter = tet_volume(tet) / 4;
+      for (int32_t p : tet) nodal_[p] += quarter;
+    }
+    for (int32_t a = 0; a < m.npoint(); ++a)
+      nodal_[a] = static_cast<Real>(m.point_volume_k[a]) * (nodal_[a] - static_cast<Real>(m.point_rest_volume[a]));
+  }
+  // Volume: f_i = k_v (V_r - V) dV/dx_i per tet, or -p_t dV/dx_i with p_t
+  // the mean nodal pressure of the tet.
   if (m.has_volume()) {
     for (int32_t t = 0; t < m.ntet(); ++t) {
       const Tet& tet = m.tet_points[t];
       const V3 p0 = x(tet[0]), e1 = x(tet[1]) - p0, e2 = x(tet[2]) - p0, e3 = x(tet[3]) - p0;
-      const Real volume = e1.dot(e2.cross(e3)) / 6;
-      const Real scale = static_cast<Real>(m.tet_k[t]) * (static_cast<Real>(m.tet_rest_volume[t]) - volume) / 6;
+      const Real scale =
+          m.has_nodal_volume()
+              ? -(nodal_[tet[0]] + nodal_[tet[1]] + nodal_[tet[2]] + nodal_[tet[3]]) / 24
+              : static_cast<Real>(m.tet_k[t]) * (static_cast<Real>(m.tet_rest_volume[t]) - tet_volume(tet)) / 6;
       const V3 g1 = e2.cross(e3), g2 = e3.cross(e1), g3 = e1.cross(e2);
       force_[tet[0]] -= scale * (g1 + g2 + g3);
       force_[tet[1]] += scale * g1;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "core/mesh/tet_mesh.h"
+#include "core/model/nodal_volume.h"
 #include "core/util/error.h"
 #include "core/util/format.h"
 
@@ -57,7 +58,14 @@ double elastic_energy(const Model& model, const std::vector<Vec3>& x) {
     const double stretch = (x[b] - x[a]).norm() - model.spring_rest[s];
     e += 0.5 * model.spring_k[s] * stretch * stretch;
   }
-  if (model.has_volume()) {
+  if (model.has_nodal_volume()) {
+    std::vector<double> v;
+    nodal_volumes(model, x, v);
+    for (int32_t a = 0; a < model.npoint(); ++a) {
+      const double dv = v[a] - model.point_rest_volume[a];
+      e += 0.5 * model.point_volume_k[a] * dv * dv;
+    }
+  } else if (model.has_volume()) {
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
       const double dv = signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) - model.tet_rest_volume[t];

@@ -78,7 +78,23 @@ void apply_stiffness(const Model& model, const RestStiffness& k, const std::vect
       out[b] += f;
     }
   }
-  if ((terms & kVolume) && model.has_volume()) {
+  if ((terms & kVolume) && model.has_nodal_volume()) {
+    // Energy k_a/2 (V_a - V_a^r)^2 on nodal volumes: at rest G^T diag(k_a) G,
+    // applied as nodal volume changes, nodal pressures, then tet forces.
+    std::vector<double> q(model.npoint(), 0.0);
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const auto& g = k.tet_grad[t];
+      const double dv = g[0].dot(x[p[0]]) + g[1].dot(x[p[1]]) + g[2].dot(x[p[2]]) + g[3].dot(x[p[3]]);
+      for (int i = 0; i < 4; ++i) q[p[i]] += dv / 4;
+    }
+    for (int32_t a = 0; a < model.npoint(); ++a) q[a] *= model.point_volume_k[a];
+    for (int32_t t = 0; t < model.ntet(); ++t) {
+      const Tet& p = model.tet_points[t];
+      const double s = (q[p[0]] + q[p[1]] + q[p[2]] + q[p[3]]) / 4;
+      for (int i = 0; i < 4; ++i) out[p[i]] += s * k.tet_grad[t][i];
+    }
+  } else if ((terms & kVolume) && model.has_volume()) {
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
       const auto& g = k.tet_grad[t];

@@ -65,7 +65,39 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
 
   Mat3 diag = diag_springs;
   double off = off_springs;
-  if (model.has_volume()) {
+  auto tets_of = [&](int32_t p, auto&& visit) {
+    const int32_t first = layout.tets.chunk_offset[p / c] + p % c;
+    for (int32_t j = 0; j < layout.tets.count[p]; ++j) visit(layout.tets.item[first + j * c]);
+  };
+  if (model.has_nodal_volume()) {
+    // K_ij = sum_a k_a G_ai G_aj^T with G_ai = dV_a/dx_i = sum of g_ti / 4
+    // over the tets holding a and i: the nodes a are the points of i's tets.
+    // ||K_ij|| <= sum_a |k_a| |G_ai| |G_aj| and |G_aj| <= sum of |g_tj| / 4
+    // over the tets of a holding j, so a adds |k_a| |G_ai| times the weighted
+    // sum of its tets' other free gradients / 4.
+    std::vector<std::pair<int32_t, Vec3>> nodes;  // (a, G_ai)
+    tets_of(i, [&](int32_t t) {
+      const Tet& tet = model.tet_points[t];
+      const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), i) - tet.begin());
+      const Vec3 gi = volume_gradient(model, tet, corner) / 4;
+      for (int32_t a : tet) {
+        auto it = std::find_if(nodes.begin(), nodes.end(), [&](const auto& n) { return n.first == a; });
+        if (it == nodes.end()) nodes.emplace_back(a, gi);
+        else it->second += gi;
+      }
+    });
+    for (const auto& [a, g] : nodes) {
+      const double k = model.point_volume_k[a];
+      diag += k * g * g.transpose();
+      double reach = 0;
+      tets_of(a, [&](int32_t t) {
+        const Tet& tet = model.tet_points[t];
+        for (int m = 0; m < 4; ++m)
+          if (tet[m] != i && free(tet[m])) reach += volume_gradient(model, tet, m).norm() / 4 * weight(tet[m]);
+      });
+      off += std::abs(k) * g.norm() * reach;
+    }
+  } else if (model.has_volume()) {
     const int32_t first_tet = layout.tets.chunk_offset[i / c] + i % c;
     for (int32_t j = 0; j < layout.tets.count[i]; ++j) {
       const int32_t t = layout.tets.item[first_tet + j * c];

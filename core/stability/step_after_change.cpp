@@ -25,17 +25,23 @@ void ChangeStepCheck::update(const Model& previous, const Model& next) {
     for (int32_t q : next.sutures[s].ends)
       if (!touched_[q]) touched_[q] = 1, changed.push_back(q);
   // Their spring neighbours: a neighbour's spring to a split point may now be
-  // two springs (one per side) whose stiffnesses sum to the old one.
+  // two springs (one per side) whose stiffnesses sum to the old one. With the
+  // nodal volume term also the next ring: a row sums over the nodal volumes
+  // of its neighbours, whose own tets reach the split points.
   const GatherLayout& layout = next.layout;
   const int32_t c = layout.chunk_size;
-  const size_t nchanged = changed.size();
-  for (size_t k = 0; k < nchanged; ++k) {
-    const int32_t p = changed[k];
-    const int32_t first = layout.springs.chunk_offset[p / c] + p % c;
-    for (int32_t j = 0; j < layout.springs.count[p]; ++j) {
-      const int32_t q = layout.spring_other[first + j * c];
-      if (!touched_[q]) touched_[q] = 1, changed.push_back(q);
+  size_t ring_begin = 0;
+  for (int ring = 0; ring < (next.has_nodal_volume() ? 2 : 1); ++ring) {
+    const size_t ring_end = changed.size();
+    for (size_t k = ring_begin; k < ring_end; ++k) {
+      const int32_t p = changed[k];
+      const int32_t first = layout.springs.chunk_offset[p / c] + p % c;
+      for (int32_t j = 0; j < layout.springs.count[p]; ++j) {
+        const int32_t q = layout.spring_other[first + j * c];
+        if (!touched_[q]) touched_[q] = 1, changed.push_back(q);
+      }
     }
+    ring_begin = ring_end;
   }
   for (int32_t p : changed) compute_gershgorin_row(next, p, rows_);
 }

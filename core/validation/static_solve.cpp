@@ -19,7 +19,7 @@ void add_block(Triplets& t, int32_t p, int32_t q, const Eigen::Matrix3d& b) {
 }
 
 // Rest stiffness of the Model's force law. Springs: k u u^T between the ends.
-// Volume: f_i = k_v (V_r - V) g_i, so at rest d f_i / d x_j = -k_v g_i g_j^T.
+// Volume per tet: f_i = k_v (V_r - V) g_i, so at rest d f_i / d x_j = -k_v g_i g_j^T.
 Triplets rest_stiffness(const Model& model) {
   Triplets t;
   t.reserve(static_cast<size_t>(model.nspring()) * 36 + (model.has_volume() ? model.ntet() * 144 : 0));
@@ -33,18 +33,37 @@ Triplets rest_stiffness(const Model& model) {
     add_block(t, a, b, -block);
     add_block(t, b, a, -block);
   }
-  if (model.has_volume()) {
-    for (int32_t e = 0; e < model.ntet(); ++e) {
-      const Tet& tet = model.tet_points[e];
-      const Vec3 a = x[tet[1]] - x[tet[0]], b = x[tet[2]] - x[tet[0]], c = x[tet[3]] - x[tet[0]];
-      std::array<Vec3, 4> g;
-      g[1] = b.cross(c) / 6;
-      g[2] = c.cross(a) / 6;
-      g[3] = a.cross(b) / 6;
-      g[0] = -(g[1] + g[2] + g[3]);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) add_block(t, tet[i], tet[j], model.tet_k[e] * g[i] * g[j].transpose());
+  if (!model.has_volume()) return t;
+  // Nodal: the energy k_a/2 (V_a - V_a^r)^2 gives G^T diag(k_a) G with
+  // G = dV_a/dx (npoint x 3 npoint, row a = sum over the tets of a of their
+  // gradients / 4): it couples all points of a node patch.
+  Triplets g_rows;
+  for (int32_t e = 0; e < model.ntet(); ++e) {
+    const Tet& tet = model.tet_points[e];
+    const Vec3 a = x[tet[1]] - x[tet[0]], b = x[tet[2]] - x[tet[0]], c = x[tet[3]] - x[tet[0]];
+    std::array<Vec3, 4> g;
+    g[1] = b.cross(c) / 6;
+    g[2] = c.cross(a) / 6;
+    g[3] = a.cross(b) / 6;
+    g[0] = -(g[1] + g[2] + g[3]);
+    if (model.has_nodal_volume()) {
+      for (int32_t node : tet)
+        for (int i = 0; i < 4; ++i)
+          for (int k = 0; k < 3; ++k) g_rows.emplace_back(node, 3 * tet[i] + k, g[i][k] / 4);
+      continue;
     }
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) add_block(t, tet[i], tet[j], model.tet_k[e] * g[i] * g[j].transpose());
+  }
+  if (model.has_nodal_volume()) {
+    const int32_t n = model.npoint();
+    Eigen::SparseMatrix<double> G(n, 3 * n);
+    G.setFromTriplets(g_rows.begin(), g_rows.end());
+    const Eigen::Map<const Eigen::VectorXd> k(model.point_volume_k.data(), n);
+    const Eigen::SparseMatrix<double> K = G.transpose() * (k.asDiagonal() * G);
+    for (int32_t col = 0; col < K.outerSize(); ++col)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it)
+        t.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
   }
   return t;
 }

@@ -300,5 +300,16 @@ TEST(ScenarioParse, PoissonRatioIsReadAndCheckedAgainstTheVolumeModulus) {
   EXPECT_NE(error_of(j).find("give poisson_ratio or volume_modulus, not both"), std::string::npos);
 }
 
+TEST(ScenarioParse, VolumeFormulationIsReadAndChecked) {
+  json j = minimal();
+  EXPECT_FALSE(parse(j).material.volume_formulation.has_value());  // absent: the material's default
+  j["material"] = {{"volume_modulus", 2000}, {"volume_formulation", "nodal"}};
+  EXPECT_EQ(*parse(j).material.volume_formulation, VolumeFormulation::Nodal);
+  j["material"]["volume_formulation"] = "per_tet";
+  EXPECT_EQ(*parse(j).material.volume_formulation, VolumeFormulation::PerTet);
+  j["material"]["volume_formulation"] = "tet";
+  EXPECT_NE(error_of(j).find("material.volume_formulation: expected"), std::string::npos) << error_of(j);
+}
+
 }  // namespace
 }  // namespace organsim

@@ -6,6 +6,7 @@
 
 #include <random>
 
+#include "core/model/stiffness.h"
 #include "core/stability/critical_step.h"
 #include "core/stability/step_after_change.h"
 #include "core/topology/blade.h"
@@ -16,8 +17,13 @@
 namespace organsim {
 namespace {
 
-TEST(StepAfterChange, KeptRowsEqualFreshOnesAndTheGuaranteedStepNeverExceedsDtCrit) {
+// Both volume terms: the nodal one's rows reach one ring further (a row sums
+// over its neighbours' nodal volumes).
+class StepAfterChange : public ::testing::TestWithParam<VolumeFormulation> {};
+
+TEST_P(StepAfterChange, KeptRowsEqualFreshOnesAndTheGuaranteedStepNeverExceedsDtCrit) {
   Material material;
+  material.volume_formulation = GetParam();
   material.density = 1000;
   material.young_modulus = 5000;
   material.volume_modulus = 8000;
@@ -64,6 +70,10 @@ TEST(StepAfterChange, KeptRowsEqualFreshOnesAndTheGuaranteedStepNeverExceedsDtCr
   EXPECT_EQ(changes, 12);
   EXPECT_GT(below, 0);  // the bound is a bound, not the estimate itself
 }
+
+INSTANTIATE_TEST_SUITE_P(VolumeTerms, StepAfterChange,
+                         ::testing::Values(VolumeFormulation::PerTet, VolumeFormulation::Nodal),
+                         [](const auto& info) { return std::string(volume_formulation_name(info.param)); });
 
 }  // namespace
 }  // namespace organsim

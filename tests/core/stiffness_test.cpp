@@ -58,8 +58,16 @@ TEST(Stiffness, SpringsOfAUnitTetFollowTheFormula) {
     const double r = model.spring_rest[s];
     EXPECT_NEAR(model.spring_k[s], es * v / (r * r), 1e-9 * model.spring_k[s]);
   }
-  ASSERT_TRUE(model.has_volume());
-  EXPECT_NEAR(model.tet_k[0] * v, volume_term_modulus(m), 1e-9 * volume_term_modulus(m));
+  // With a Poisson ratio the volume term is nodal: k_a V_a^r = K_v, V_a^r = V / 4.
+  ASSERT_TRUE(model.has_nodal_volume());
+  for (int32_t a = 0; a < 4; ++a) {
+    EXPECT_NEAR(model.point_rest_volume[a], v / 4, 1e-12 * v);
+    EXPECT_NEAR(model.point_volume_k[a] * v / 4, volume_term_modulus(m), 1e-9 * volume_term_modulus(m));
+  }
+  m.volume_formulation = VolumeFormulation::PerTet;
+  const Model per_tet = build_model(mesh, m, {});
+  ASSERT_TRUE(per_tet.has_volume() && !per_tet.has_nodal_volume());
+  EXPECT_NEAR(per_tet.tet_k[0] * v, volume_term_modulus(m), 1e-9 * volume_term_modulus(m));
 }
 
 TEST(Stiffness, PoissonRatioOutOfRangeOrWithVolumeModulusIsRefused) {

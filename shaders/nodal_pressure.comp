@@ -1,0 +1,33 @@
+// First pass of the averaged nodal volume term (docs/physics.md): each lane
+// owns one point, gathers its tets from the same table as step.comp and
+// writes its nodal pressure q_p = k_p (V_p - V_p^r), V_p = sum of V_t / 4.
+// step.comp (variant NODAL_VOLUME) then reads the pressures of each tet's
+// four vertices, after a barrier. Same formulas as core/sim/cpu_backend.cpp.
+layout(local_size_x = ORGANSIM_GL_CHUNK) in;
+
+struct TetEntry {
+  int a, b, c;  // other vertices, (p, a, b, c) positively oriented; p itself for padding
+  float k_v;    // unused here (per-tet term only)
+  float v_r;
+};
+
+layout(std430, binding = ORGANSIM_GL_B_X_CUR) readonly buffer XCur { vec4 x_cur[]; };
+layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
+layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
+layout(std430, binding = ORGANSIM_GL_B_NODAL) readonly buffer Nodal { vec2 nodal[]; };
+layout(std430, binding = ORGANSIM_GL_B_PRESSURE) writeonly buffer Pressure { float pressure[]; };
+
+void main() {
+  const uint lane = gl_LocalInvocationID.x;
+  const uint chunk = gl_WorkGroupID.x;
+  const int p = int(chunk * ORGANSIM_GL_CHUNK + lane);
+  const ivec4 info = chunks[chunk];  // spring offset, spring slots, tet offset, tet slots
+  const vec3 xi = x_cur[p].xyz;
+  float v = 0.0;
+  for (int j = 0; j < info.w; ++j) {
+    const TetEntry e = tets[info.z + j * ORGANSIM_GL_CHUNK + int(lane)];
+    v += dot(x_cur[e.a].xyz - xi, cross(x_cur[e.b].xyz - xi, x_cur[e.c].xyz - xi)) * (1.0 / 24.0);
+  }
+  const vec2 n = nodal[p];  // {k_p (N/m^5; 0 for padding), V_p^r (m^3)}
+  pressure[p] = n.x * (v - n.y);
+}
