@@ -1,12 +1,17 @@
 #pragma once
 // Small box scenes shared by the GL tests (built from make_box_tet_mesh so
 // the tests need neither CGAL nor the scenario files).
+#include <filesystem>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "core/gl/gl_backend.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model.h"
 #include "core/sim/backend.h"
+#include "core/sim/cpu_backend.h"
+#include "core/sim/run.h"
 #include "core/sim/run_observer.h"
 
 namespace organsim::gl_test {
@@ -57,6 +62,37 @@ inline std::vector<Vec3> perturbed(const Model& model, double amplitude, unsigne
   return round_to_float(x);
 }
 
+// A deformed state with velocities: x_t noisy by 1 mm, x_{t-1} by another
+// 1 um, both rounded to float; v = (x_t - x_{t-1}) / dt as the kernels see it.
+struct MovingState {
+  std::vector<Vec3> x, x_prev, v;
+};
+inline MovingState moving_state(const Model& model, double dt, unsigned seed = 7) {
+  MovingState s;
+  s.x = perturbed(model, 1e-3, seed);
+  s.x_prev = s.x;
+  std::mt19937 rng(seed + 4);
+  std::uniform_real_distribution<double> u(-1e-6, 1e-6);
+  for (Vec3& p : s.x_prev) p += Vec3(u(rng), u(rng), u(rng));
+  s.x_prev = round_to_float(s.x_prev);
+  s.v.resize(s.x.size());
+  for (size_t i = 0; i < s.x.size(); ++i) s.v[i] = (s.x[i] - s.x_prev[i]) / dt;
+  return s;
+}
+
+// Starts `gl` (built with record_forces) from `state`, runs one substep of dt
+// and returns the force on every point that step used.
+inline std::vector<Vec3> forces_of_one_substep(GlBackend& gl, const MovingState& state, double dt) {
+  gl.set_state(state.x, state.x_prev);
+  TickRequest request;
+  request.dt = dt;
+  request.substeps = 1;
+  gl.tick(request);
+  std::vector<Vec3> f;
+  gl.forces(f);
+  return f;
+}
+
 // Counts a run's topology changes and keeps its final positions.
 struct FinalState final : RunObserver {
   std::vector<Vec3> x;
@@ -65,5 +101,33 @@ struct FinalState final : RunObserver {
   void on_topology_changed(const Model&, Backend&) override { ++changes; }
   void on_finish(const Model&, Backend& backend) override { backend.positions(x); }
 };
+
+// The same scenario run on the double CPU reference (one thread) and on GL,
+// each observed by a FinalState; outputs under ORGANSIM_TEST_TMP/name_{cpu,gl}.
+struct CpuAndGlRuns {
+  RunResult cpu, gl;
+  FinalState cpu_end, gl_end;
+  int32_t gl_latency = 0;  // GlBackend::reaction_latency_ticks()
+  // max_i |x_gl - x_cpu| at the end, divided by `scale`.
+  double worst_position_difference(double scale) const {
+    double worst = 0;
+    for (size_t i = 0; i < cpu_end.x.size(); ++i) worst = std::max(worst, (gl_end.x[i] - cpu_end.x[i]).norm());
+    return worst / scale;
+  }
+};
+inline CpuAndGlRuns run_on_cpu_and_gl(const Scenario& s, const Model& model, const std::string& name) {
+  CpuAndGlRuns r;
+  auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  GlBackend gl(model, backend_tool(s), {});
+  r.gl_latency = gl.reaction_latency_ticks();
+  RunOptions options;
+  options.outdir = std::filesystem::path(ORGANSIM_TEST_TMP) / (name + "_cpu");
+  options.observers = {&r.cpu_end};
+  r.cpu = run_scenario(s, model, *cpu, options);
+  options.outdir = std::filesystem::path(ORGANSIM_TEST_TMP) / (name + "_gl");
+  options.observers = {&r.gl_end};
+  r.gl = run_scenario(s, model, gl, options);
+  return r;
+}
 
 }  // namespace organsim::gl_test

@@ -33,38 +33,15 @@ double relative_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& 
   return d / max_norm(b);
 }
 
-struct OneStep {
-  std::vector<Vec3> x, x_prev, v;
-};
-
-// A deformed state with velocities: x_t noisy by 1 mm, x_{t-1} by another 1 um.
-OneStep deformed_state(const Model& model) {
-  OneStep s;
-  s.x = gl_test::perturbed(model, 1e-3, 7);
-  s.x_prev = s.x;
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1e-6, 1e-6);
-  for (Vec3& p : s.x_prev) p += Vec3(u(rng), u(rng), u(rng));
-  s.x_prev = gl_test::round_to_float(s.x_prev);
-  s.v.resize(s.x.size());
-  for (size_t i = 0; i < s.x.size(); ++i) s.v[i] = (s.x[i] - s.x_prev[i]) / kDt;
-  return s;
-}
-
 TEST(GlKernel, SpringsVolumeAndGravityMatchTheReferenceScatter) {
   const Model model = gl_test::box_model(5, 5, 3, true, 2e4, Vec3(0, 0, -9.81));
   ASSERT_TRUE(model.has_volume());
   GlBackendOptions options;
   options.record_forces = true;
   GlBackend gl(model, BackendTool{}, options);
-  const OneStep s = deformed_state(model);
-  gl.set_state(s.x, s.x_prev);
-  TickRequest request;
-  request.dt = kDt;
-  request.substeps = 1;
-  gl.tick(request);
-  std::vector<Vec3> got, want;
-  gl.forces(got);
+  const gl_test::MovingState s = gl_test::moving_state(model, kDt);
+  const std::vector<Vec3> got = gl_test::forces_of_one_substep(gl, s, kDt);
+  std::vector<Vec3> want;
   reference_internal_forces(model, s.x, s.v, want);
   const double rel = relative_difference(got, want);
   std::cout << "springs+volume+gravity: max |f_gl - f_ref| / max |f_ref| = " << rel << " (max |f| "
@@ -94,7 +71,7 @@ TEST(GlKernel, PushContactAndReactionMatchTheReference) {
   GlBackendOptions options;
   options.record_forces = true;
   GlBackend gl(model, tool, options);
-  const OneStep s = deformed_state(model);
+  const gl_test::MovingState s = gl_test::moving_state(model, kDt);
   gl.set_state(s.x, s.x_prev);
   // Tool centre 1.2 cm above the top face's centre: the top points nearest the
   // centre are inside the 2 cm sphere.
@@ -129,7 +106,7 @@ TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   GlBackendOptions options;
   options.record_forces = true;
   GlBackend gl(model, tool, options);
-  const OneStep s = deformed_state(model);
+  const gl_test::MovingState s = gl_test::moving_state(model, kDt);
   gl.set_state(s.x, s.x_prev);
   // A top corner whose Kuhn corner point lies in one tet: light points with a
   // tool stiffness scale well below 1 (Model::tool_k_scale) are among those grasped.

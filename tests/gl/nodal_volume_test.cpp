@@ -36,22 +36,10 @@ TEST(GlNodalVolume, ForceMatchesTheReference) {
   options.record_forces = true;
   GlBackend gl(model, BackendTool{}, options);
   EXPECT_EQ(gl.plan().dispatches_per_step, 2);
-  // x_t 1 mm of noise, x_{t-1} another 1 um: springs, dampers, volume, gravity.
-  const std::vector<Vec3> x = gl_test::perturbed(model, 1e-3, 7);
-  std::vector<Vec3> x_prev = gl_test::perturbed(model, 1e-3, 7), v(x.size());
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1e-6, 1e-6);
-  for (Vec3& p : x_prev) p += Vec3(u(rng), u(rng), u(rng));
-  x_prev = gl_test::round_to_float(x_prev);
-  for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x_prev[i]) / kDt;
-  gl.set_state(x, x_prev);
-  TickRequest request;
-  request.dt = kDt;
-  request.substeps = 1;
-  gl.tick(request);
-  std::vector<Vec3> got, want;
-  gl.forces(got);
-  reference_internal_forces(model, x, v, want);
+  const gl_test::MovingState s = gl_test::moving_state(model, kDt);
+  const std::vector<Vec3> got = gl_test::forces_of_one_substep(gl, s, kDt);
+  std::vector<Vec3> want;
+  reference_internal_forces(model, s.x, s.v, want);
   double worst = 0, largest = 0;
   for (size_t i = 0; i < got.size(); ++i) {
     worst = std::max(worst, (got[i] - want[i]).norm());

@@ -3,20 +3,16 @@
 // a run that cuts and then sutures follows the double CPU backend.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <random>
 
 #include "core/gl/gl_backend.h"
 #include "core/model/model_rebuild.h"
-#include "core/sim/cpu_backend.h"
 #include "core/sim/reference_forces.h"
 #include "gl_test_scenes.h"
 #include "tests/core/suture_test_util.h"
 
 namespace organsim {
 namespace {
-
-namespace fs = std::filesystem;
 
 // Tolerance as tests/gl/kernel_test.cpp: the kernel sees the reference's
 // input (positions rounded to float), so only float arithmetic differs
@@ -43,22 +39,12 @@ TEST(GlSuture, TensionOnlySuturesOnTheirScheduleMatchTheReference) {
   GlBackendOptions options;
   options.record_forces = true;
   GlBackend gl(model, BackendTool{}, options);
-  const std::vector<Vec3> x = gl_test::perturbed(model, 1e-3, 5);
-  std::vector<Vec3> x_prev = x, v(x.size());
-  std::uniform_real_distribution<double> u(-1e-6, 1e-6);
-  for (Vec3& p : x_prev) p += Vec3(u(rng), u(rng), u(rng));
-  x_prev = gl_test::round_to_float(x_prev);
   const double dt = 1e-4;
-  for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x_prev[i]) / dt;
-  gl.set_state(x, x_prev);
-  TickRequest request;
-  request.dt = dt;
-  request.substeps = 1;
-  gl.tick(request);
-  std::vector<Vec3> got, want, when_tied;
-  gl.forces(got);
-  reference_internal_forces(model, x, v, want, 0.0);
-  reference_internal_forces(model, x, v, when_tied, -0.1);
+  const gl_test::MovingState state = gl_test::moving_state(model, dt, 5);
+  const std::vector<Vec3> got = gl_test::forces_of_one_substep(gl, state, dt);
+  std::vector<Vec3> want, when_tied;
+  reference_internal_forces(model, state.x, state.v, want, 0.0);
+  reference_internal_forces(model, state.x, state.v, when_tied, -0.1);
   double err = 0, scale = 0, schedule = 0;
   for (size_t i = 0; i < want.size(); ++i) {
     err = std::max(err, (got[i] - want[i]).norm());
@@ -76,24 +62,13 @@ TEST(GlSuture, TensionOnlySuturesOnTheirScheduleMatchTheReference) {
 TEST(GlSuture, CutThenSutureRunMatchesTheCpuReference) {
   const Scenario s = testing::sutured_beam(0.05, 0.15);
   const Model model = testing::beam_model(s);
-  auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
-  GlBackend gl(model, backend_tool(s), {});
-  gl_test::FinalState cpu_end, gl_end;
-  RunOptions options;
-  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "gl_suture_cpu";
-  options.observers = {&cpu_end};
-  const RunResult rc = run_scenario(s, model, *cpu, options);
-  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "gl_suture_gl";
-  options.observers = {&gl_end};
-  const RunResult rg = run_scenario(s, model, gl, options);
-  ASSERT_GT(cpu_end.changes, 1);
-  EXPECT_EQ(gl_end.changes, cpu_end.changes);
-  EXPECT_EQ(rg.meta.extra["sutures"]["count"], rc.meta.extra["sutures"]["count"]);
-  ASSERT_GT(rc.meta.extra["sutures"]["count"].get<int>(), 0);
-  ASSERT_EQ(gl_end.x.size(), cpu_end.x.size());
-  const double diagonal = gl_test::bbox_diagonal(model);
-  double worst = 0;
-  for (size_t i = 0; i < cpu_end.x.size(); ++i) worst = std::max(worst, (gl_end.x[i] - cpu_end.x[i]).norm() / diagonal);
+  const gl_test::CpuAndGlRuns r = gl_test::run_on_cpu_and_gl(s, model, "gl_suture");
+  ASSERT_GT(r.cpu_end.changes, 1);
+  EXPECT_EQ(r.gl_end.changes, r.cpu_end.changes);
+  EXPECT_EQ(r.gl.meta.extra["sutures"]["count"], r.cpu.meta.extra["sutures"]["count"]);
+  ASSERT_GT(r.cpu.meta.extra["sutures"]["count"].get<int>(), 0);
+  ASSERT_EQ(r.gl_end.x.size(), r.cpu_end.x.size());
+  const double worst = r.worst_position_difference(gl_test::bbox_diagonal(model));
   std::cout << "GL vs CPU after cut and sutures: " << worst << " of the diagonal\n";
   EXPECT_LT(worst, 1e-5);
 }

@@ -3,18 +3,12 @@
 // run follows the double CPU reference through every change.
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <optional>
-
 #include "core/gl/gl_backend.h"
-#include "core/sim/cpu_backend.h"
 #include "core/sim/run.h"
 #include "gl_test_scenes.h"
 
 namespace organsim {
 namespace {
-
-namespace fs = std::filesystem;
 
 // A 4 cm block (4 x 4 x 4 cubes) held at its base under gravity. From 10 to
 // 30 ms a blade in the grid plane x = 2 cm cuts down from the top to
@@ -54,29 +48,17 @@ TEST(GlTopology, CutRunMatchesTheCpuReference) {
   const Scenario s = cut_block();
   const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 4, 4, 4), s.material,
                                   model_options(s), "block");
-  auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
-  GlBackend gl(model, backend_tool(s), {});
-  gl_test::FinalState cpu_end, gl_end;
-  RunOptions options;
-  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "gl_topology_cpu";
-  options.observers = {&cpu_end};
-  const RunResult rc = run_scenario(s, model, *cpu, options);
-  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "gl_topology_gl";
-  options.observers = {&gl_end};
-  const RunResult rg = run_scenario(s, model, gl, options);
-  ASSERT_GT(cpu_end.changes, 1);
-  EXPECT_EQ(gl_end.changes, cpu_end.changes);  // the same faces cut at the same ticks
-  ASSERT_EQ(gl_end.x.size(), cpu_end.x.size());
-  const double diagonal = gl_test::bbox_diagonal(model);
-  double worst = 0;
-  for (size_t i = 0; i < cpu_end.x.size(); ++i) worst = std::max(worst, (gl_end.x[i] - cpu_end.x[i]).norm() / diagonal);
-  EXPECT_LT(worst, 1e-5);
+  const gl_test::CpuAndGlRuns r = gl_test::run_on_cpu_and_gl(s, model, "gl_topology");
+  ASSERT_GT(r.cpu_end.changes, 1);
+  EXPECT_EQ(r.gl_end.changes, r.cpu_end.changes);  // the same faces cut at the same ticks
+  ASSERT_EQ(r.gl_end.x.size(), r.cpu_end.x.size());
+  EXPECT_LT(r.worst_position_difference(gl_test::bbox_diagonal(model)), 1e-5);
   // The GL reaction arrives one tick late (non-blocking readback).
-  const int32_t lag = gl.reaction_latency_ticks();
+  const size_t lag = static_cast<size_t>(r.gl_latency);
   double peak = 0, force_error = 0;
-  for (size_t i = 0; i + lag < rc.samples.size(); ++i) {
-    peak = std::max(peak, rc.samples.force[i].norm());
-    force_error = std::max(force_error, (rg.samples.force[i + lag] - rc.samples.force[i]).norm());
+  for (size_t i = 0; i + lag < r.cpu.samples.size(); ++i) {
+    peak = std::max(peak, r.cpu.samples.force[i].norm());
+    force_error = std::max(force_error, (r.gl.samples.force[i + lag] - r.cpu.samples.force[i]).norm());
   }
   ASSERT_GT(peak, 0);  // the tool touched
   EXPECT_LT(force_error, 1e-4 * peak);
