@@ -38,7 +38,7 @@ cv::Mat draw_force_plot(const std::vector<double>& t, const std::vector<Vec3>& f
   }
   cv::Mat img(options.height, options.width, CV_8UC3, cv::Scalar(255, 255, 255));
   const cv::Rect area = force_plot_area(options.width, options.height);
-  const cv::Scalar ink(30, 30, 30), grid(225, 225, 225);
+  const cv::Scalar ink(30, 30, 30);
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
 
   // Data ranges: time from the samples; force covers all curves and 0.
@@ -64,25 +64,7 @@ cv::Mat draw_force_plot(const std::vector<double>& t, const std::vector<Vec3>& f
   const auto px = [&](double tv) { return area.x + (tv - t0) / (t1 - t0) * area.width; };
   const auto py = [&](double fv) { return area.y + area.height - (fv - f0) / (f1 - f0) * area.height; };
 
-  // Grid, ticks and tick labels.
-  for (double v = t0; v <= t1 + tstep * 1e-6; v += tstep) {
-    const int x = static_cast<int>(std::lround(px(v)));
-    cv::line(img, {x, area.y}, {x, area.y + area.height}, grid, 1);
-    cv::line(img, {x, area.y + area.height}, {x, area.y + area.height + 5}, ink, 1);
-    const std::string s = tick_label(v, tstep);
-    int base = 0;
-    const cv::Size size = cv::getTextSize(s, font, 0.4, 1, &base);
-    cv::putText(img, s, {x - size.width / 2, area.y + area.height + 20}, font, 0.4, ink, 1, cv::LINE_AA);
-  }
-  for (double v = f0; v <= f1 + fstep * 1e-6; v += fstep) {
-    const int y = static_cast<int>(std::lround(py(v)));
-    cv::line(img, {area.x, y}, {area.x + area.width, y}, grid, 1);
-    cv::line(img, {area.x - 5, y}, {area.x, y}, ink, 1);
-    const std::string s = tick_label(v, fstep);
-    int base = 0;
-    const cv::Size size = cv::getTextSize(s, font, 0.4, 1, &base);
-    cv::putText(img, s, {area.x - 8 - size.width, y + 4}, font, 0.4, ink, 1, cv::LINE_AA);
-  }
+  draw_grid_and_ticks(img, area, t0, t1, tstep, f0, f1, fstep);
   // Zero force line, darker than the grid.
   if (f0 < 0 && f1 > 0) {
     const int y = static_cast<int>(std::lround(py(0)));

@@ -38,7 +38,7 @@ cv::Mat draw_xy_plot(const std::vector<XySeries>& series, const XyPlotOptions& o
 
   cv::Mat img(options.height, options.width, CV_8UC3, cv::Scalar(255, 255, 255));
   const cv::Rect area = xy_plot_area(options.width, options.height);
-  const cv::Scalar ink(30, 30, 30), grid(225, 225, 225);
+  const cv::Scalar ink(30, 30, 30);
   const auto font = cv::FONT_HERSHEY_SIMPLEX;
   const auto px = [&](double v) { return area.x + (v - x0) / (x1 - x0) * area.width; };
   const auto py = [&](double v) { return area.y + area.height - (v - y0) / (y1 - y0) * area.height; };
@@ -50,22 +50,7 @@ cv::Mat draw_xy_plot(const std::vector<XySeries>& series, const XyPlotOptions& o
     cv::rectangle(img, at(x0, options.band->second), at(x1, options.band->first), cv::Scalar(215, 240, 215),
                   cv::FILLED);
   }
-  for (double v = x0; v <= x1 + xstep * 1e-6; v += xstep) {
-    const int x = static_cast<int>(std::lround(px(v)));
-    cv::line(img, {x, area.y}, {x, area.y + area.height}, grid, 1);
-    const std::string s = tick_label(v, xstep);
-    int base = 0;
-    const cv::Size size = cv::getTextSize(s, font, 0.4, 1, &base);
-    cv::putText(img, s, {x - size.width / 2, area.y + area.height + 20}, font, 0.4, ink, 1, cv::LINE_AA);
-  }
-  for (double v = y0; v <= y1 + ystep * 1e-6; v += ystep) {
-    const int y = static_cast<int>(std::lround(py(v)));
-    cv::line(img, {area.x, y}, {area.x + area.width, y}, grid, 1);
-    const std::string s = tick_label(v, ystep);
-    int base = 0;
-    const cv::Size size = cv::getTextSize(s, font, 0.4, 1, &base);
-    cv::putText(img, s, {area.x - 8 - size.width, y + 4}, font, 0.4, ink, 1, cv::LINE_AA);
-  }
+  draw_grid_and_ticks(img, area, x0, x1, xstep, y0, y1, ystep);
   cv::rectangle(img, area, ink, 1);
 
   static const cv::Scalar colours[] = {{200, 80, 30}, {30, 140, 230}, {60, 170, 60}, {160, 60, 200},

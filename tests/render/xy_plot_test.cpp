@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "core/render/xy_plot.h"
@@ -36,6 +37,14 @@ TEST(XyPlot, ALineFromLowerLeftToUpperRightAndTheBand) {
   // The band (light green) fills the area between y = 1 and 2, left of the line.
   const cv::Vec3b band = img.at<cv::Vec3b>(area.y + area.height * 11 / 20, area.x + area.width / 20);
   EXPECT_EQ(band, cv::Vec3b(215, 240, 215));
+  // Grid and ticks every 0.5 (nice_step over 0..4): light grey grid lines
+  // through x = 2 and y = 3 away from the data, a dark tick mark below x = 2.
+  const int x2 = static_cast<int>(std::lround(area.x + 0.5 * area.width));
+  const int y3 = static_cast<int>(std::lround(area.y + 0.25 * area.height));
+  const int bottom = area.y + area.height;
+  EXPECT_EQ(img.at<cv::Vec3b>(area.y + 3, x2), cv::Vec3b(225, 225, 225));
+  EXPECT_EQ(img.at<cv::Vec3b>(y3, area.x + 3), cv::Vec3b(225, 225, 225));
+  EXPECT_EQ(img.at<cv::Vec3b>(bottom + 3, x2), cv::Vec3b(30, 30, 30));
 }
 
 TEST(XyPlot, MismatchedSeriesIsAUsageError) {
