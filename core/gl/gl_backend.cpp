@@ -45,10 +45,11 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
                                       std::to_string(options.threads_per_point) + ")");
   }
   threads_per_point_ = options.threads_per_point > 0 ? options.threads_per_point : context_->software() ? 1 : 8;
-  defines.push_back("THREADS_PER_POINT " + std::to_string(threads_per_point_));
+  const std::string split = "THREADS_PER_POINT " + std::to_string(threads_per_point_);
+  defines.push_back(split);
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
-  if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {});
+  if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
 
   // Buffers that do not depend on the model's size: the readback rings.
   const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
