@@ -56,6 +56,7 @@ struct BenchArgs {
   std::vector<std::string> backends;    // empty: cpu, and gl when it can be created
   std::vector<std::string> precisions;  // empty: double and float on cpu, float on gl
   int32_t threads = 0;
+  int32_t gl_threads_per_point = 0;
   int32_t warmup = 200;       // steps
   int32_t repetitions = 7;
   int32_t steps = 200;        // steps per repetition
@@ -232,6 +233,7 @@ void run_bench(const BenchArgs& args) {
       sel.name = name;
       sel.precision = precision;
       sel.threads = args.threads;
+      sel.gl_threads_per_point = args.gl_threads_per_point;
       std::unique_ptr<Backend> backend;
       try {
         backend = make_backend(sel, model, BackendTool{});
@@ -437,6 +439,9 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_option("--backend", *backends, "Comma-separated backends (default: cpu, and gl when it can be created)");
   cmd->add_option("--precision", *precisions, "Comma-separated precisions (default: double,float on cpu; float on gl)");
   cmd->add_option("--threads", args->threads, "CPU threads (0: the backend's choice)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--gl-threads-per-point", args->gl_threads_per_point,
+                  "GL invocations sharing one point's gathers, 1 to 16 (0: 1 on a software renderer, 8 on a GPU)")
+      ->check(CLI::Range(0, 16));
   cmd->add_option("--warmup", args->warmup, "Warm-up steps before timing (default 200)");
   cmd->add_option("--repetitions", args->repetitions, "Timed repetitions; the median is reported (default 7)");
   cmd->add_option("--steps", args->steps, "Steps per repetition (default 200)");
