@@ -24,8 +24,9 @@ namespace organsim {
 // True when this build contains the AVX-512 kernel.
 bool avx512_kernel_compiled();
 
-// Why `model` cannot run on the AVX-512 kernel ("" when it can). The kernel
-// needs the layout's chunks to be whole groups of 16 points.
+// Why `model` cannot run on the AVX-512 kernels, float and double ("" when
+// it can): the one routing point for both. They need the layout's chunks to
+// be whole groups of 16 points.
 std::string avx512_kernel_unsupported(const Model& model);
 
 using FloatStepInputs = KernelStepInputs<float>;
