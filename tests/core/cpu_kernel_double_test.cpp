@@ -21,11 +21,8 @@ namespace {
 
 using testing::kSize;
 using testing::random_model;
-using testing::run_scene;
-using testing::Scene;
-using testing::scene_name;
 
-CpuBackendOptions fast(int threads = 1) { return {Precision::Double, threads, CpuKernel::Avx512}; }
+CpuBackendOptions fast() { return {Precision::Double, 1, CpuKernel::Avx512}; }
 CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic}; }
 
 #define SKIP_WITHOUT_AVX512() \
@@ -91,44 +88,17 @@ TEST(CpuKernelDouble, OneStepForcesMatchTheReferenceOnRandomMeshesToRounding) {
 
 TEST(CpuKernelDouble, ThousandStepTrajectoriesTrackTheReferenceInEverySceneVariant) {
   SKIP_WITHOUT_AVX512();
-  for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::Pull}) {
-    const bool lean = scene == Scene::Lean;
-    const Model model = random_model(7, 5, !lean, !lean);
-    Reaction rd, rf;
-    const auto xd = run_scene(model, scene, reference(), rd);
-    const auto xf = run_scene(model, scene, fast(), rf);
-    double worst = 0, moved = 0;
-    for (size_t i = 0; i < xd.size(); ++i) {
-      worst = std::max(worst, (xd[i] - xf[i]).norm());
-      moved = std::max(moved, (xd[i] - model.rest_position[i]).norm());
-    }
-    ASSERT_GT(moved, 1e-4) << scene_name(scene) << ": the scene must deform the model to test anything";
-    // Rounding differences of a few ulps per step, carried by a damped
-    // stable system over 1000 steps: measured up to 7.6e-17 m (about 10 ulps
-    // of a 5 cm coordinate). Tolerance 1e-12 of the box edge (5e-14 m),
-    // seven orders below the float kernel's.
-    EXPECT_LT(worst, 1e-12 * kSize) << scene_name(scene);
-    if (scene == Scene::Push || scene == Scene::Pull) {
-      ASSERT_GT(rd.contacts, 0) << scene_name(scene);
-      EXPECT_EQ(rd.contacts, rf.contacts) << scene_name(scene);
-      // The same per-point terms summed: measured 7.5e-16 relative, tolerance 1e-12.
-      EXPECT_LT((rd.force - rf.force).norm(), 1e-12 * rd.force.norm()) << scene_name(scene);
-    }
-  }
+  // Rounding differences of a few ulps per step, carried by a damped
+  // stable system over 1000 steps: measured up to 7.6e-17 m (about 10 ulps
+  // of a 5 cm coordinate). Tolerance 1e-12 of the box edge (5e-14 m),
+  // seven orders below the float kernel's. The reaction sums the same
+  // per-point terms: measured 7.5e-16 relative, tolerance 1e-12.
+  testing::expect_scenes_track_the_reference(fast(), 1e-12 * kSize, 1e-12);
 }
 
 TEST(CpuKernelDouble, TwoThreadsGiveBitIdenticalResultsToOne) {
   SKIP_WITHOUT_AVX512();
-  for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
-    const Model model = random_model(3, 6, true, true);
-    Reaction r1, r2;
-    // 200 steps: enough for contact and motion; bitwise equality needs no more.
-    const auto x1 = run_scene(model, scene, fast(1), r1, 10);
-    const auto x2 = run_scene(model, scene, fast(2), r2, 10);
-    EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
-    EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
-    for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
-  }
+  testing::expect_two_threads_bit_identical_to_one(Precision::Double);
 }
 
 TEST(CpuKernelDouble, RestStateStaysPutWithoutGravity) {

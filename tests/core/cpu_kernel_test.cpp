@@ -21,9 +21,6 @@ namespace {
 
 using testing::kSize;
 using testing::random_model;
-using testing::run_scene;
-using testing::Scene;
-using testing::scene_name;
 
 CpuBackendOptions fast(int threads = 1) { return {Precision::Float, threads, CpuKernel::Avx512}; }
 CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic}; }
@@ -58,46 +55,18 @@ TEST(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
 
 TEST(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVariant) {
   SKIP_WITHOUT_AVX512();
-  for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::Pull}) {
-    const bool lean = scene == Scene::Lean;
-    const Model model = random_model(7, 5, !lean, !lean);
-    Reaction rd, rf;
-    const auto xd = run_scene(model, scene, reference(), rd);
-    const auto xf = run_scene(model, scene, fast(), rf);
-    double worst = 0, moved = 0;
-    for (size_t i = 0; i < xd.size(); ++i) {
-      worst = std::max(worst, (xd[i] - xf[i]).norm());
-      moved = std::max(moved, (xd[i] - model.rest_position[i]).norm());
-    }
-    ASSERT_GT(moved, 1e-4) << scene_name(scene) << ": the scene must deform the model to test anything";
-    // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
-    // contact amplifies it); the generic float kernel shows the same drift
-    // (Gather.FloatTracksDoubleReference). Measured 2e-7 to 5.5e-7 of the
-    // box edge (10-27 nm on 5 cm); tolerance 1e-5 of it (0.5 um, against
-    // deformations of 0.8-26 mm here).
-    EXPECT_LT(worst, 1e-5 * kSize) << scene_name(scene);
-    if (scene == Scene::Push || scene == Scene::Pull) {
-      ASSERT_GT(rd.contacts, 0) << scene_name(scene);
-      EXPECT_EQ(rd.contacts, rf.contacts) << scene_name(scene);
-      // The reaction sums the same per-point terms: measured 1.6e-6 relative, tolerance 1e-4.
-      EXPECT_LT((rd.force - rf.force).norm(), 1e-4 * rd.force.norm()) << scene_name(scene);
-    }
-  }
+  // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
+  // contact amplifies it); the generic float kernel shows the same drift
+  // (Gather.FloatTracksDoubleReference). Measured 2e-7 to 5.5e-7 of the
+  // box edge (10-27 nm on 5 cm); tolerance 1e-5 of it (0.5 um, against
+  // deformations of 0.8-26 mm here). The reaction sums the same per-point
+  // terms: measured 1.6e-6 relative, tolerance 1e-4.
+  testing::expect_scenes_track_the_reference(fast(), 1e-5 * kSize, 1e-4);
 }
 
 TEST(CpuKernel, TwoThreadsGiveBitIdenticalResultsToOne) {
   SKIP_WITHOUT_AVX512();
-  for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
-    const Model model = random_model(3, 6, true, true);
-    Reaction r1, r2;
-    // 200 steps: enough for contact and motion (a loaded machine makes
-    // every two-thread step slow, and bitwise equality needs no more).
-    const auto x1 = run_scene(model, scene, fast(1), r1, 10);
-    const auto x2 = run_scene(model, scene, fast(2), r2, 10);
-    EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
-    EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
-    for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
-  }
+  testing::expect_two_threads_bit_identical_to_one(Precision::Float);
 }
 
 TEST(CpuKernel, RestStateStaysPutWithoutGravity) {

@@ -2,6 +2,8 @@
 // Models and scenes shared by the AVX-512 kernel tests (float and double):
 // a jittered box with a fixed base, and 1000-step runs of every scene
 // variant (lean, volume + gravity, push, pull).
+#include <gtest/gtest.h>
+
 #include <random>
 #include <vector>
 
@@ -108,6 +110,49 @@ inline const char* scene_name(Scene s) {
     case Scene::Pull: return "pull";
   }
   return "";
+}
+
+// Every scene variant on `options` against the generic double kernel (the
+// reference), 1000 steps each: the scene must deform the model; positions
+// must agree within `position_tol` m and, with a tool, the contacts exactly
+// and the reaction force within `reaction_tol` of its size.
+inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, double position_tol,
+                                              double reaction_tol) {
+  for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::Pull}) {
+    const bool lean = scene == Scene::Lean;
+    const Model model = random_model(7, 5, !lean, !lean);
+    Reaction rd, rf;
+    const auto xd = run_scene(model, scene, {Precision::Double, 1, CpuKernel::Generic}, rd);
+    const auto xf = run_scene(model, scene, options, rf);
+    double worst = 0, moved = 0;
+    for (size_t i = 0; i < xd.size(); ++i) {
+      worst = std::max(worst, (xd[i] - xf[i]).norm());
+      moved = std::max(moved, (xd[i] - model.rest_position[i]).norm());
+    }
+    ASSERT_GT(moved, 1e-4) << scene_name(scene) << ": the scene must deform the model to test anything";
+    EXPECT_LT(worst, position_tol) << scene_name(scene);
+    if (scene == Scene::Push || scene == Scene::Pull) {
+      ASSERT_GT(rd.contacts, 0) << scene_name(scene);
+      EXPECT_EQ(rd.contacts, rf.contacts) << scene_name(scene);
+      EXPECT_LT((rd.force - rf.force).norm(), reaction_tol * rd.force.norm()) << scene_name(scene);
+    }
+  }
+}
+
+// The avx512 kernel of `precision` on two threads against one, bitwise, in
+// the scenes with volume, push and pull. 200 steps: enough for contact and
+// motion (a loaded machine makes every two-thread step slow, and bitwise
+// equality needs no more).
+inline void expect_two_threads_bit_identical_to_one(Precision precision) {
+  for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
+    const Model model = random_model(3, 6, true, true);
+    Reaction r1, r2;
+    const auto x1 = run_scene(model, scene, {precision, 1, CpuKernel::Avx512}, r1, 10);
+    const auto x2 = run_scene(model, scene, {precision, 2, CpuKernel::Avx512}, r2, 10);
+    EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
+    EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
+    for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
+  }
 }
 
 }  // namespace organsim::testing
