@@ -42,6 +42,8 @@ class GlBackend final : public Backend {
   std::string precision() const override { return "float"; }
   Plan plan() const override;
   int32_t reaction_latency_ticks() const override { return 1; }
+  // Non-finite positions are flagged on the GPU every tick (status ring).
+  int32_t default_check_interval_ticks() const override { return 50; }
   Reaction tick(const TickRequest& request) override;
   void attach(const Attachment& attachment) override;
   void release() override;
