@@ -4,8 +4,9 @@
 // (slot j, lane l) of chunk c is at chunk offset + j * C + l: neighbouring
 // lanes read neighbouring entries. No atomics: every point writes only itself.
 // Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
-// nodal term, pressures from nodal_pressure.comp), HAS_GRAVITY, TOOL_PUSH,
-// TOOL_PULL, and RECORD_FORCE (tests: also store each point's total force).
+// nodal term, pressures from nodal_pressure.comp), SHEAR_ELEMENT (the per-tet
+// Green-strain shear energy of nu < 1/4), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// and RECORD_FORCE (tests: also store each point's total force).
 // Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
 layout(local_size_x = ORGANSIM_GL_CHUNK) in;
 
@@ -28,8 +29,17 @@ layout(std430, binding = ORGANSIM_GL_B_D_NEXT) writeonly buffer DNext { vec4 d_n
 layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec4 mass[]; };
 layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
 layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
-#ifdef HAS_VOLUME
+#if defined(HAS_VOLUME) || defined(SHEAR_ELEMENT)
 layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
+#endif
+#ifdef SHEAR_ELEMENT
+struct ShearEntry {
+  vec4 ga;  // rest gradient of a's barycentric coordinate (1/m), w = k_t = mu_e V_t^r (J)
+  vec4 gb;  // b's, w unused
+  vec4 gc;  // c's, w unused
+};
+layout(std430, binding = ORGANSIM_GL_B_REST) readonly buffer Rest { vec4 rest[]; };
+layout(std430, binding = ORGANSIM_GL_B_SHEAR) readonly buffer Shear { ShearEntry shear[]; };
 #endif
 #ifdef NODAL_VOLUME
 layout(std430, binding = ORGANSIM_GL_B_PRESSURE) readonly buffer Pressure { float pressure[]; };
@@ -109,6 +119,25 @@ void main() {
     const float v = dot(a, cross(b, c)) * (1.0 / 6.0);
     f += e.k_v * (e.v_r - v) * grad;
 #endif
+  }
+#endif
+
+#ifdef SHEAR_ELEMENT
+  // f_p = k_t F C s with C = 2 E = H + H^T + H^T H, H = F - I = sum over the
+  // others q of (u_q - u_p) g_q^T from displacements u = x - X (exactly zero
+  // at rest), s = g_a + g_b + g_c. GLSL matrices are column-major: column j of
+  // H is sum_q (u_q - u_p) g_q[j], i.e. H = outerProduct(du_q, g_q) summed.
+  const vec3 ui = xi - rest[p].xyz;
+  for (int j = 0; j < info.w; ++j) {
+    const int slot = info.z + j * ORGANSIM_GL_CHUNK + int(lane);
+    const TetEntry e = tets[slot];
+    const ShearEntry g = shear[slot];
+    const mat3 H = outerProduct(x_cur[e.a].xyz - rest[e.a].xyz - ui, g.ga.xyz) +
+                   outerProduct(x_cur[e.b].xyz - rest[e.b].xyz - ui, g.gb.xyz) +
+                   outerProduct(x_cur[e.c].xyz - rest[e.c].xyz - ui, g.gc.xyz);
+    const mat3 Cg = H + transpose(H) + transpose(H) * H;
+    const vec3 w = g.ga.w * (Cg * (g.ga.xyz + g.gb.xyz + g.gc.xyz));
+    f += w + H * w;
   }
 #endif
 

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -25,7 +26,9 @@ std::string cpu_model_name() {
 }
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
-enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
+// The per-tet pass: a volume term, or the shear element (nu < 1/4), which
+// never comes with a volume term (core/model/stiffness.h).
+enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2, kShearElement = 3 };
 
 // Why the AVX-512 kernel cannot run `model` in `precision` here ("" if it can).
 template <class Real>
@@ -137,6 +140,9 @@ class CpuBackend final : public Backend {
     if (m.has_volume())
       plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
+    if (m.has_shear_element())
+      plan.passes.push_back({"shear-element", std::to_string(m.ntet()) + " tets' Green-strain shear energy, gathered per vertex (" +
+                                                  std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
     if (tool_.present)
       plan.passes.push_back({"tool-contact", tool_.mode == ToolMode::Push ? "sphere penalty contact"
@@ -154,6 +160,9 @@ class CpuBackend final : public Backend {
     } else if (m.has_volume()) {
       plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)",
                               m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
+    } else if (m.has_shear_element()) {
+      plan.buffers.push_back({"tet slots (3 others, 3 rest shape gradients, k_t)",
+                              m.layout.tets.item.size() * (3 * sizeof(int32_t) + 10 * real)});
     }
     if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
     plan.dispatches_per_step = 1;
@@ -303,13 +312,16 @@ class CpuBackend final : public Backend {
       }
     });
     refresh_suture_rest();
-    if (model.has_volume()) {
+    if (model.has_volume() || model.has_shear_element()) {
       const auto& tets = layout.tets;
       for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
       // The nodal term reads only the vertices of each slot.
       const size_t per_tet = model.has_nodal_volume() ? 0 : tets.item.size();
       tet_rest_.assign(per_tet, 0);
-      tet_k_.assign(per_tet, 0);
+      tet_k_.assign(model.has_shear_element() ? tets.item.size() : per_tet, 0);
+      // The shear element: rest gradients g_a, g_b, g_c of each slot's
+      // others (padding: zero, no force).
+      for (auto& g : shear_g_) g.assign(model.has_shear_element() ? tets.item.size() : 0, 0);
       for_each_slot(tets, [&](int32_t e, int32_t p) {
         const int32_t t = tets.item[e];
         const auto& o = layout.tet_others[e];
@@ -317,6 +329,16 @@ class CpuBackend final : public Backend {
         tet_b_[e] = t < 0 ? p : o[1];
         tet_c_[e] = t < 0 ? p : o[2];
         if (t < 0 || model.has_nodal_volume()) return;
+        if (model.has_shear_element()) {
+          const Tet& tet = model.tet_points[t];
+          for (int k = 0; k < 3; ++k) {
+            const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), o[k]) - tet.begin());
+            for (int axis = 0; axis < 3; ++axis)
+              shear_g_[3 * k + axis][e] = static_cast<Real>(model.tet_shape_gradient[t][corner][axis]);
+          }
+          tet_k_[e] = static_cast<Real>(model.tet_shear_k[t]);
+          return;
+        }
         tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
       });
@@ -490,6 +512,10 @@ class CpuBackend final : public Backend {
       if (gravity) return dispatch_tool<kTetVolume, true>(ctx, tool_kind);
       return dispatch_tool<kTetVolume, false>(ctx, tool_kind);
     }
+    if (model_->has_shear_element()) {
+      if (gravity) return dispatch_tool<kShearElement, true>(ctx, tool_kind);
+      return dispatch_tool<kShearElement, false>(ctx, tool_kind);
+    }
     if (gravity) return dispatch_tool<kNoVolume, true>(ctx, tool_kind);
     return dispatch_tool<kNoVolume, false>(ctx, tool_kind);
   }
@@ -635,7 +661,56 @@ class CpuBackend final : public Backend {
         }
       }
 
-      if constexpr (Volume != kNoVolume) {
+      if constexpr (Volume == kShearElement) {
+        // f_p = -2 k F E g_p = k F C s with C = 2 E = H + H^T + H^T H,
+        // H = F - I = sum over the others q of (u_q - u_p) g_q^T and
+        // s = g_a + g_b + g_c = -g_p. From displacements: exactly zero at rest.
+        const int32_t* __restrict ta = tet_a_.data();
+        const int32_t* __restrict tb = tet_b_.data();
+        const int32_t* __restrict tc = tet_c_.data();
+        const Real* __restrict kt = tet_k_.data();
+        const Real* __restrict gax = shear_g_[0].data();
+        const Real* __restrict gay = shear_g_[1].data();
+        const Real* __restrict gaz = shear_g_[2].data();
+        const Real* __restrict gbx = shear_g_[3].data();
+        const Real* __restrict gby = shear_g_[4].data();
+        const Real* __restrict gbz = shear_g_[5].data();
+        const Real* __restrict gcx = shear_g_[6].data();
+        const Real* __restrict gcy = shear_g_[7].data();
+        const Real* __restrict gcz = shear_g_[8].data();
+        for (int32_t j = 0; j < tet_width_[group]; ++j) {
+          const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
+#pragma omp simd
+          for (int32_t l = 0; l < lanes; ++l) {
+            const int32_t e = e0 + l, p = g0 + l, a = ta[e], b = tb[e], cc = tc[e];
+            const Real ax = ux[a] - ux[p], ay = uy[a] - uy[p], az = uz[a] - uz[p];
+            const Real bx = ux[b] - ux[p], by = uy[b] - uy[p], bz = uz[b] - uz[p];
+            const Real cx = ux[cc] - ux[p], cy = uy[cc] - uy[p], cz = uz[cc] - uz[p];
+            const Real h00 = ax * gax[e] + bx * gbx[e] + cx * gcx[e];
+            const Real h01 = ax * gay[e] + bx * gby[e] + cx * gcy[e];
+            const Real h02 = ax * gaz[e] + bx * gbz[e] + cx * gcz[e];
+            const Real h10 = ay * gax[e] + by * gbx[e] + cy * gcx[e];
+            const Real h11 = ay * gay[e] + by * gby[e] + cy * gcy[e];
+            const Real h12 = ay * gaz[e] + by * gbz[e] + cy * gcz[e];
+            const Real h20 = az * gax[e] + bz * gbx[e] + cz * gcx[e];
+            const Real h21 = az * gay[e] + bz * gby[e] + cz * gcy[e];
+            const Real h22 = az * gaz[e] + bz * gbz[e] + cz * gcz[e];
+            const Real c00 = 2 * h00 + h00 * h00 + h10 * h10 + h20 * h20;
+            const Real c11 = 2 * h11 + h01 * h01 + h11 * h11 + h21 * h21;
+            const Real c22 = 2 * h22 + h02 * h02 + h12 * h12 + h22 * h22;
+            const Real c01 = h01 + h10 + h00 * h01 + h10 * h11 + h20 * h21;
+            const Real c02 = h02 + h20 + h00 * h02 + h10 * h12 + h20 * h22;
+            const Real c12 = h12 + h21 + h01 * h02 + h11 * h12 + h21 * h22;
+            const Real sx = gax[e] + gbx[e] + gcx[e], sy = gay[e] + gby[e] + gcy[e], sz = gaz[e] + gbz[e] + gcz[e];
+            const Real wx = kt[e] * (c00 * sx + c01 * sy + c02 * sz);
+            const Real wy = kt[e] * (c01 * sx + c11 * sy + c12 * sz);
+            const Real wz = kt[e] * (c02 * sx + c12 * sy + c22 * sz);
+            fx[l] += wx + h00 * wx + h01 * wy + h02 * wz;
+            fy[l] += wy + h10 * wx + h11 * wy + h12 * wz;
+            fz[l] += wz + h20 * wx + h21 * wy + h22 * wz;
+          }
+        }
+      } else if constexpr (Volume != kNoVolume) {
         // Per tet: f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
         // Nodal: f_p = -p_t dV/dx_p, p_t the mean of the 4 nodal pressures.
         const Real* __restrict q = node_q_.data();
@@ -740,7 +815,8 @@ class CpuBackend final : public Backend {
   std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry); k < 0 marks a suture
   std::vector<std::pair<int32_t, int32_t>> suture_slots_;  // (slot, spring) of every suture slot
   std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
-  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term
+  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term; k_t with the shear element
+  std::array<std::vector<Real>, 9> shear_g_;    // shear element: g_a, g_b, g_c (x, y, z each) per slot (nentry); else empty
   std::vector<Real> node_k_, node_rest_, node_q_;  // nodal term: k_a, V_a^r, pressure (npoint); else empty
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;

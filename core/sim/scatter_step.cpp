@@ -62,6 +62,17 @@ void ScatterStep<Real>::step(double dt_seconds) {
       force_[tet[3]] += scale * g3;
     }
   }
+  // Shear element: f_i = -2 k_t F E g_i with F = I + sum_i u_i g_i^T (from the
+  // displacements, so the rest state is exactly force-free).
+  for (int32_t t = 0; t < static_cast<int32_t>(m.tet_shear_k.size()); ++t) {
+    const Tet& tet = m.tet_points[t];
+    const auto& g = m.tet_shape_gradient[t];
+    M3 H = M3::Zero();
+    for (int i = 1; i < 4; ++i) H += (u_[tet[i]] - u_[tet[0]]) * g[i].cast<Real>().transpose();
+    // 2 E = F^T F - I = H + H^T + H^T H, without the cancellation of 1 - 1.
+    const M3 P = Real(m.tet_shear_k[t]) * (M3::Identity() + H) * (H + H.transpose() + H.transpose() * H);  // 2 k F E
+    for (int i = 0; i < 4; ++i) force_[tet[i]] -= P * g[i].cast<Real>();
+  }
   // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m, u' = u + d'.
   for (int32_t i = 0; i < m.npoint(); ++i) {
     if (m.fixed[i]) continue;

@@ -1,0 +1,40 @@
+#pragma once
+// The per-tet shear element that lets a spring lattice reach Poisson ratios
+// below 1/4 (docs/physics.md). A central-force lattice has lambda = mu
+// (Cauchy), so below nu = 1/4 part of the shear stiffness must come from a
+// non-central term: per tet the energy
+//   W_t = k_t |E|^2,  k_t = mu_e V_t^r,  E = (F^T F - I) / 2,
+// on the Green strain of the tet's deformation gradient F = sum_i x_i g_i^T
+// (g_i the rest gradients of the tet's barycentric coordinates, sum g_i = 0).
+// E is invariant under rotation, so a rigidly rotated tet has no force and no
+// polar decomposition is needed; at small strain W_t = mu_e V |eps|^2, the
+// energy of a linear solid with Lame constants (lambda, mu) = (0, mu_e). The
+// force on vertex i is f_i = -dW/dx_i = -2 k_t F E g_i.
+//
+// This file evaluates it in double precision outside the kernels (reference
+// forces, energy, rest stiffness); the kernels evaluate the same formulas.
+#include <array>
+#include <vector>
+
+#include "core/model/model.h"
+
+namespace organsim {
+
+// Rest gradients g_i of the barycentric coordinates of the tet (x0..x3),
+// 1/m: g_i = (dV/dx_i) / V. They sum to zero.
+std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);
+
+// F = sum_i x_i g_i^T of tet t at positions x (internal numbering).
+Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::vector<Vec3>& x);
+
+// Sum over the tets of k_t |E_t|^2, J; 0 without the element.
+double shear_element_energy(const Model& model, const std::vector<Vec3>& x);
+
+// Adds f_i = -2 k_t F E g_i of every tet into force (npoint); nothing without the element.
+void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& force);
+
+// Block (i, j) of the element's stiffness at rest, N/m, for corners i, j of
+// tet t: k_t ((g_i . g_j) I + g_j g_i^T), the linear solid with lambda = 0.
+Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, int j);
+
+}  // namespace organsim
