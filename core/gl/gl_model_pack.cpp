@@ -1,8 +1,8 @@
 #include "core/gl/gl_model_pack.h"
 
-#include <algorithm>
 #include <string>
 
+#include "core/model/shear_element.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
 
@@ -85,12 +85,10 @@ PackedModel pack_model(const Model& model) {
     for (size_t e = 0; e < L.tets.item.size(); ++e) {
       const int32_t t = L.tets.item[e];
       if (t < 0) continue;
-      const Tet& tet = model.tet_points[t];
       float* g[3] = {p.shear[e].ga, p.shear[e].gb, p.shear[e].gc};
-      for (int k = 0; k < 3; ++k) {
-        const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), L.tet_others[e][k]) - tet.begin());
-        for (int axis = 0; axis < 3; ++axis) g[k][axis] = static_cast<float>(model.tet_shape_gradient[t][corner][axis]);
-      }
+      for (int k = 0; k < 3; ++k)
+        for (int axis = 0; axis < 3; ++axis)
+          g[k][axis] = static_cast<float>(shape_gradient_of(model, t, L.tet_others[e][k])[axis]);
       p.shear[e].k = static_cast<float>(model.tet_shear_k[t]);
     }
   }

@@ -202,7 +202,8 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
     if (model.has_volume())
       throw Error(ErrorKind::Scenario, "material: the shear element (poisson_ratio < 0.25) and a volume term together");
     const auto& X = model.rest_position;
-    for (const Tet& t : model.tet_points) model.tet_shape_gradient.push_back(shape_gradients(X[t[0]], X[t[1]], X[t[2]], X[t[3]]));
+    for (const Tet& t : model.tet_points)
+      model.tet_shape_gradient.push_back(shape_gradients(X[t[0]], X[t[1]], X[t[2]], X[t[3]]));
   }
 
   model.layout = build_gather_layout(model, chunk_size, sort_window);

@@ -1,5 +1,7 @@
 #include "core/model/shear_element.h"
 
+#include <algorithm>
+
 namespace organsim {
 
 std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3) {
@@ -11,6 +13,11 @@ std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& 
   g[3] = a.cross(b) / six_v;
   g[0] = -(g[1] + g[2] + g[3]);
   return g;
+}
+
+const Vec3& shape_gradient_of(const Model& model, int32_t t, int32_t point) {
+  const Tet& tet = model.tet_points[t];
+  return model.tet_shape_gradient[t][std::find(tet.begin(), tet.end(), point) - tet.begin()];
 }
 
 Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::vector<Vec3>& x) {

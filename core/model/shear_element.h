@@ -24,6 +24,10 @@ namespace organsim {
 // 1/m: g_i = (dV/dx_i) / V. They sum to zero.
 std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);
 
+// g of `point`, one of tet t's corners (the gathered kernels store the
+// gradients of a slot's other three corners).
+const Vec3& shape_gradient_of(const Model& model, int32_t t, int32_t point);
+
 // F = sum_i x_i g_i^T of tet t at positions x (internal numbering).
 Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::vector<Vec3>& x);
 

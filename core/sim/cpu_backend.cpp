@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "core/model/shear_element.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/util/error.h"
 
@@ -141,7 +142,8 @@ class CpuBackend final : public Backend {
       plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_shear_element())
-      plan.passes.push_back({"shear-element", std::to_string(m.ntet()) + " tets' Green-strain shear energy, gathered per vertex (" +
+      plan.passes.push_back({"shear-element", std::to_string(m.ntet()) +
+                                                  " tets' Green-strain shear energy, gathered per vertex (" +
                                                   std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
     if (tool_.present)
@@ -330,12 +332,9 @@ class CpuBackend final : public Backend {
         tet_c_[e] = t < 0 ? p : o[2];
         if (t < 0 || model.has_nodal_volume()) return;
         if (model.has_shear_element()) {
-          const Tet& tet = model.tet_points[t];
-          for (int k = 0; k < 3; ++k) {
-            const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), o[k]) - tet.begin());
+          for (int k = 0; k < 3; ++k)
             for (int axis = 0; axis < 3; ++axis)
-              shear_g_[3 * k + axis][e] = static_cast<Real>(model.tet_shape_gradient[t][corner][axis]);
-          }
+              shear_g_[3 * k + axis][e] = static_cast<Real>(shape_gradient_of(model, t, o[k])[axis]);
           tet_k_[e] = static_cast<Real>(model.tet_shear_k[t]);
           return;
         }

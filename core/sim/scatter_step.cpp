@@ -69,8 +69,8 @@ void ScatterStep<Real>::step(double dt_seconds) {
     const auto& g = m.tet_shape_gradient[t];
     M3 H = M3::Zero();
     for (int i = 1; i < 4; ++i) H += (u_[tet[i]] - u_[tet[0]]) * g[i].cast<Real>().transpose();
-    // 2 E = F^T F - I = H + H^T + H^T H, without the cancellation of 1 - 1.
-    const M3 P = Real(m.tet_shear_k[t]) * (M3::Identity() + H) * (H + H.transpose() + H.transpose() * H);  // 2 k F E
+    // 2 k F E with 2 E = F^T F - I = H + H^T + H^T H, without the cancellation of 1 - 1.
+    const M3 P = Real(m.tet_shear_k[t]) * (M3::Identity() + H) * (H + H.transpose() + H.transpose() * H);
     for (int i = 0; i < 4; ++i) force_[tet[i]] -= P * g[i].cast<Real>();
   }
   // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m, u' = u + d'.

@@ -21,7 +21,6 @@ void add_block(Triplets& t, int32_t p, int32_t q, const Eigen::Matrix3d& b) {
 
 // Rest stiffness of the Model's force law. Springs: k u u^T between the ends.
 // Volume per tet: f_i = k_v (V_r - V) g_i, so at rest d f_i / d x_j = -k_v g_i g_j^T.
-// Shear element: its rest blocks.
 Triplets rest_stiffness(const Model& model) {
   Triplets t;
   t.reserve(static_cast<size_t>(model.nspring()) * 36 + (model.has_volume() ? model.ntet() * 144 : 0));
