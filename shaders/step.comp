@@ -5,7 +5,7 @@
 // lanes read neighbouring entries. No atomics: every point writes only itself.
 // Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
 // nodal term, pressures from nodal_pressure.comp), SHEAR_ELEMENT (the per-tet
-// Green-strain shear energy of nu < 1/4), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// shear element of nu < 1/4), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
 // and RECORD_FORCE (tests: also store each point's total force).
 // Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
 layout(local_size_x = ORGANSIM_GL_CHUNK) in;
@@ -123,21 +123,25 @@ void main() {
 #endif
 
 #ifdef SHEAR_ELEMENT
-  // f_p = k_t F C s with C = 2 E = H + H^T + H^T H, H = F - I = sum over the
-  // others q of (u_q - u_p) g_q^T from displacements u = x - X (exactly zero
-  // at rest), s = g_a + g_b + g_c. GLSL matrices are column-major: column j of
-  // H is sum_q (u_q - u_p) g_q[j], i.e. H = outerProduct(du_q, g_q) summed.
+  // f_p = k_t (F s + phi'(J) cof(F) s) with F = I + sum over the others q of
+  // (u_q - u_p) g_q^T from displacements u = x - X, s = g_a + g_b + g_c
+  // (core/model/shear_element.h). GLSL matrices are column-major:
+  // outerProduct(du, g) is du g^T, and cof F's columns are the cross
+  // products of F's other columns.
   const vec3 ui = xi - rest[p].xyz;
+  const float jm = 0.5;  // kShearElementMinJ
   for (int j = 0; j < info.w; ++j) {
     const int slot = info.z + j * ORGANSIM_GL_CHUNK + int(lane);
     const TetEntry e = tets[slot];
     const ShearEntry g = shear[slot];
-    const mat3 H = outerProduct(x_cur[e.a].xyz - rest[e.a].xyz - ui, g.ga.xyz) +
+    const mat3 F = mat3(1.0) + outerProduct(x_cur[e.a].xyz - rest[e.a].xyz - ui, g.ga.xyz) +
                    outerProduct(x_cur[e.b].xyz - rest[e.b].xyz - ui, g.gb.xyz) +
                    outerProduct(x_cur[e.c].xyz - rest[e.c].xyz - ui, g.gc.xyz);
-    const mat3 Cg = H + transpose(H) + transpose(H) * H;
-    const vec3 w = g.ga.w * (Cg * (g.ga.xyz + g.gb.xyz + g.gc.xyz));
-    f += w + H * w;
+    const mat3 cof = mat3(cross(F[1], F[2]), cross(F[2], F[0]), cross(F[0], F[1]));
+    const float J = dot(F[0], cof[0]);
+    const float slope = J >= jm ? -1.0 / J : (J - 2.0 * jm) / (jm * jm);
+    const vec3 s = g.ga.xyz + g.gb.xyz + g.gc.xyz;
+    f += g.ga.w * (F * s + slope * (cof * s));
   }
 #endif
 

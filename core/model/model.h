@@ -56,9 +56,10 @@ struct Model {
   std::vector<double> point_rest_volume;  // nodal rest volume V_a^r, m^3 (npoint; 0 in no tet)
   std::vector<double> point_volume_k;     // nodal K / V_a^r, N/m^5 (npoint); empty unless the nodal term is on
   // The shear element (core/model/shear_element.h), on for nu < 1/4 only,
-  // never together with a volume term: energy k_t |E_t|^2 per tet on the
-  // Green strain, k_t = mu_e V_t^r, with the rest gradients g_i of each tet's
-  // barycentric coordinates (corners in tet_points order).
+  // never together with a volume term: per tet a neo-Hookean energy without
+  // its lambda part, k_t [(|F|^2 - 3) / 2 - ln det F], k_t = mu_e V_t^r, with
+  // the rest gradients g_i of each tet's barycentric coordinates (corners in
+  // tet_points order).
   std::vector<double> tet_shear_k;                   // mu_e V_t^r, J (ntet); empty unless the element is on
   std::vector<std::array<Vec3, 4>> tet_shape_gradient;  // g_i, 1/m (ntet x 4); empty unless the element is on
 

@@ -1,6 +1,7 @@
 #include "core/model/shear_element.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace organsim {
 
@@ -30,12 +31,30 @@ Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::v
   return F;
 }
 
+namespace {
+
+// cof F = J F^-T, column by column: the cross products of F's other columns.
+Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
+
+double barrier(double J) {
+  const double jm = kShearElementMinJ;
+  if (J >= jm) return -std::log(J);
+  return -std::log(jm) - (J - jm) / jm + (J - jm) * (J - jm) / (2 * jm * jm);
+}
+
+}  // namespace
+
 double shear_element_energy(const Model& model, const std::vector<Vec3>& x) {
   double e = 0;
   for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
     const Eigen::Matrix3d F = deformation_gradient(model, t, x);
-    const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
-    e += model.tet_shear_k[t] * E.squaredNorm();
+    e += model.tet_shear_k[t] * ((F.squaredNorm() - 3) / 2 + barrier(F.determinant()));
   }
   return e;
 }
@@ -43,8 +62,10 @@ double shear_element_energy(const Model& model, const std::vector<Vec3>& x) {
 void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& force) {
   for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
     const Eigen::Matrix3d F = deformation_gradient(model, t, x);
-    const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
-    const Eigen::Matrix3d P = 2 * model.tet_shear_k[t] * F * E;  // V times the first Piola-Kirchhoff stress
+    const Eigen::Matrix3d cof = cofactor(F);
+    const double J = F.col(0).dot(cof.col(0));
+    // V times the first Piola-Kirchhoff stress.
+    const Eigen::Matrix3d P = model.tet_shear_k[t] * (F + shear_barrier_slope(J) * cof);
     for (int i = 0; i < 4; ++i) force[model.tet_points[t][i]] -= P * model.tet_shape_gradient[t][i];
   }
 }

@@ -50,7 +50,8 @@ nlohmann::json elasticity_json(const Material& m) {
   if (m.spring_stiffness) return {{"rule", "spring_stiffness"}, {"spring_stiffness", *m.spring_stiffness}};
   const EffectiveElasticity e = effective_elasticity(m);
   return {{"rule", m.poisson_ratio ? "poisson_ratio" : "springs + volume_modulus"},
-          {"volume_formulation", volume_formulation_name(volume_formulation(m))},
+          // Below nu = 1/4 there is no volume term to name.
+          {"volume_formulation", shear_element_modulus(m) > 0 ? "none" : volume_formulation_name(volume_formulation(m))},
           {"young_modulus", e.young_modulus},
           {"poisson_ratio", e.poisson_ratio},
           {"spring_modulus", spring_modulus(m)},

@@ -143,7 +143,7 @@ class CpuBackend final : public Backend {
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_shear_element())
       plan.passes.push_back({"shear-element", std::to_string(m.ntet()) +
-                                                  " tets' Green-strain shear energy, gathered per vertex (" +
+                                                  " tets' shear element (neo-Hookean, no lambda), gathered per vertex (" +
                                                   std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
     if (tool_.present)
@@ -661,9 +661,10 @@ class CpuBackend final : public Backend {
       }
 
       if constexpr (Volume == kShearElement) {
-        // f_p = -2 k F E g_p = k F C s with C = 2 E = H + H^T + H^T H,
-        // H = F - I = sum over the others q of (u_q - u_p) g_q^T and
-        // s = g_a + g_b + g_c = -g_p. From displacements: exactly zero at rest.
+        // f_p = -k (F + phi'(J) cof F) g_p = k (F s + phi'(J) cof(F) s) with
+        // F = I + H, H = sum over the others q of (u_q - u_p) g_q^T and
+        // s = g_a + g_b + g_c = -g_p (core/model/shear_element.h). From
+        // displacements: F = I, cof F = I, J = 1 exactly at rest, no force.
         const int32_t* __restrict ta = tet_a_.data();
         const int32_t* __restrict tb = tet_b_.data();
         const int32_t* __restrict tc = tet_c_.data();
@@ -685,28 +686,24 @@ class CpuBackend final : public Backend {
             const Real ax = ux[a] - ux[p], ay = uy[a] - uy[p], az = uz[a] - uz[p];
             const Real bx = ux[b] - ux[p], by = uy[b] - uy[p], bz = uz[b] - uz[p];
             const Real cx = ux[cc] - ux[p], cy = uy[cc] - uy[p], cz = uz[cc] - uz[p];
-            const Real h00 = ax * gax[e] + bx * gbx[e] + cx * gcx[e];
-            const Real h01 = ax * gay[e] + bx * gby[e] + cx * gcy[e];
-            const Real h02 = ax * gaz[e] + bx * gbz[e] + cx * gcz[e];
-            const Real h10 = ay * gax[e] + by * gbx[e] + cy * gcx[e];
-            const Real h11 = ay * gay[e] + by * gby[e] + cy * gcy[e];
-            const Real h12 = ay * gaz[e] + by * gbz[e] + cy * gcz[e];
-            const Real h20 = az * gax[e] + bz * gbx[e] + cz * gcx[e];
-            const Real h21 = az * gay[e] + bz * gby[e] + cz * gcy[e];
-            const Real h22 = az * gaz[e] + bz * gbz[e] + cz * gcz[e];
-            const Real c00 = 2 * h00 + h00 * h00 + h10 * h10 + h20 * h20;
-            const Real c11 = 2 * h11 + h01 * h01 + h11 * h11 + h21 * h21;
-            const Real c22 = 2 * h22 + h02 * h02 + h12 * h12 + h22 * h22;
-            const Real c01 = h01 + h10 + h00 * h01 + h10 * h11 + h20 * h21;
-            const Real c02 = h02 + h20 + h00 * h02 + h10 * h12 + h20 * h22;
-            const Real c12 = h12 + h21 + h01 * h02 + h11 * h12 + h21 * h22;
+            const Real f00 = 1 + ax * gax[e] + bx * gbx[e] + cx * gcx[e];
+            const Real f01 = ax * gay[e] + bx * gby[e] + cx * gcy[e];
+            const Real f02 = ax * gaz[e] + bx * gbz[e] + cx * gcz[e];
+            const Real f10 = ay * gax[e] + by * gbx[e] + cy * gcx[e];
+            const Real f11 = 1 + ay * gay[e] + by * gby[e] + cy * gcy[e];
+            const Real f12 = ay * gaz[e] + by * gbz[e] + cy * gcz[e];
+            const Real f20 = az * gax[e] + bz * gbx[e] + cz * gcx[e];
+            const Real f21 = az * gay[e] + bz * gby[e] + cz * gcy[e];
+            const Real f22 = 1 + az * gaz[e] + bz * gbz[e] + cz * gcz[e];
+            // Cofactors: cof_ij = (-1)^(i+j) times the minor of F_ij.
+            const Real k00 = f11 * f22 - f12 * f21, k01 = f12 * f20 - f10 * f22, k02 = f10 * f21 - f11 * f20;
+            const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
+            const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
+            const Real slope = shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
             const Real sx = gax[e] + gbx[e] + gcx[e], sy = gay[e] + gby[e] + gcy[e], sz = gaz[e] + gbz[e] + gcz[e];
-            const Real wx = kt[e] * (c00 * sx + c01 * sy + c02 * sz);
-            const Real wy = kt[e] * (c01 * sx + c11 * sy + c12 * sz);
-            const Real wz = kt[e] * (c02 * sx + c12 * sy + c22 * sz);
-            fx[l] += wx + h00 * wx + h01 * wy + h02 * wz;
-            fy[l] += wy + h10 * wx + h11 * wy + h12 * wz;
-            fz[l] += wz + h20 * wx + h21 * wy + h22 * wz;
+            fx[l] += kt[e] * (f00 * sx + f01 * sy + f02 * sz + slope * (k00 * sx + k01 * sy + k02 * sz));
+            fy[l] += kt[e] * (f10 * sx + f11 * sy + f12 * sz + slope * (k10 * sx + k11 * sy + k12 * sz));
+            fz[l] += kt[e] * (f20 * sx + f21 * sy + f22 * sz + slope * (k20 * sx + k21 * sy + k22 * sz));
           }
         }
       } else if constexpr (Volume != kNoVolume) {

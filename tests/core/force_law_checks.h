@@ -2,6 +2,8 @@
 // Checks shared by the tests of a force-law term (the nodal volume term, the
 // shear element): a deformed moving state, one generic-kernel step against
 // the double reference, and the scatter step against the generic kernel.
+#include <gtest/gtest.h>
+
 #include <random>
 
 #include "core/model/model.h"
@@ -39,15 +41,14 @@ inline void random_state(const Model& model, unsigned seed, double dt, std::vect
   }
 }
 
-// One generic-kernel step of dt in `precision` from random_state(seed)
-// against position Verlet with the double reference force: the largest
-// position difference and the largest force increment dt^2 |f|_max / m_i, m.
+// One generic-kernel step of dt in `precision` from (x, x_prev) against
+// position Verlet with the double reference force: the largest position
+// difference and the largest force increment dt^2 |f|_max / m_i, m.
 struct StepError {
   double worst = 0, largest = 0;
 };
-inline StepError generic_step_error(const Model& model, unsigned seed, double dt, Precision precision) {
-  std::vector<Vec3> x, x_prev;
-  random_state(model, seed, dt, x, x_prev);
+inline StepError generic_step_error(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev,
+                                    double dt, Precision precision) {
   std::vector<Vec3> v(x.size()), force;
   for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x_prev[i]) / dt;
   reference_internal_forces(model, x, v, force);
@@ -67,6 +68,30 @@ inline StepError generic_step_error(const Model& model, unsigned seed, double dt
     e.largest = std::max(e.largest, dt * dt * model.inv_mass[i] * scale);
   }
   return e;
+}
+
+// generic_step_error from random_state(seed) for seeds 1 and 2 and chunk
+// sizes 64 and 8 (padding, lane groups) of make_model(seed, chunk). Double:
+// the same terms summed in another order, ~1e-12 of the force increment.
+// Float: positions carry ~6e-8 relative rounding, i.e. ~3e-9 m on 5 cm
+// against 1 mm deformations, ~1e-5 of the force, plus the rounding of x
+// itself (~4e-9 m); tolerance 1e-4 of the largest increment plus 1e-8 m.
+template <class MakeModel>
+inline void expect_generic_kernel_matches_reference(MakeModel make_model) {
+  const double dt = 1e-4;
+  for (unsigned seed : {1u, 2u}) {
+    for (int32_t chunk : {64, 8}) {
+      const Model model = make_model(seed, chunk);
+      std::vector<Vec3> x, x_prev;
+      random_state(model, seed, dt, x, x_prev);
+      for (Precision precision : {Precision::Double, Precision::Float}) {
+        const StepError e = generic_step_error(model, x, x_prev, dt, precision);
+        const bool dbl = precision == Precision::Double;
+        EXPECT_LT(e.worst, dbl ? 1e-15 + 1e-12 * e.largest : 1e-8 + 1e-4 * e.largest)
+            << "seed " << seed << " chunk " << chunk << (dbl ? " double" : " float");
+      }
+    }
+  }
 }
 
 // `steps` steps of dt from rest of the scatter step and the generic kernel,

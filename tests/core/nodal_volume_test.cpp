@@ -107,22 +107,8 @@ TEST(NodalVolume, ReferenceForceIsMinusTheEnergyGradient) {
 // The generic kernel (double) against the reference: one step from a
 // deformed, moving state, for several chunk sizes (padding, lane groups).
 TEST(NodalVolume, GenericKernelMatchesTheReferenceOnRandomMeshes) {
-  for (unsigned seed : {1u, 2u}) {
-    for (int32_t chunk : {64, 8}) {
-      const Model model = nodal_model(seed, 5, chunk, Vec3(0.3, -1, -9.81));
-      for (Precision precision : {Precision::Double, Precision::Float}) {
-        const testing::StepError e = testing::generic_step_error(model, seed, 1e-4, precision);
-        // Double: the same terms summed in another order, ~1e-12 of the force
-        // increment. Float: positions carry ~6e-8 relative rounding, i.e.
-        // ~3e-9 m on 5 cm against 1 mm deformations, ~1e-5 of the force, plus
-        // the rounding of x itself (~4e-9 m); tolerance 1e-4 of the largest
-        // increment plus 1e-8 m.
-        const bool dbl = precision == Precision::Double;
-        EXPECT_LT(e.worst, dbl ? 1e-15 + 1e-12 * e.largest : 1e-8 + 1e-4 * e.largest)
-            << "seed " << seed << " chunk " << chunk << (dbl ? " double" : " float");
-      }
-    }
-  }
+  testing::expect_generic_kernel_matches_reference(
+      [](unsigned seed, int32_t chunk) { return nodal_model(seed, 5, chunk, Vec3(0.3, -1, -9.81)); });
 }
 
 // At rest every nodal pressure is exactly zero in either precision: the

@@ -111,13 +111,12 @@ inline std::vector<Vec3> forces_of_one_substep(GlBackend& gl, const MovingState&
   return f;
 }
 
-// One GL substep of dt from moving_state(model) against the double reference
-// force: max |f_gl - f_ref| / max |f_ref|.
-inline double one_substep_force_error(const Model& model, double dt) {
+// One GL substep of dt from state `s` against the double reference force:
+// max |f_gl - f_ref| / max |f_ref|.
+inline double one_substep_force_error(const Model& model, const MovingState& s, double dt) {
   GlBackendOptions options;
   options.record_forces = true;
   GlBackend gl(model, BackendTool{}, options);
-  const MovingState s = moving_state(model, dt);
   const std::vector<Vec3> got = forces_of_one_substep(gl, s, dt);
   std::vector<Vec3> want;
   reference_internal_forces(model, s.x, s.v, want);

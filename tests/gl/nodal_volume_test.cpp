@@ -17,7 +17,7 @@ TEST(GlNodalVolume, ForceMatchesTheReference) {
   const Model model = gl_test::poisson_box(0.45, Vec3(0, 0, -9.81));
   ASSERT_TRUE(model.has_nodal_volume());
   EXPECT_EQ(GlBackend(model, BackendTool{}, {}).plan().dispatches_per_step, 2);
-  const double error = gl_test::one_substep_force_error(model, kDt);
+  const double error = gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt);
   std::cout << "nodal: max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
   // Float: a nodal volume change (~5 % of V_a here) is the difference of two
   // sums of ~24 tet volumes each rounded at ~1e-7 relative, so its pressure
