@@ -111,11 +111,13 @@ inline std::vector<Vec3> forces_of_one_substep(GlBackend& gl, const MovingState&
   return f;
 }
 
-// One GL substep of dt from state `s` against the double reference force:
-// max |f_gl - f_ref| / max |f_ref|.
-inline double one_substep_force_error(const Model& model, const MovingState& s, double dt) {
+// One GL substep of dt from state `s` (with `threads_per_point` invocations
+// per point) against the double reference force: max |f_gl - f_ref| / max |f_ref|.
+inline double one_substep_force_error(const Model& model, const MovingState& s, double dt,
+                                      int32_t threads_per_point = 1) {
   GlBackendOptions options;
   options.record_forces = true;
+  options.threads_per_point = threads_per_point;
   GlBackend gl(model, BackendTool{}, options);
   const std::vector<Vec3> got = forces_of_one_substep(gl, s, dt);
   std::vector<Vec3> want;

@@ -13,17 +13,26 @@ namespace {
 
 constexpr double kDt = 1e-4;  // s
 
+// With 1, 3 and 8 invocations per point (step.comp and nodal_pressure.comp
+// share THREADS_PER_POINT; kernel_test.cpp says why those three).
 TEST(GlNodalVolume, ForceMatchesTheReference) {
   const Model model = gl_test::poisson_box(0.45, Vec3(0, 0, -9.81));
   ASSERT_TRUE(model.has_nodal_volume());
-  EXPECT_EQ(GlBackend(model, BackendTool{}, {}).plan().dispatches_per_step, 2);
-  const double error = gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt);
-  std::cout << "nodal: max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
-  // Float: a nodal volume change (~5 % of V_a here) is the difference of two
-  // sums of ~24 tet volumes each rounded at ~1e-7 relative, so its pressure
-  // carries ~1e-6 relative error, and the springs as in kernel_test.cpp; a
-  // wrong index, sign or factor gives errors of order 1. Tolerance 1e-5.
-  EXPECT_LT(error, 1e-5);
+  for (const int32_t threads_per_point : {1, 3, 8}) {
+    SCOPED_TRACE("threads per point " + std::to_string(threads_per_point));
+    GlBackendOptions options;
+    options.threads_per_point = threads_per_point;
+    EXPECT_EQ(GlBackend(model, BackendTool{}, options).plan().dispatches_per_step, 2);
+    const double error =
+        gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt, threads_per_point);
+    std::cout << "nodal, " << threads_per_point << " invocation(s) per point: max |f_gl - f_ref| / max |f_ref| = "
+              << error << "\n";
+    // Float: a nodal volume change (~5 % of V_a here) is the difference of two
+    // sums of ~24 tet volumes each rounded at ~1e-7 relative, so its pressure
+    // carries ~1e-6 relative error, and the springs as in kernel_test.cpp; a
+    // wrong index, sign or factor gives errors of order 1. Tolerance 1e-5.
+    EXPECT_LT(error, 1e-5);
+  }
 }
 
 // 1000 steps (100 ticks x 10) of the box released from a 2 % uniform

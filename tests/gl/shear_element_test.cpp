@@ -13,19 +13,24 @@ namespace {
 
 constexpr double kDt = 1e-4;  // s
 
+// With 1 and 3 invocations per point (THREADS_PER_POINT, kernel_test.cpp).
 TEST(GlShearElement, ForceMatchesTheReference) {
   for (double nu : {0.0, 0.15}) {
+   for (const int32_t threads_per_point : {1, 3}) {
     // The shared soft box: springs carry lambda, the element mu - lambda (all of it at nu = 0).
     const Model model = gl_test::poisson_box(nu, Vec3(0, 0, -9.81));
     ASSERT_TRUE(model.has_shear_element());
-    const double error = gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt);
-    std::cout << "shear element nu " << nu << ": max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
+    const double error =
+        gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt, threads_per_point);
+    std::cout << "shear element nu " << nu << ", " << threads_per_point
+              << " invocation(s) per point: max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
     // Float: the displacements x - X (1 mm) carry the rounding of x (~4e-9
     // m near 0.1 m), a few 1e-6 of a displacement difference, and the
     // springs as in kernel_test.cpp (measured 7e-7 of the largest force); a
     // wrong index, sign, transpose or factor gives errors of order 1.
     // Tolerance 1e-5, as for the nodal term.
-    EXPECT_LT(error, 1e-5) << "nu " << nu;
+    EXPECT_LT(error, 1e-5) << "nu " << nu << ", " << threads_per_point << " per point";
+   }
   }
 }
 
