@@ -20,12 +20,14 @@
 #include "core/mesh/example_shapes.h"
 #include "core/mesh/mesh_io.h"
 #include "core/model/model.h"
+#include "core/model/stiffness.h"
 #include "core/render/frame_cost.h"
 #include "core/sim/scatter_step.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/change_cost.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 #include "meshing/mesh_surface.h"
 
 namespace organsim::app {
@@ -67,6 +69,7 @@ struct BenchArgs {
   double dt = 1e-4;           // s
   double volume_modulus = 20000;  // Pa; 0 leaves the volume pass out
   bool nodal_volume = false;      // the averaged nodal volume term instead of the per-tet one
+  double poisson_ratio = -1;      // >= 0: material.poisson_ratio (its own volume term or shear element), no volume_modulus
   std::string surface;        // default: the built-in liver-like surface (= examples/liver.off)
   bool exude = true;
   bool frames = true;         // also measure one rendered frame per model
@@ -222,6 +225,10 @@ void run_bench(const BenchArgs& args) {
     material.young_modulus = 8000;
     material.volume_modulus = args.volume_modulus;
     if (args.nodal_volume) material.volume_formulation = VolumeFormulation::Nodal;
+    if (args.poisson_ratio >= 0) {
+      material.poisson_ratio = args.poisson_ratio;
+      material.volume_modulus = 0;
+    }
     ModelOptions options;
     options.gravity = Vec3(0, 0, -9.81);  // a moving model, not one at rest
     const Model model = build_model(mesh, material, options, surface_name);
@@ -291,6 +298,7 @@ void run_bench(const BenchArgs& args) {
                      {"steps_per_repetition", args.steps}, {"dt", args.dt},
                      {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
                      {"volume_formulation", args.nodal_volume ? "nodal" : "per_tet"},
+                     {"poisson_ratio", args.poisson_ratio >= 0 ? nlohmann::json(args.poisson_ratio) : nlohmann::json()},
                      {"gravity", true}, {"tool", false}, {"exude", args.exude}, {"surface", surface_name}};
     j["rows"] = nlohmann::json::array();
     for (const Row& r : rows) {
@@ -342,7 +350,13 @@ void run_bench(const BenchArgs& args) {
   std::cout << "organsim bench, " << date << "\n";
   std::cout << "machine: " << machine.cpu << ", " << machine.logical_cpus << " logical CPUs, load average "
             << machine.load_average << " at start\n";
-  std::cout << "step:    springs + dampers" << (args.volume_modulus > 0 ? (args.nodal_volume ? " + nodal volume" : " + volume") : "")
+  const std::string material_terms =
+      args.poisson_ratio >= 0 ? " (poisson_ratio " + format_number(args.poisson_ratio, "%.3g") +
+                                    (args.poisson_ratio < kShearElementBelowPoissonRatio ? ": + shear element)"
+                                                                                         : ": + its volume term)")
+      : args.volume_modulus > 0 ? (args.nodal_volume ? " + nodal volume" : " + volume")
+                                : "";
+  std::cout << "step:    springs + dampers" << material_terms
             << " + gravity + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
             << args.warmup << " warm-up steps, then "
             << args.repetitions << " repetitions of " << args.steps << " steps; median (min..max) ms per step\n";
@@ -459,6 +473,10 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--nodal-volume", args->nodal_volume,
                 "The averaged nodal volume term (material.volume_formulation \"nodal\") instead of the per-tet one");
+  cmd->add_option("--poisson-ratio", args->poisson_ratio,
+                  "Material with this Poisson ratio instead of --volume-modulus (below 0.25 it has the shear element, "
+                  "docs/physics.md)")
+      ->check(CLI::Range(0.0, 0.4999));
   cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");
   cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
   cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");

@@ -47,7 +47,7 @@ std::optional<double> parse_ratio(const std::string& text) {
     if (used == text.size() && nu >= kMinPoissonRatio && nu < 0.5) return nu;
   } catch (const std::exception&) {
   }
-  throw Error(ErrorKind::Usage, "--poisson-ratio: expected 'springs' or a number in [0.25, 0.5), got '" + text + "'");
+  throw Error(ErrorKind::Usage, "--poisson-ratio: expected 'springs' or a number in [0, 0.5), got '" + text + "'");
 }
 
 void validate_command(const ValidateArgs& args) {
@@ -132,7 +132,7 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
   cmd->add_option("--cell-size", args->cell_sizes, "CGAL cell sizes, m (comma-separated; default 0.012,0.008,0.005)")
       ->delimiter(',');
   cmd->add_option("--poisson-ratio", args->poisson_ratios,
-                  "Materials: 'springs' (no Poisson ratio, springs' nu = 1/4) or a Poisson ratio in [0.25, 0.5) "
+                  "Materials: 'springs' (no Poisson ratio, springs' nu = 1/4) or a Poisson ratio in [0, 0.5) "
                   "(comma-separated; default springs,0.3,0.45)")
       ->delimiter(',');
   cmd->add_option("--young-modulus", args->young_modulus, "Young's modulus, Pa (default 10000)");

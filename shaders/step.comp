@@ -4,8 +4,9 @@
 // (slot j, lane l) of chunk c is at chunk offset + j * C + l: neighbouring
 // lanes read neighbouring entries. No atomics: every point writes only itself.
 // Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
-// nodal term, pressures from nodal_pressure.comp), HAS_GRAVITY, TOOL_PUSH,
-// TOOL_PULL, and RECORD_FORCE (tests: also store each point's total force).
+// nodal term, pressures from nodal_pressure.comp), SHEAR_ELEMENT (the per-tet
+// shear element of nu < 1/4), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// and RECORD_FORCE (tests: also store each point's total force).
 // THREADS_PER_POINT T (default 1): T invocations share a point's gathers, slot
 // j going to invocation j mod T, and invocation 0 adds the T partial sums in a
 // fixed order, then integrates. On a GPU a lane's slots are a chain of
@@ -37,8 +38,17 @@ layout(std430, binding = ORGANSIM_GL_B_D_NEXT) writeonly buffer DNext { vec4 d_n
 layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec4 mass[]; };
 layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
 layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
-#ifdef HAS_VOLUME
+#if defined(HAS_VOLUME) || defined(SHEAR_ELEMENT)
 layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
+#endif
+#ifdef SHEAR_ELEMENT
+struct ShearEntry {
+  vec4 ga;  // rest gradient of a's barycentric coordinate (1/m), w = k_t = mu_e V_t^r (J)
+  vec4 gb;  // b's, w unused
+  vec4 gc;  // c's, w unused
+};
+layout(std430, binding = ORGANSIM_GL_B_REST) readonly buffer Rest { vec4 rest[]; };
+layout(std430, binding = ORGANSIM_GL_B_SHEAR) readonly buffer Shear { ShearEntry shear[]; };
 #endif
 #ifdef NODAL_VOLUME
 layout(std430, binding = ORGANSIM_GL_B_PRESSURE) readonly buffer Pressure { float pressure[]; };
@@ -125,6 +135,29 @@ void main() {
     const float v = dot(a, cross(b, c)) * (1.0 / 6.0);
     f += e.k_v * (e.v_r - v) * grad;
 #endif
+  }
+#endif
+
+#ifdef SHEAR_ELEMENT
+  // f_p = k_t (F s + phi'(J) cof(F) s) with F = I + sum over the others q of
+  // (u_q - u_p) g_q^T from displacements u = x - X, s = g_a + g_b + g_c
+  // (core/model/shear_element.h). GLSL matrices are column-major:
+  // outerProduct(du, g) is du g^T, and cof F's columns are the cross
+  // products of F's other columns.
+  const vec3 ui = xi - rest[p].xyz;
+  const float jm = 0.5;  // kShearElementMinJ
+  for (int j = part; j < info.w; j += THREADS_PER_POINT) {
+    const int slot = info.z + j * ORGANSIM_GL_CHUNK + int(lane);
+    const TetEntry e = tets[slot];
+    const ShearEntry g = shear[slot];
+    const mat3 F = mat3(1.0) + outerProduct(x_cur[e.a].xyz - rest[e.a].xyz - ui, g.ga.xyz) +
+                   outerProduct(x_cur[e.b].xyz - rest[e.b].xyz - ui, g.gb.xyz) +
+                   outerProduct(x_cur[e.c].xyz - rest[e.c].xyz - ui, g.gc.xyz);
+    const mat3 cof = mat3(cross(F[1], F[2]), cross(F[2], F[0]), cross(F[0], F[1]));
+    const float J = dot(F[0], cof[0]);
+    const float slope = J >= jm ? -1.0 / J : (J - 2.0 * jm) / (jm * jm);
+    const vec3 s = g.ga.xyz + g.gb.xyz + g.gc.xyz;
+    f += g.ga.w * (F * s + slope * (cof * s));
   }
 #endif
 

@@ -27,6 +27,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
 
   volume_ = model.has_volume();
   nodal_ = model.has_nodal_volume();
+  shear_ = model.has_shear_element();
   gravity_ = model.has_gravity();
   push_ = tool.present && tool.mode == ToolMode::Push;
   pull_ = tool.present && tool.mode == ToolMode::Pull;
@@ -35,6 +36,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   std::vector<std::string> defines;
   if (volume_) defines.push_back("HAS_VOLUME");
   if (nodal_) defines.push_back("NODAL_VOLUME");
+  if (shear_) defines.push_back("SHEAR_ELEMENT");
   if (gravity_) defines.push_back("HAS_GRAVITY");
   if (push_) defines.push_back("TOOL_PUSH");
   if (pull_) defines.push_back("TOOL_PULL");
@@ -112,9 +114,14 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   suture_rest_.assign(suture_entries_.size(), -1.0f);
   springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
                            packed.springs.data(), suture_entries_.empty() ? 0 : GL_DYNAMIC_STORAGE_BIT);
-  if (volume_) {
+  if (volume_ || shear_) {
     tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
                           packed.tets.data(), 0);
+  }
+  if (shear_) {
+    rest_ = create_buffer("rest positions", packed.rest.size() * sizeof(float), packed.rest.data(), 0);
+    shear_params_ = create_buffer("shear element entries {g_a, k_t, g_b, g_c}",
+                                  packed.shear.size() * sizeof(gl::ShearEntry), packed.shear.data(), 0);
   }
   if (nodal_) {
     nodal_params_ = create_buffer("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
@@ -144,13 +151,15 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   if (tets_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_TETS, tets_);
   if (nodal_params_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_NODAL, nodal_params_);
   if (pressure_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PRESSURE, pressure_);
+  if (rest_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REST, rest_);
+  if (shear_params_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR, shear_params_);
   if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
 }
 
 void GlBackend::delete_model_buffers() {
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &attach_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &attach_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -231,6 +240,7 @@ Plan GlBackend::plan() const {
                       std::to_string(m.layout.springs.item.size()) + " slots)";
   if (m.nsuture() > 0) fused += " of which " + std::to_string(m.nsuture()) + " sutures (tension only, rest length per tick)";
   if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
+  if (shear_) fused += ", shear element of " + std::to_string(m.ntet()) + " tets per vertex";
   if (gravity_) fused += ", gravity";
   if (push_) fused += ", sphere penalty contact";
   if (pull_) fused += ", grasp attachment springs";

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "core/model/shear_element.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
 
@@ -20,7 +21,8 @@ PackedModel pack_model(const Model& model) {
   p.npoint = model.npoint();
   p.nchunk = L.nchunk;
   p.npad = p.nchunk * C;
-  const bool volume = model.has_volume();
+  // Tet entries: for the volume term or the shear element (never both).
+  const bool volume = model.has_volume() || model.has_shear_element();
 
   p.rest.assign(static_cast<size_t>(p.npad) * 4, 0.0f);
   p.mass.assign(static_cast<size_t>(p.npad) * 4, 0.0f);  // padding: 1/m = 0, never moves
@@ -70,12 +72,24 @@ PackedModel pack_model(const Model& model) {
           p.tets[e] = {q, q, q, 0, 0};
         } else {
           const auto& o = L.tet_others[e];
-          // The nodal term reads only the vertices here (its k and V^r are per point).
-          const bool per_tet = !model.has_nodal_volume();
+          // The nodal term and the shear element read only the vertices here.
+          const bool per_tet = !model.tet_k.empty();
           p.tets[e] = {o[0], o[1], o[2], per_tet ? static_cast<float>(model.tet_k[t]) : 0.0f,
                        static_cast<float>(model.tet_rest_volume[t])};
         }
       }
+    }
+  }
+  if (model.has_shear_element()) {
+    p.shear.assign(L.tets.item.size(), ShearEntry{});  // padding: zero gradients and k_t, no force
+    for (size_t e = 0; e < L.tets.item.size(); ++e) {
+      const int32_t t = L.tets.item[e];
+      if (t < 0) continue;
+      float* g[3] = {p.shear[e].ga, p.shear[e].gb, p.shear[e].gc};
+      for (int k = 0; k < 3; ++k)
+        for (int axis = 0; axis < 3; ++axis)
+          g[k][axis] = static_cast<float>(shape_gradient_of(model, t, L.tet_others[e][k])[axis]);
+      p.shear[e].k = static_cast<float>(model.tet_shear_k[t]);
     }
   }
   if (model.has_nodal_volume()) {

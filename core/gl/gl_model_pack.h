@@ -26,13 +26,24 @@ struct TetEntry {
 };
 static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has stride 20
 
+// The shear element's parameters of one gathered tet (p, a, b, c): the rest
+// gradients of a's, b's and c's barycentric coordinates (1/m) and k_t =
+// mu_e V_t^r (J); mirrors `ShearEntry` in step.comp (three vec4).
+struct ShearEntry {
+  float ga[3], k;
+  float gb[3], pad_b;
+  float gc[3], pad_c;
+};
+static_assert(sizeof(ShearEntry) == 48);
+
 struct PackedModel {
   int32_t npoint = 0, nchunk = 0, npad = 0;  // npad = nchunk * C
   std::vector<float> rest;        // vec4 rest positions, m, w = 1 (npad x 4); padding copies the last point
   std::vector<float> mass;        // vec4 {1/m (0 = fixed or padding), m (kg), tool stiffness scale, 0} (npad x 4)
   std::vector<int32_t> chunks;    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk x 4)
   std::vector<SpringEntry> springs;  // per (chunk, slot, lane) (nspring_entry)
-  std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume (ntet_entry)
+  std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume or shear element (ntet_entry)
+  std::vector<ShearEntry> shear;     // per (chunk, slot, lane), empty without the shear element (ntet_entry)
   std::vector<int32_t> suture_entries;  // entries of suture springs, 2 per suture
   // Nodal volume term: vec2 {k_a (N/m^5), V_a^r (m^3)} per point, zero for
   // padding (npad x 2); empty unless the model has it.

@@ -24,9 +24,10 @@ struct Material {
   // ratio a tet spring lattice has). See core/model/stiffness.h.
   double young_modulus = 3000.0;                // Pa (liver: a few kPa)
   std::optional<double> spring_stiffness;       // N/m; overrides young_modulus when set
-  // With a Poisson ratio (0 <= nu < 0.5) the springs carry the shear modulus
-  // and the volume term is derived from nu (volume_modulus must then be 0);
-  // without one, E_s = young_modulus and volume_modulus are used as given.
+  // With a Poisson ratio (0 <= nu < 0.5) the springs, the volume term (nu >=
+  // 1/4) or the shear element (nu < 1/4) are derived from E and nu
+  // (core/model/stiffness.h; volume_modulus must then be 0); without one,
+  // E_s = young_modulus and volume_modulus are used as given.
   std::optional<double> poisson_ratio;
   double spring_damping_time = 0.002;           // s; damper d_e = spring_damping_time * k_e (N s/m)
   double viscous_damping = 1.0;                 // 1/s; mass-proportional drag F = -alpha m v

@@ -8,6 +8,7 @@
 #include "core/model/layout_build.h"
 #include "core/model/model_assembly.h"
 #include "core/model/ordering.h"
+#include "core/model/shear_element.h"
 #include "core/model/stiffness.h"
 #include "core/model/tet_edges.h"
 #include "core/util/error.h"
@@ -38,8 +39,8 @@ void validate_material(const Material& m) {
   if (m.poisson_ratio) {
     const double nu = *m.poisson_ratio;
     if (!(nu >= kMinPoissonRatio && nu < 0.5))
-      throw Error(ErrorKind::Scenario, "material.poisson_ratio: expected a number in [0.25, 0.5), got " +
-                                           std::to_string(nu) + kPoissonRatioFloorReason);
+      throw Error(ErrorKind::Scenario, "material.poisson_ratio: expected a number in [0, 0.5), got " +
+                                           std::to_string(nu));
     if (m.spring_stiffness)
       throw Error(ErrorKind::Scenario, "material.poisson_ratio: needs young_modulus, not spring_stiffness");
     // The volume term is derived from nu (core/model/stiffness.h).
@@ -193,6 +194,17 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   // A cut splits a node patch: nodal volumes follow the new tets.
   model.point_rest_volume = nodal_rest_volume(npoint, model.tet_points, model.tet_rest_volume);
   model.point_volume_k = nodal_volume_stiffness(material, model.point_rest_volume);
+  // The shear element (nu < 1/4) follows the tets too; it never comes with a
+  // volume term (stiffness.h), which lets the kernels treat them as one pass.
+  model.tet_shear_k = tet_shear_stiffness(material, model.tet_rest_volume);
+  model.tet_shape_gradient.clear();
+  if (model.has_shear_element()) {
+    if (model.has_volume())
+      throw Error(ErrorKind::Scenario, "material: the shear element (poisson_ratio < 0.25) and a volume term together");
+    const auto& X = model.rest_position;
+    for (const Tet& t : model.tet_points)
+      model.tet_shape_gradient.push_back(shape_gradients(X[t[0]], X[t[1]], X[t[2]], X[t[3]]));
+  }
 
   model.layout = build_gather_layout(model, chunk_size, sort_window);
 }

@@ -4,6 +4,7 @@
 // stored in the *internal* numbering (locality order, then valence-sorted
 // within windows, see layout.h); `input_of_internal` maps back so every output
 // is reported in the user's numbering.
+#include <array>
 #include <vector>
 
 #include "core/mesh/tet_mesh.h"
@@ -54,6 +55,13 @@ struct Model {
   std::vector<double> tet_k;         // per-tet K / V_r, N/m^5 (ntet); empty unless the per-tet term is on
   std::vector<double> point_rest_volume;  // nodal rest volume V_a^r, m^3 (npoint; 0 in no tet)
   std::vector<double> point_volume_k;     // nodal K / V_a^r, N/m^5 (npoint); empty unless the nodal term is on
+  // The shear element (core/model/shear_element.h), on for nu < 1/4 only,
+  // never together with a volume term: per tet a neo-Hookean energy without
+  // its lambda part, k_t [(|F|^2 - 3) / 2 - ln det F], k_t = mu_e V_t^r, with
+  // the rest gradients g_i of each tet's barycentric coordinates (corners in
+  // tet_points order).
+  std::vector<double> tet_shear_k;                   // mu_e V_t^r, J (ntet); empty unless the element is on
+  std::vector<std::array<Vec3, 4>> tet_shape_gradient;  // g_i, 1/m (ntet x 4); empty unless the element is on
 
   // Scene parameters.
   Vec3 gravity{0, 0, 0};             // m/s^2
@@ -76,6 +84,7 @@ struct Model {
   int32_t ntet() const { return static_cast<int32_t>(tet_points.size()); }
   bool has_volume() const { return !tet_k.empty() || !point_volume_k.empty(); }
   bool has_nodal_volume() const { return !point_volume_k.empty(); }
+  bool has_shear_element() const { return !tet_shear_k.empty(); }
   bool has_gravity() const { return gravity.squaredNorm() > 0; }
   double tool_scale(int32_t i) const { return tool_k_scale.empty() ? 1.0 : tool_k_scale[i]; }
   double total_mass() const;

@@ -5,21 +5,41 @@
 
 namespace organsim {
 
+namespace {
+
+// Lame constants of the asked (E, nu).
+double lame_mu(const Material& m) { return m.young_modulus / (2.0 * (1.0 + *m.poisson_ratio)); }
+double lame_lambda(const Material& m) {
+  const double nu = *m.poisson_ratio;
+  return m.young_modulus * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}
+bool below_lattice_ratio(const Material& m) {
+  return m.poisson_ratio && *m.poisson_ratio < kShearElementBelowPoissonRatio;
+}
+
+}  // namespace
+
 double spring_modulus(const Material& m) {
   if (!m.poisson_ratio) return m.young_modulus;
-  return 2.5 * m.young_modulus / (2.0 * (1.0 + *m.poisson_ratio));
+  return 2.5 * (below_lattice_ratio(m) ? lame_lambda(m) : lame_mu(m));
 }
 
 double volume_term_modulus(const Material& m) {
   if (!m.poisson_ratio) return m.volume_modulus;
+  if (below_lattice_ratio(m)) return 0.0;
   const double nu = *m.poisson_ratio;
   return m.young_modulus * (4.0 * nu - 1.0) / (2.0 * (1.0 + nu) * (1.0 - 2.0 * nu));
 }
 
+double shear_element_modulus(const Material& m) {
+  if (!below_lattice_ratio(m)) return 0.0;
+  return lame_mu(m) - lame_lambda(m);
+}
+
 EffectiveElasticity effective_elasticity(const Material& m) {
   EffectiveElasticity e;
-  e.shear_modulus = 0.4 * spring_modulus(m);
-  e.lame_lambda = e.shear_modulus + volume_term_modulus(m);
+  e.shear_modulus = 0.4 * spring_modulus(m) + shear_element_modulus(m);
+  e.lame_lambda = 0.4 * spring_modulus(m) + volume_term_modulus(m);
   const double mu = e.shear_modulus, lambda = e.lame_lambda;
   e.young_modulus = mu * (3 * lambda + 2 * mu) / (lambda + mu);
   e.poisson_ratio = lambda / (2 * (lambda + mu));
@@ -30,11 +50,13 @@ nlohmann::json elasticity_json(const Material& m) {
   if (m.spring_stiffness) return {{"rule", "spring_stiffness"}, {"spring_stiffness", *m.spring_stiffness}};
   const EffectiveElasticity e = effective_elasticity(m);
   return {{"rule", m.poisson_ratio ? "poisson_ratio" : "springs + volume_modulus"},
-          {"volume_formulation", volume_formulation_name(volume_formulation(m))},
+          // Below nu = 1/4 there is no volume term to name.
+          {"volume_formulation", shear_element_modulus(m) > 0 ? "none" : volume_formulation_name(volume_formulation(m))},
           {"young_modulus", e.young_modulus},
           {"poisson_ratio", e.poisson_ratio},
           {"spring_modulus", spring_modulus(m)},
-          {"volume_term_modulus", volume_term_modulus(m)}};
+          {"volume_term_modulus", volume_term_modulus(m)},
+          {"shear_element_modulus", shear_element_modulus(m)}};
 }
 
 std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,
@@ -78,6 +100,15 @@ std::vector<double> tet_volume_stiffness(const Material& material, const std::ve
   if (modulus == 0 || volume_formulation(material) != VolumeFormulation::PerTet) return k;
   k.resize(tet_rest_volume.size());
   for (size_t t = 0; t < k.size(); ++t) k[t] = modulus / tet_rest_volume[t];
+  return k;
+}
+
+std::vector<double> tet_shear_stiffness(const Material& material, const std::vector<double>& tet_rest_volume) {
+  const double modulus = shear_element_modulus(material);
+  std::vector<double> k;
+  if (modulus == 0) return k;
+  k.resize(tet_rest_volume.size());
+  for (size_t t = 0; t < k.size(); ++t) k[t] = modulus * tet_rest_volume[t];
   return k;
 }
 

@@ -8,10 +8,14 @@
 //   k_e = E_s * (sum of the rest volumes of the tets sharing e) / r_e^2
 // and edge directions spread evenly, the springs store the energy of a linear
 // solid of modulus E_s with nu = 1/4 (mu_s = lambda_s = 0.4 E_s). The volume
-// term K_v/2 (V - V_r)^2 / V_r adds K_v to lambda only. So a material (E, nu)
-// needs mu_s = mu = E / (2 (1 + nu)), i.e. E_s = 2.5 mu, and
-// K_v = lambda - mu = E (4 nu - 1) / (2 (1 + nu) (1 - 2 nu)), which is >= 0
-// for nu >= 1/4.
+// term K_v/2 (V - V_r)^2 / V_r adds K_v to lambda only; the shear element
+// (core/model/shear_element.h) adds mu_e to mu only. So a material (E, nu),
+// lambda = E nu / ((1 + nu) (1 - 2 nu)), mu = E / (2 (1 + nu)), gets
+//   nu >= 1/4: springs mu_s = mu (E_s = 2.5 mu), K_v = lambda - mu >= 0, no element;
+//   nu <  1/4: springs mu_s = lambda (E_s = 2.5 lambda), mu_e = mu - lambda > 0, no volume term.
+// Both branches meet at nu = 1/4 (lambda = mu: springs only), and every
+// part is non-negative, so the stiffness stays positive definite for any
+// 0 <= nu < 1/2 (a negative volume term did not: docs/validation.md).
 #include <nlohmann/json_fwd.hpp>
 #include <vector>
 
@@ -20,26 +24,23 @@
 
 namespace organsim {
 
-// Below 1/4 the volume term would be negative, and on real meshes that makes
-// the stiffness indefinite, i.e. an unstable model (measured with the static
-// solve's pivots, docs/validation.md: per tet from nu = 0.240-0.248 on CGAL
-// boxes, beams and the liver at 500-4000 points; the nodal term, with one
-// volume constraint per point instead of about six, only from 0.18-0.242,
-// too little and too mesh-dependent a gain to accept). Such materials are
-// refused: below 1/4 a spring lattice needs another element (see
-// docs/validation.md).
-inline constexpr double kMinPoissonRatio = 0.25;
-inline constexpr const char* kPoissonRatioFloorReason =
-    " (a spring lattice's own ratio is 1/4; lower values need a negative volume term, which makes the model "
-    "unstable: see docs/validation.md)";
+// The Poisson ratios a material may ask for: [kMinPoissonRatio, 0.5).
+inline constexpr double kMinPoissonRatio = 0.0;
+// Below this ratio the springs carry lambda and the shear element the rest of mu.
+inline constexpr double kShearElementBelowPoissonRatio = 0.25;
 
 // E_s of the spring formula above, Pa: young_modulus without a Poisson ratio
-// (the old rule), 2.5 E / (2 (1 + nu)) with one.
+// (the old rule), with one 2.5 mu for nu >= 1/4 and 2.5 lambda below (0 at
+// nu = 0: the shear element then carries all of the stiffness).
 double spring_modulus(const Material& material);
 
 // K_v of the volume term, Pa: volume_modulus without a Poisson ratio,
-// lambda - mu with one (may be negative for nu < 1/4).
+// lambda - mu with one for nu >= 1/4, 0 below.
 double volume_term_modulus(const Material& material);
+
+// mu_e of the shear element, Pa: mu - lambda for a Poisson ratio below 1/4,
+// else 0 (no element).
+double shear_element_modulus(const Material& material);
 
 // Lame constants of the linear solid the model approximates, Pa: with a
 // Poisson ratio the asked (E, nu); without one mu = 0.4 E_s and
@@ -80,6 +81,10 @@ const char* volume_formulation_name(VolumeFormulation formulation);  // "per_tet
 // Per-tet volume stiffness K_v / V_r, N/m^5; empty when the volume term is off
 // (K_v == 0) or nodal.
 std::vector<double> tet_volume_stiffness(const Material& material, const std::vector<double>& tet_rest_volume);
+
+// Per-tet shear element stiffness k_t = mu_e V_t^r, J (ntet); empty when
+// the element is off (mu_e == 0).
+std::vector<double> tet_shear_stiffness(const Material& material, const std::vector<double>& tet_rest_volume);
 
 // Nodal rest volumes V_a^r = sum of V_t^r / 4 over the tets of a, m^3 (npoint;
 // 0 for a point in no tet).

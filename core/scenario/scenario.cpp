@@ -92,7 +92,7 @@ Material parse_material(const nlohmann::json& j, const JsonPath& at) {
   }
   if (auto v = r.number("poisson_ratio")) {
     if (!(*v >= kMinPoissonRatio && *v < 0.5))
-      throw r.at("poisson_ratio").error("expected a number in [0.25, 0.5) (got " + std::to_string(*v) + ")" + kPoissonRatioFloorReason);
+      throw r.at("poisson_ratio").error("expected a number in [0, 0.5) (got " + std::to_string(*v) + ")");
     if (has_k) throw at.error("poisson_ratio needs young_modulus, not spring_stiffness");
     if (m.volume_modulus > 0) throw at.error("give poisson_ratio or volume_modulus, not both (nu sets the volume term)");
     m.poisson_ratio = *v;

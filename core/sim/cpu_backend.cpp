@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/model/shear_element.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/cpu_kernel_avx512_double.h"
 #include "core/util/error.h"
@@ -27,7 +29,9 @@ std::string cpu_model_name() {
 }
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
-enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
+// The per-tet pass: a volume term, or the shear element (nu < 1/4), which
+// never comes with a volume term (core/model/stiffness.h).
+enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2, kShearElement = 3 };
 
 // Why the AVX-512 kernels cannot run `model` here ("" if they can).
 std::string avx512_refusal(const Model& model) {
@@ -139,6 +143,10 @@ class CpuBackend final : public Backend {
     if (m.has_volume())
       plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
+    if (m.has_shear_element())
+      plan.passes.push_back({"shear-element", std::to_string(m.ntet()) +
+                                                  " tets' shear element (neo-Hookean, no lambda), gathered per vertex (" +
+                                                  std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
     if (tool_.present)
       plan.passes.push_back({"tool-contact", tool_.mode == ToolMode::Push ? "sphere penalty contact"
@@ -156,6 +164,9 @@ class CpuBackend final : public Backend {
     } else if (m.has_volume()) {
       plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)",
                               m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
+    } else if (m.has_shear_element()) {
+      plan.buffers.push_back({"tet slots (3 others, 3 rest shape gradients, k_t)",
+                              m.layout.tets.item.size() * (3 * sizeof(int32_t) + 10 * real)});
     }
     if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
     plan.dispatches_per_step = 1;
@@ -307,13 +318,16 @@ class CpuBackend final : public Backend {
       }
     });
     refresh_suture_rest();
-    if (model.has_volume()) {
+    if (model.has_volume() || model.has_shear_element()) {
       const auto& tets = layout.tets;
       for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
       // The nodal term reads only the vertices of each slot.
       const size_t per_tet = model.has_nodal_volume() ? 0 : tets.item.size();
       tet_rest_.assign(per_tet, 0);
-      tet_k_.assign(per_tet, 0);
+      tet_k_.assign(model.has_shear_element() ? tets.item.size() : per_tet, 0);
+      // The shear element: rest gradients g_a, g_b, g_c of each slot's
+      // others (padding: zero, no force).
+      for (auto& g : shear_g_) g.assign(model.has_shear_element() ? tets.item.size() : 0, 0);
       for_each_slot(tets, [&](int32_t e, int32_t p) {
         const int32_t t = tets.item[e];
         const auto& o = layout.tet_others[e];
@@ -321,6 +335,13 @@ class CpuBackend final : public Backend {
         tet_b_[e] = t < 0 ? p : o[1];
         tet_c_[e] = t < 0 ? p : o[2];
         if (t < 0 || model.has_nodal_volume()) return;
+        if (model.has_shear_element()) {
+          for (int k = 0; k < 3; ++k)
+            for (int axis = 0; axis < 3; ++axis)
+              shear_g_[3 * k + axis][e] = static_cast<Real>(shape_gradient_of(model, t, o[k])[axis]);
+          tet_k_[e] = static_cast<Real>(model.tet_shear_k[t]);
+          return;
+        }
         tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
         tet_k_[e] = static_cast<Real>(model.tet_k[t]);
       });
@@ -490,6 +511,10 @@ class CpuBackend final : public Backend {
       if (gravity) return dispatch_tool<kTetVolume, true>(ctx, tool_kind);
       return dispatch_tool<kTetVolume, false>(ctx, tool_kind);
     }
+    if (model_->has_shear_element()) {
+      if (gravity) return dispatch_tool<kShearElement, true>(ctx, tool_kind);
+      return dispatch_tool<kShearElement, false>(ctx, tool_kind);
+    }
     if (gravity) return dispatch_tool<kNoVolume, true>(ctx, tool_kind);
     return dispatch_tool<kNoVolume, false>(ctx, tool_kind);
   }
@@ -635,7 +660,53 @@ class CpuBackend final : public Backend {
         }
       }
 
-      if constexpr (Volume != kNoVolume) {
+      if constexpr (Volume == kShearElement) {
+        // f_p = -k (F + phi'(J) cof F) g_p = k (F s + phi'(J) cof(F) s) with
+        // F = I + H, H = sum over the others q of (u_q - u_p) g_q^T and
+        // s = g_a + g_b + g_c = -g_p (core/model/shear_element.h). From
+        // displacements: F = I, cof F = I, J = 1 exactly at rest, no force.
+        const int32_t* __restrict ta = tet_a_.data();
+        const int32_t* __restrict tb = tet_b_.data();
+        const int32_t* __restrict tc = tet_c_.data();
+        const Real* __restrict kt = tet_k_.data();
+        const Real* __restrict gax = shear_g_[0].data();
+        const Real* __restrict gay = shear_g_[1].data();
+        const Real* __restrict gaz = shear_g_[2].data();
+        const Real* __restrict gbx = shear_g_[3].data();
+        const Real* __restrict gby = shear_g_[4].data();
+        const Real* __restrict gbz = shear_g_[5].data();
+        const Real* __restrict gcx = shear_g_[6].data();
+        const Real* __restrict gcy = shear_g_[7].data();
+        const Real* __restrict gcz = shear_g_[8].data();
+        for (int32_t j = 0; j < tet_width_[group]; ++j) {
+          const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
+#pragma omp simd
+          for (int32_t l = 0; l < lanes; ++l) {
+            const int32_t e = e0 + l, p = g0 + l, a = ta[e], b = tb[e], cc = tc[e];
+            const Real ax = ux[a] - ux[p], ay = uy[a] - uy[p], az = uz[a] - uz[p];
+            const Real bx = ux[b] - ux[p], by = uy[b] - uy[p], bz = uz[b] - uz[p];
+            const Real cx = ux[cc] - ux[p], cy = uy[cc] - uy[p], cz = uz[cc] - uz[p];
+            const Real f00 = 1 + ax * gax[e] + bx * gbx[e] + cx * gcx[e];
+            const Real f01 = ax * gay[e] + bx * gby[e] + cx * gcy[e];
+            const Real f02 = ax * gaz[e] + bx * gbz[e] + cx * gcz[e];
+            const Real f10 = ay * gax[e] + by * gbx[e] + cy * gcx[e];
+            const Real f11 = 1 + ay * gay[e] + by * gby[e] + cy * gcy[e];
+            const Real f12 = ay * gaz[e] + by * gbz[e] + cy * gcz[e];
+            const Real f20 = az * gax[e] + bz * gbx[e] + cz * gcx[e];
+            const Real f21 = az * gay[e] + bz * gby[e] + cz * gcy[e];
+            const Real f22 = 1 + az * gaz[e] + bz * gbz[e] + cz * gcz[e];
+            // Cofactors: cof_ij = (-1)^(i+j) times the minor of F_ij.
+            const Real k00 = f11 * f22 - f12 * f21, k01 = f12 * f20 - f10 * f22, k02 = f10 * f21 - f11 * f20;
+            const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
+            const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
+            const Real slope = shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
+            const Real sx = gax[e] + gbx[e] + gcx[e], sy = gay[e] + gby[e] + gcy[e], sz = gaz[e] + gbz[e] + gcz[e];
+            fx[l] += kt[e] * (f00 * sx + f01 * sy + f02 * sz + slope * (k00 * sx + k01 * sy + k02 * sz));
+            fy[l] += kt[e] * (f10 * sx + f11 * sy + f12 * sz + slope * (k10 * sx + k11 * sy + k12 * sz));
+            fz[l] += kt[e] * (f20 * sx + f21 * sy + f22 * sz + slope * (k20 * sx + k21 * sy + k22 * sz));
+          }
+        }
+      } else if constexpr (Volume != kNoVolume) {
         // Per tet: f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
         // Nodal: f_p = -p_t dV/dx_p, p_t the mean of the 4 nodal pressures.
         const Real* __restrict q = node_q_.data();
@@ -740,7 +811,8 @@ class CpuBackend final : public Backend {
   std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry); k < 0 marks a suture
   std::vector<std::pair<int32_t, int32_t>> suture_slots_;  // (slot, spring) of every suture slot
   std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
-  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term
+  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term; k_t with the shear element
+  std::array<std::vector<Real>, 9> shear_g_;    // shear element: g_a, g_b, g_c (x, y, z each) per slot (nentry); else empty
   std::vector<Real> node_k_, node_rest_, node_q_;  // nodal term: k_a, V_a^r, pressure (npoint); else empty
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;

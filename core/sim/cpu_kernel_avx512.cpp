@@ -37,6 +37,7 @@ std::string avx512_kernel_unsupported(const Model& model) {
     return "layout chunk size " + std::to_string(model.layout.chunk_size) + " is not a multiple of " +
            std::to_string(kLanes);
   if (model.has_nodal_volume()) return "the nodal volume term runs on the generic kernel only";
+  if (model.has_shear_element()) return "the shear element (poisson_ratio < 0.25) runs on the generic kernel only";
   return "";
 }
 

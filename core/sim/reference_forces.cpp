@@ -1,6 +1,7 @@
 #include "core/sim/reference_forces.h"
 
 #include "core/model/nodal_volume.h"
+#include "core/model/shear_element.h"
 
 namespace organsim {
 
@@ -42,6 +43,8 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
       force[tet[3]] += scale * g3;
     }
   }
+  // Shear element (nu < 1/4): f_i = -2 k_t F E g_i.
+  add_shear_element_forces(model, x, force);
   if (model.has_gravity())
     for (int32_t i = 0; i < model.npoint(); ++i) force[i] += model.mass[i] * model.gravity;
 }

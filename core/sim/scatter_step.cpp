@@ -1,5 +1,7 @@
 #include "core/sim/scatter_step.h"
 
+#include "core/model/shear_element.h"
+
 namespace organsim {
 
 template <class Real>
@@ -61,6 +63,21 @@ void ScatterStep<Real>::step(double dt_seconds) {
       force_[tet[2]] += scale * g2;
       force_[tet[3]] += scale * g3;
     }
+  }
+  // Shear element: f_i = -k_t (F + phi'(J) cof F) g_i with F = I + sum_i u_i g_i^T
+  // (from the displacements, so the rest state is exactly force-free).
+  for (int32_t t = 0; t < static_cast<int32_t>(m.tet_shear_k.size()); ++t) {
+    const Tet& tet = m.tet_points[t];
+    const auto& g = m.tet_shape_gradient[t];
+    M3 F = M3::Identity();
+    for (int i = 1; i < 4; ++i) F += (u_[tet[i]] - u_[tet[0]]) * g[i].cast<Real>().transpose();
+    M3 cof;
+    cof.col(0) = F.col(1).cross(F.col(2));
+    cof.col(1) = F.col(2).cross(F.col(0));
+    cof.col(2) = F.col(0).cross(F.col(1));
+    const Real J = F.col(0).dot(cof.col(0));
+    const M3 P = Real(m.tet_shear_k[t]) * (F + shear_barrier_slope(J) * cof);
+    for (int i = 0; i < 4; ++i) force_[tet[i]] -= P * g[i].cast<Real>();
   }
   // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m, u' = u + d'.
   for (int32_t i = 0; i < m.npoint(); ++i) {

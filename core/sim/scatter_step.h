@@ -16,14 +16,15 @@ template <class Real>
 class ScatterStep {
  public:
   explicit ScatterStep(const Model& model);
-  // One step of dt (springs + dampers, volume (per tet or nodal) if the model
-  // has it, gravity, position Verlet with drag); no tool.
+  // One step of dt (springs + dampers, volume (per tet or nodal) or the shear
+  // element if the model has it, gravity, position Verlet with drag); no tool.
   void step(double dt);
   // Current positions x_t (internal numbering).
   void positions(std::vector<Vec3>& out) const;
 
  private:
   using V3 = Eigen::Matrix<Real, 3, 1>;
+  using M3 = Eigen::Matrix<Real, 3, 3>;
   const Model& model_;
   std::vector<V3> rest_, u_, d_, force_;
   std::vector<Real> nodal_;  // nodal pressures of the nodal volume term (npoint; empty without it)

@@ -7,6 +7,7 @@
 
 #include "core/mesh/tet_mesh.h"
 #include "core/model/nodal_volume.h"
+#include "core/model/shear_element.h"
 #include "core/util/error.h"
 #include "core/util/format.h"
 
@@ -72,7 +73,7 @@ double elastic_energy(const Model& model, const std::vector<Vec3>& x) {
       e += 0.5 * model.tet_k[t] * dv * dv;
     }
   }
-  return e;
+  return e + shear_element_energy(model, x);
 }
 
 std::optional<BlowupFinding> check_geometry(const Model& model, const std::vector<Vec3>& x,

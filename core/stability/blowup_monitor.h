@@ -57,7 +57,7 @@ struct BlowupFinding {
 std::optional<BlowupFinding> check_geometry(const Model& model, const std::vector<Vec3>& x,
                                             const BlowupMonitorOptions& options);
 
-// Elastic energy of springs and the volume term at positions x, J.
+// Elastic energy of springs, the volume term and the shear element at positions x, J.
 double elastic_energy(const Model& model, const std::vector<Vec3>& x);
 
 class BlowupMonitor final : public RunObserver {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 
+#include "core/model/shear_element.h"
 #include "core/stability/gershgorin.h"
 #include "core/util/error.h"
 
@@ -61,7 +62,7 @@ RestStiffness rest_stiffness(const Model& model, const CriticalStepOptions& opti
 }
 
 // Which terms of K to apply (for the per-term shares of the top mode).
-enum Terms { kSprings = 1, kVolume = 2, kTool = 4, kAll = 7 };
+enum Terms { kSprings = 1, kVolume = 2, kTool = 4, kShear = 8, kAll = 15 };
 
 // out = K x for displacements x (fixed points must be zero in x; their rows
 // of out are set to zero).
@@ -102,6 +103,14 @@ void apply_stiffness(const Model& model, const RestStiffness& k, const std::vect
       const double dv = g[0].dot(x[p[0]]) + g[1].dot(x[p[1]]) + g[2].dot(x[p[2]]) + g[3].dot(x[p[3]]);
       const double s = model.tet_k[t] * dv;
       for (int i = 0; i < 4; ++i) out[p[i]] += s * g[i];
+    }
+  }
+  if (terms & kShear) {
+    // Shear element at rest: f_i = sum_j k_t ((g_i . g_j) I + g_j g_i^T) x_j.
+    for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
+      const Tet& p = model.tet_points[t];
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) out[p[i]] += shear_element_rest_block(model, t, i, j) * x[p[j]];
     }
   }
   if (terms & kTool)
@@ -271,11 +280,13 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
     return dot(x, kx);
   };
   if (r.lambda_max > 0) {
-    const double s = rayleigh(y, kSprings), v = rayleigh(y, kVolume), t = rayleigh(y, kTool), total = s + v + t;
+    const double s = rayleigh(y, kSprings), v = rayleigh(y, kVolume), t = rayleigh(y, kTool),
+                 e = rayleigh(y, kShear), total = s + v + t + e;
     if (total > 0) {
       r.share_springs = s / total;
       r.share_volume = v / total;
       r.share_tool = t / total;
+      r.share_shear = e / total;
     }
   }
   const double c = r.spring_damping_time, alpha = r.viscous_damping;

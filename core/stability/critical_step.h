@@ -3,7 +3,8 @@
 //
 // Position Verlet is central differences: undamped it is stable while
 // dt < 2 / omega_max, omega_max^2 = largest eigenvalue of M^-1 K with K the
-// stiffness at rest (springs k u u^T, volume k_v g_i g_j^T, tool contact).
+// stiffness at rest (springs k u u^T, volume k_v g_i g_j^T, shear element
+// k_t ((g_i . g_j) I + g_j g_i^T), tool contact).
 // We estimate omega_max^2 by power iteration on the symmetric form
 // W = M^-1/2 K M^-1/2 over the free points and bound it from above by
 // Gershgorin. Damping then shrinks the step (see damped_critical_step).
@@ -60,7 +61,7 @@ struct StabilityReport {
   bool converged = false;
   double residual = 0;            // |W y - lambda y| / lambda for the final unit y
   // Shares of the top mode's stiffness y^T W y from each term (sum 1).
-  double share_springs = 0, share_volume = 0, share_tool = 0;
+  double share_springs = 0, share_volume = 0, share_tool = 0, share_shear = 0;  // shear: the shear element
 
   double lambda_springs = 0;       // largest eigenvalue of M^-1 K_springs (the damped part), 1/s^2
   // Damping of the top mode: xi = (c s omega^2 + alpha) / (2 omega), with c the

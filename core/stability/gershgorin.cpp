@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/model/shear_element.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -108,6 +109,22 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
       for (int k = 0; k < 4; ++k)
         if (k != corner && free(tet[k]))
           off += model.tet_k[t] * gi.norm() * volume_gradient(model, tet, k).norm() * weight(tet[k]);
+    }
+  }
+  if (model.has_shear_element()) {
+    // K_ij = k_t ((g_i . g_j) I + g_j g_i^T) per tet: ||K_ij|| <= k_t (|g_i . g_j| + |g_i| |g_j|).
+    const int32_t first_tet = layout.tets.chunk_offset[i / c] + i % c;
+    for (int32_t j = 0; j < layout.tets.count[i]; ++j) {
+      const int32_t t = layout.tets.item[first_tet + j * c];
+      const Tet& tet = model.tet_points[t];
+      const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), i) - tet.begin());
+      const Vec3& gi = model.tet_shape_gradient[t][corner];
+      diag += shear_element_rest_block(model, t, corner, corner);
+      for (int k = 0; k < 4; ++k) {
+        const Vec3& gk = model.tet_shape_gradient[t][k];
+        if (k != corner && free(tet[k]))
+          off += model.tet_shear_k[t] * (std::abs(gi.dot(gk)) + gi.norm() * gk.norm()) * weight(tet[k]);
+      }
     }
   }
   rows.all[i] = largest_eigenvalue_from_above(diag) + off;

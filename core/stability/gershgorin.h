@@ -9,10 +9,12 @@
 //   lambda <= (lambda_max(K_ii) + sum_{j free, j != i} ||K_ij|| sqrt(m_i / m_j)) / m_i.
 // K_ii = sum of k_s u u^T over i's springs + sum of k_t g_i g_i^T over its
 // tets (volume term per tet; the nodal term's blocks come from the nodal
-// volumes of i's tets' points, see gershgorin.cpp) + k_tool I, and
-// ||K_ij|| <= sum of k_s + sum of k_t |g_i| |g_j| over what joins i and j. On the 2500-point liver this is
-// 1.5 lambda_max, where scalar row sums of M^-1 K (|K_ii| <= its terms'
-// sum, no mass weights) gave 2.9.
+// volumes of i's tets' points, see gershgorin.cpp) + the shear element's
+// k_t (|g_i|^2 I + g_i g_i^T) + k_tool I, and
+// ||K_ij|| <= sum of k_s + sum of k_t |g_i| |g_j| (the shear element's
+// k_t (|g_i . g_j| + |g_i| |g_j|)) over what joins i and j. On the
+// 2500-point liver this is 1.5 lambda_max, where scalar row sums of M^-1 K
+// (|K_ii| <= its terms' sum, no mass weights) gave 2.9.
 #include <cstdint>
 #include <vector>
 

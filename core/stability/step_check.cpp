@@ -22,8 +22,10 @@ std::string point_list(const std::vector<LimitingPoint>& points, size_t count) {
 
 // What dominates the top mode, in words.
 std::string dominant_term(const StabilityReport& r) {
-  if (r.share_volume >= r.share_springs && r.share_volume >= r.share_tool)
+  if (r.share_volume >= r.share_springs && r.share_volume >= r.share_tool && r.share_volume >= r.share_shear)
     return "volume term (slivers raise it: K |dV/dx|^2 / V)";
+  if (r.share_shear >= r.share_springs && r.share_shear >= r.share_tool)
+    return "shear element (slivers raise it: mu_e V |g|^2)";
   if (r.share_tool >= r.share_springs) return "tool contact stiffness";
   return "springs";
 }
@@ -70,7 +72,10 @@ nlohmann::json to_json(const StabilityReport& r) {
   j["power_iterations"] = r.iterations;
   j["converged"] = r.converged;
   j["residual"] = r.residual;
-  j["mode_share"] = {{"springs", r.share_springs}, {"volume", r.share_volume}, {"tool", r.share_tool}};
+  j["mode_share"] = {{"springs", r.share_springs},
+                     {"volume", r.share_volume},
+                     {"shear_element", r.share_shear},
+                     {"tool", r.share_tool}};
   j["limiting_points"] = nlohmann::json::array();
   for (const auto& p : r.mode_points) j["limiting_points"].push_back(point_json(p));
   j["gershgorin_points"] = nlohmann::json::array();
@@ -93,7 +98,9 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     << fmt(r.dt_crit_gershgorin) << " s\n";
   o << "  omega_max " << fmt(r.omega_max) << " rad/s from " << r.iterations << " power iterations"
     << (r.converged ? "" : " (NOT converged)") << "; top mode: springs " << fmt(100 * r.share_springs, "%.0f")
-    << " %, volume " << fmt(100 * r.share_volume, "%.0f") << " %, tool " << fmt(100 * r.share_tool, "%.0f") << " %\n";
+    << " %, volume " << fmt(100 * r.share_volume, "%.0f")
+    << (r.share_shear > 0 ? " %, shear element " + fmt(100 * r.share_shear, "%.0f") : std::string())
+    << " %, tool " << fmt(100 * r.share_tool, "%.0f") << " %\n";
   if (r.tool_points > 0)
     o << "  tool contact " << fmt(r.tool_contact_stiffness) << " N/m counted on " << r.tool_points
       << " points near the tool path\n";

@@ -4,6 +4,7 @@
 #include <Eigen/SparseCore>
 #include <string>
 
+#include "core/model/shear_element.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -33,6 +34,11 @@ Triplets rest_stiffness(const Model& model) {
     add_block(t, a, b, -block);
     add_block(t, b, a, -block);
   }
+  // Shear element: k_t ((g_i . g_j) I + g_j g_i^T) (core/model/shear_element.h).
+  for (int32_t e = 0; e < static_cast<int32_t>(model.tet_shear_k.size()); ++e)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        add_block(t, model.tet_points[e][i], model.tet_points[e][j], shear_element_rest_block(model, e, i, j));
   if (!model.has_volume()) return t;
   // Nodal: the energy k_a/2 (V_a - V_a^r)^2 gives G^T diag(k_a) G with
   // G = dV_a/dx (npoint x 3 npoint, row a = sum over the tets of a of their

@@ -1,8 +1,9 @@
 #pragma once
 // Small-strain static equilibrium of a Model: the stiffness of its force law
 // linearised at rest (springs k u u^T, volume term k_v g_i g_j^T per tet or
-// G^T diag(k_a) G nodal), solved directly. This is the response every backend converges to under a slow
-// (quasi-static) load, without the dynamics: the validation suite uses it to
+// G^T diag(k_a) G nodal, shear element k_t ((g_i . g_j) I + g_j g_i^T)),
+// solved directly. This is the response every backend converges to under a
+// slow (quasi-static) load, without the dynamics: the validation suite uses it to
 // compare the force law with elasticity theory in milliseconds.
 #include <vector>
 

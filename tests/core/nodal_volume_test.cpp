@@ -4,17 +4,16 @@
 // the integrator, and the routing away from the AVX-512 kernel.
 #include <gtest/gtest.h>
 
-#include <random>
 
 #include "core/model/nodal_volume.h"
 #include "core/model/stiffness.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/reference_forces.h"
-#include "core/sim/scatter_step.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
+#include "tests/core/force_law_checks.h"
 #include "tests/core/stability_test_util.h"
 #include "tests/core/test_models.h"
 
@@ -32,27 +31,8 @@ Material nodal_material(double nu = 0.45) {
 }
 
 Model nodal_model(unsigned seed, int cells, int32_t chunk = kDefaultChunkSize, const Vec3& gravity = Vec3::Zero()) {
-  ModelOptions options;
-  options.gravity = gravity;
-  options.chunk_size = chunk;
-  FixedSelector base;
-  base.kind = FixedSelector::Kind::Plane;
-  base.point = Vec3(0, 0, 1e-9);
-  base.normal = Vec3(0, 0, -1);
-  options.fixed.push_back(base);
-  return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), nodal_material(), options);
-}
-
-// A deformed, moving state: displacements ~1 mm on a 5 cm box.
-void random_state(const Model& model, unsigned seed, double dt, std::vector<Vec3>& x, std::vector<Vec3>& x_prev) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0, 1);
-  x = model.rest_position;
-  x_prev.resize(x.size());
-  for (size_t i = 0; i < x.size(); ++i) {
-    x[i] += (1e-3 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
-    x_prev[i] = x[i] - (dt * 0.2 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
-  }
+  return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), nodal_material(),
+                     testing::fixed_bottom_options(gravity, chunk));
 }
 
 TEST(NodalVolume, PoissonRatioSelectsItAndVolumeModulusKeepsThePerTetTerm) {
@@ -107,7 +87,7 @@ TEST(NodalVolume, AffineDeformationStoresThePerTetEnergy) {
 TEST(NodalVolume, ReferenceForceIsMinusTheEnergyGradient) {
   Model model = nodal_model(2, 3);
   std::vector<Vec3> x, x_prev;
-  random_state(model, 7, 1e-4, x, x_prev);
+  testing::random_state(model, 7, 1e-4, x, x_prev);
   std::vector<Vec3> force, zero(x.size(), Vec3::Zero());
   reference_internal_forces(model, x, zero, force);
   double scale = 0;
@@ -127,42 +107,8 @@ TEST(NodalVolume, ReferenceForceIsMinusTheEnergyGradient) {
 // The generic kernel (double) against the reference: one step from a
 // deformed, moving state, for several chunk sizes (padding, lane groups).
 TEST(NodalVolume, GenericKernelMatchesTheReferenceOnRandomMeshes) {
-  for (unsigned seed : {1u, 2u}) {
-    for (int32_t chunk : {64, 8}) {
-      const Model model = nodal_model(seed, 5, chunk, Vec3(0.3, -1, -9.81));
-      const double dt = 1e-4;
-      std::vector<Vec3> x, x_prev;
-      random_state(model, seed, dt, x, x_prev);
-      std::vector<Vec3> v(x.size()), force;
-      for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x_prev[i]) / dt;
-      reference_internal_forces(model, x, v, force);
-      double scale = 0;
-      for (const Vec3& f : force) scale = std::max(scale, f.norm());
-      for (Precision precision : {Precision::Double, Precision::Float}) {
-        auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
-        backend->set_state(x, x_prev);
-        testing::run_ticks(*backend, 1, dt, 1);
-        std::vector<Vec3> after;
-        backend->positions(after);
-        // Double: the same terms summed in another order, ~1e-12 of the force
-        // increment. Float: positions carry ~6e-8 relative rounding, i.e.
-        // ~3e-9 m on 5 cm against 1 mm deformations, ~1e-5 of the force, plus
-        // the rounding of x itself (~4e-9 m); tolerance 1e-4 of the largest
-        // increment plus 1e-8 m.
-        const bool dbl = precision == Precision::Double;
-        double worst = 0, largest = 0;
-        for (int32_t i = 0; i < model.npoint(); ++i) {
-          const Vec3 expected = model.fixed[i] ? x[i]
-                                               : Vec3(x[i] + (1 - model.viscous_damping * dt) * (x[i] - x_prev[i]) +
-                                                      dt * dt * model.inv_mass[i] * force[i]);
-          worst = std::max(worst, (after[i] - expected).norm());
-          largest = std::max(largest, dt * dt * model.inv_mass[i] * scale);
-        }
-        EXPECT_LT(worst, dbl ? 1e-15 + 1e-12 * largest : 1e-8 + 1e-4 * largest)
-            << "seed " << seed << " chunk " << chunk << (dbl ? " double" : " float");
-      }
-    }
-  }
+  testing::expect_generic_kernel_matches_reference(
+      [](unsigned seed, int32_t chunk) { return nodal_model(seed, 5, chunk, Vec3(0.3, -1, -9.81)); });
 }
 
 // At rest every nodal pressure is exactly zero in either precision: the
@@ -185,21 +131,10 @@ TEST(NodalVolume, RestStateIsExactlyForceFree) {
 // of both in double from the same deformed state agree to rounding.
 TEST(NodalVolume, ScatterStepMatchesTheGenericKernel) {
   const Model model = nodal_model(5, 4, kDefaultChunkSize, Vec3(0, 0, -9.81));
-  ScatterStep<double> scatter(model);
-  auto backend = make_cpu_backend(model, {}, {Precision::Double, 1, CpuKernel::Generic});
-  for (int s = 0; s < 200; ++s) scatter.step(1e-4);
-  testing::run_ticks(*backend, 200, 1e-4, 1);
-  std::vector<Vec3> a, b;
-  scatter.positions(a);
-  backend->positions(b);
-  double largest = 0, worst = 0;
-  for (int32_t i = 0; i < model.npoint(); ++i) {
-    largest = std::max(largest, (a[i] - model.rest_position[i]).norm());
-    worst = std::max(worst, (a[i] - b[i]).norm());
-  }
-  ASSERT_GT(largest, 1e-6);
+  const testing::PathDifference d = testing::scatter_against_generic(model, 200, 1e-4);
+  ASSERT_GT(d.motion, 1e-6);
   // Different summation order over 200 steps: ~1e-12 of the motion.
-  EXPECT_LT(worst, 1e-9 * largest);
+  EXPECT_LT(d.worst, 1e-9 * d.motion);
 }
 
 // A cut splits node patches: the rebuilt Model's nodal rest volumes come

@@ -11,6 +11,7 @@
 #include "core/model/model.h"
 #include "core/sim/backend.h"
 #include "core/sim/cpu_backend.h"
+#include "core/sim/reference_forces.h"
 #include "core/sim/run.h"
 #include "core/sim/run_observer.h"
 
@@ -33,6 +34,23 @@ inline Model box_model(int nx, int ny, int nz, bool fixed_bottom, double volume_
     bottom.normal = Vec3(0, 0, -1);  // points with z <= 1e-9
     options.fixed.push_back(bottom);
   }
+  return build_model(mesh, material, options, "test box");
+}
+
+// The same box, 5 x 5 x 3 cubes, bottom fixed, with E = 3 kPa and a Poisson
+// ratio (its volume term from 1/4 up, its shear element below).
+inline Model poisson_box(double nu, const Vec3& gravity) {
+  const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.05), 5, 5, 3);
+  Material material;
+  material.young_modulus = 3000;
+  material.poisson_ratio = nu;
+  ModelOptions options;
+  options.gravity = gravity;
+  FixedSelector bottom;
+  bottom.kind = FixedSelector::Kind::Plane;
+  bottom.point = Vec3(0, 0, 1e-9);
+  bottom.normal = Vec3(0, 0, -1);
+  options.fixed.push_back(bottom);
   return build_model(mesh, material, options, "test box");
 }
 
@@ -91,6 +109,54 @@ inline std::vector<Vec3> forces_of_one_substep(GlBackend& gl, const MovingState&
   std::vector<Vec3> f;
   gl.forces(f);
   return f;
+}
+
+// One GL substep of dt from state `s` (with `threads_per_point` invocations
+// per point) against the double reference force: max |f_gl - f_ref| / max |f_ref|.
+inline double one_substep_force_error(const Model& model, const MovingState& s, double dt,
+                                      int32_t threads_per_point = 1) {
+  GlBackendOptions options;
+  options.record_forces = true;
+  options.threads_per_point = threads_per_point;
+  GlBackend gl(model, BackendTool{}, options);
+  const std::vector<Vec3> got = forces_of_one_substep(gl, s, dt);
+  std::vector<Vec3> want;
+  reference_internal_forces(model, s.x, s.v, want);
+  double worst = 0, largest = 0;
+  for (size_t i = 0; i < got.size(); ++i) {
+    worst = std::max(worst, (got[i] - want[i]).norm());
+    largest = std::max(largest, want[i].norm());
+  }
+  return worst / largest;
+}
+
+// `ticks` ticks of 10 substeps of dt from `start` (at rest) on the double
+// CPU backend and on GL, compared after every tick: the largest position
+// difference and the CPU's largest motion from start, m.
+struct TrajectoryDifference {
+  double worst = 0, motion = 0;
+};
+inline TrajectoryDifference cpu_and_gl_from(const Model& model, const std::vector<Vec3>& start, double dt, int ticks) {
+  auto cpu = make_cpu_backend(model, {}, {Precision::Double, 1});
+  GlBackend gl(model, BackendTool{}, {});
+  cpu->set_state(start, start);
+  gl.set_state(start, start);
+  TickRequest request;
+  request.dt = dt;
+  request.substeps = 10;
+  TrajectoryDifference d;
+  std::vector<Vec3> xc, xg;
+  for (int n = 0; n < ticks; ++n) {
+    cpu->tick(request);
+    gl.tick(request);
+    cpu->positions(xc);
+    gl.positions(xg);
+    for (size_t i = 0; i < xc.size(); ++i) {
+      d.worst = std::max(d.worst, (xg[i] - xc[i]).norm());
+      d.motion = std::max(d.motion, (xc[i] - start[i]).norm());
+    }
+  }
+  return d;
 }
 
 // Counts a run's topology changes and keeps its final positions.

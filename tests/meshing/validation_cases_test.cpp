@@ -40,6 +40,17 @@ TEST(ValidationCases, UniaxialCompressionGivesTheAskedPoissonRatioAndModulus) {
   }
 }
 
+TEST(ValidationCases, UniaxialCompressionBelowAQuarterWithTheShearElement) {
+  // Below 1/4 the springs carry lambda and the shear element mu - lambda
+  // (at nu 0 the element alone). Target: measured nu within 0.03.
+  const TetMesh block = box(Vec3(0.06, 0.06, 0.09), kLiverCellSize);
+  for (double nu : {0.0, 0.1, 0.2}) {
+    const UniaxialResult r = uniaxial_compression(block, material(nu));
+    EXPECT_NEAR(r.poisson_ratio, nu, 0.03) << "asked nu " << nu;
+    EXPECT_NEAR(r.young_modulus / 10e3, 1.0, 0.10) << "asked nu " << nu;
+  }
+}
+
 TEST(ValidationCases, CantileverMatchesBeamTheoryWithinTenPercent) {
   // 0.2 x 0.02 x 0.02 m: 2-3 cells through the thickness at 8 mm. At nu 0.45
   // the nodal volume term (the default with poisson_ratio) is within the

@@ -1,0 +1,79 @@
+#include "core/model/shear_element.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace organsim {
+
+std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3) {
+  const Vec3 a = x1 - x0, b = x2 - x0, c = x3 - x0;
+  const double six_v = a.dot(b.cross(c));
+  std::array<Vec3, 4> g;
+  g[1] = b.cross(c) / six_v;
+  g[2] = c.cross(a) / six_v;
+  g[3] = a.cross(b) / six_v;
+  g[0] = -(g[1] + g[2] + g[3]);
+  return g;
+}
+
+const Vec3& shape_gradient_of(const Model& model, int32_t t, int32_t point) {
+  const Tet& tet = model.tet_points[t];
+  return model.tet_shape_gradient[t][std::find(tet.begin(), tet.end(), point) - tet.begin()];
+}
+
+Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::vector<Vec3>& x) {
+  const Tet& tet = model.tet_points[t];
+  const auto& g = model.tet_shape_gradient[t];
+  // Relative to vertex 0 (sum g_i = 0), which keeps a far-from-origin mesh's
+  // rounding out of F.
+  Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
+  for (int i = 1; i < 4; ++i) F += (x[tet[i]] - x[tet[0]]) * g[i].transpose();
+  return F;
+}
+
+namespace {
+
+// cof F = J F^-T, column by column: the cross products of F's other columns.
+Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
+
+double barrier(double J) {
+  const double jm = kShearElementMinJ;
+  if (J >= jm) return -std::log(J);
+  return -std::log(jm) - (J - jm) / jm + (J - jm) * (J - jm) / (2 * jm * jm);
+}
+
+}  // namespace
+
+double shear_element_energy(const Model& model, const std::vector<Vec3>& x) {
+  double e = 0;
+  for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
+    const Eigen::Matrix3d F = deformation_gradient(model, t, x);
+    e += model.tet_shear_k[t] * ((F.squaredNorm() - 3) / 2 + barrier(F.determinant()));
+  }
+  return e;
+}
+
+void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& force) {
+  for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
+    const Eigen::Matrix3d F = deformation_gradient(model, t, x);
+    const Eigen::Matrix3d cof = cofactor(F);
+    const double J = F.col(0).dot(cof.col(0));
+    // V times the first Piola-Kirchhoff stress.
+    const Eigen::Matrix3d P = model.tet_shear_k[t] * (F + shear_barrier_slope(J) * cof);
+    for (int i = 0; i < 4; ++i) force[model.tet_points[t][i]] -= P * model.tet_shape_gradient[t][i];
+  }
+}
+
+Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, int j) {
+  const Vec3& gi = model.tet_shape_gradient[t][i];
+  const Vec3& gj = model.tet_shape_gradient[t][j];
+  return model.tet_shear_k[t] * (gi.dot(gj) * Eigen::Matrix3d::Identity() + gj * gi.transpose());
+}
+
+}  // namespace organsim

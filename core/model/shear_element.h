@@ -1,0 +1,65 @@
+#pragma once
+// The per-tet shear element that lets a spring lattice reach Poisson ratios
+// below 1/4 (docs/physics.md). A central-force lattice has lambda = mu
+// (Cauchy), so below nu = 1/4 part of the shear stiffness must come from a
+// non-central term: per tet a compressible neo-Hookean energy without its
+// lambda part,
+//   W_t = k_t [ (|F|^2 - 3) / 2 + phi(J) ],  k_t = mu_e V_t^r,  J = det F,
+// phi(J) = -ln J, on the tet's deformation gradient F = sum_i x_i g_i^T (g_i
+// the rest gradients of the tet's barycentric coordinates, sum g_i = 0).
+// It depends on F only through F^T F and J, so a rigidly rotated tet has no
+// force and no polar decomposition is needed; at small strain
+// W_t = mu_e V |eps|^2, the energy of a linear solid with Lame constants
+// (lambda, mu) = (0, mu_e). -ln J grows without bound as a tet is crushed,
+// so the element resists compression all the way (a St Venant-Kirchhoff
+// energy on the Green strain, which also has that small-strain limit,
+// softens beyond 42 % shortening and is zero again for an inverted copy of
+// the rest shape: a liver at nu = 0 collapsed under its own weight with it).
+// Below J = kShearElementMinJ, phi continues as its quadratic Taylor
+// expansion there, so energy and force stay finite for any J and keep
+// pushing an inverted tet (J <= 0) back. The force on vertex i is
+// f_i = -dW/dx_i = -k_t (F + phi'(J) cof F) g_i, cof F = J F^-T.
+//
+// This file evaluates it in double precision outside the kernels (reference
+// forces, energy, rest stiffness); the kernels evaluate the same formulas.
+#include <array>
+#include <vector>
+
+#include "core/model/model.h"
+
+namespace organsim {
+
+// Where the barrier -ln J hands over to its quadratic extension.
+inline constexpr double kShearElementMinJ = 0.5;
+
+// phi'(J): -1/J from kShearElementMinJ up, (J - 2 J_min) / J_min^2 below (the
+// extension's slope, continuous with its first two derivatives at J_min).
+template <class Real>
+inline Real shear_barrier_slope(Real J) {
+  const Real jm = static_cast<Real>(kShearElementMinJ);
+  return J >= jm ? Real(-1) / J : (J - 2 * jm) / (jm * jm);
+}
+
+// Rest gradients g_i of the barycentric coordinates of the tet (x0..x3),
+// 1/m: g_i = (dV/dx_i) / V. They sum to zero.
+std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);
+
+// g of `point`, one of tet t's corners (the gathered kernels store the
+// gradients of a slot's other three corners).
+const Vec3& shape_gradient_of(const Model& model, int32_t t, int32_t point);
+
+// F = sum_i x_i g_i^T of tet t at positions x (internal numbering).
+Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::vector<Vec3>& x);
+
+// Sum over the tets of W_t, J; 0 without the element.
+double shear_element_energy(const Model& model, const std::vector<Vec3>& x);
+
+// Adds f_i = -k_t (F + phi'(J) cof F) g_i of every tet into force (npoint);
+// nothing without the element.
+void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& force);
+
+// Block (i, j) of the element's stiffness at rest, N/m, for corners i, j of
+// tet t: k_t ((g_i . g_j) I + g_j g_i^T), the linear solid with lambda = 0.
+Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, int j);
+
+}  // namespace organsim

@@ -1,0 +1,118 @@
+#pragma once
+// Checks shared by the tests of a force-law term (the nodal volume term, the
+// shear element): a deformed moving state, one generic-kernel step against
+// the double reference, and the scatter step against the generic kernel.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/model/model.h"
+#include "core/sim/cpu_backend.h"
+#include "core/sim/reference_forces.h"
+#include "core/sim/scatter_step.h"
+#include "tests/core/test_models.h"
+
+namespace organsim::testing {
+
+// The bottom face (z <= 0) held, with gravity and a chunk size.
+inline ModelOptions fixed_bottom_options(const Vec3& gravity = Vec3::Zero(), int32_t chunk = kDefaultChunkSize) {
+  ModelOptions options;
+  options.gravity = gravity;
+  options.chunk_size = chunk;
+  FixedSelector base;
+  base.kind = FixedSelector::Kind::Plane;
+  base.point = Vec3(0, 0, 1e-9);
+  base.normal = Vec3(0, 0, -1);
+  options.fixed.push_back(base);
+  return options;
+}
+
+// A deformed, moving state: displacements ~1 mm on a 5 cm box, rounded to
+// float so that both precisions start from the same positions.
+inline void random_state(const Model& model, unsigned seed, double dt, std::vector<Vec3>& x,
+                         std::vector<Vec3>& x_prev) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, 1);
+  x = model.rest_position;
+  x_prev.resize(x.size());
+  for (size_t i = 0; i < x.size(); ++i) {
+    x[i] += (1e-3 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
+    x_prev[i] = x[i] - (dt * 0.2 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
+  }
+}
+
+// One generic-kernel step of dt in `precision` from (x, x_prev) against
+// position Verlet with the double reference force: the largest position
+// difference and the largest force increment dt^2 |f|_max / m_i, m.
+struct StepError {
+  double worst = 0, largest = 0;
+};
+inline StepError generic_step_error(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev,
+                                    double dt, Precision precision) {
+  std::vector<Vec3> v(x.size()), force;
+  for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x_prev[i]) / dt;
+  reference_internal_forces(model, x, v, force);
+  double scale = 0;
+  for (const Vec3& f : force) scale = std::max(scale, f.norm());
+  auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+  backend->set_state(x, x_prev);
+  run_ticks(*backend, 1, dt, 1);
+  std::vector<Vec3> after;
+  backend->positions(after);
+  StepError e;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    const Vec3 expected = model.fixed[i] ? x[i]
+                                         : Vec3(x[i] + (1 - model.viscous_damping * dt) * (x[i] - x_prev[i]) +
+                                                dt * dt * model.inv_mass[i] * force[i]);
+    e.worst = std::max(e.worst, (after[i] - expected).norm());
+    e.largest = std::max(e.largest, dt * dt * model.inv_mass[i] * scale);
+  }
+  return e;
+}
+
+// generic_step_error from random_state(seed) for seeds 1 and 2 and chunk
+// sizes 64 and 8 (padding, lane groups) of make_model(seed, chunk). Double:
+// the same terms summed in another order, ~1e-12 of the force increment.
+// Float: positions carry ~6e-8 relative rounding, i.e. ~3e-9 m on 5 cm
+// against 1 mm deformations, ~1e-5 of the force, plus the rounding of x
+// itself (~4e-9 m); tolerance 1e-4 of the largest increment plus 1e-8 m.
+template <class MakeModel>
+inline void expect_generic_kernel_matches_reference(MakeModel make_model) {
+  const double dt = 1e-4;
+  for (unsigned seed : {1u, 2u}) {
+    for (int32_t chunk : {64, 8}) {
+      const Model model = make_model(seed, chunk);
+      std::vector<Vec3> x, x_prev;
+      random_state(model, seed, dt, x, x_prev);
+      for (Precision precision : {Precision::Double, Precision::Float}) {
+        const StepError e = generic_step_error(model, x, x_prev, dt, precision);
+        const bool dbl = precision == Precision::Double;
+        EXPECT_LT(e.worst, dbl ? 1e-15 + 1e-12 * e.largest : 1e-8 + 1e-4 * e.largest)
+            << "seed " << seed << " chunk " << chunk << (dbl ? " double" : " float");
+      }
+    }
+  }
+}
+
+// `steps` steps of dt from rest of the scatter step and the generic kernel,
+// both double: the largest difference between them and the largest motion, m.
+struct PathDifference {
+  double worst = 0, motion = 0;
+};
+inline PathDifference scatter_against_generic(const Model& model, int steps, double dt) {
+  ScatterStep<double> scatter(model);
+  auto backend = make_cpu_backend(model, {}, {Precision::Double, 1, CpuKernel::Generic});
+  for (int s = 0; s < steps; ++s) scatter.step(dt);
+  run_ticks(*backend, steps, dt, 1);
+  std::vector<Vec3> a, b;
+  scatter.positions(a);
+  backend->positions(b);
+  PathDifference d;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    d.motion = std::max(d.motion, (a[i] - model.rest_position[i]).norm());
+    d.worst = std::max(d.worst, (a[i] - b[i]).norm());
+  }
+  return d;
+}
+
+}  // namespace organsim::testing

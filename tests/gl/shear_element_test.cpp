@@ -1,0 +1,76 @@
+// The GL backend with the shear element of nu < 1/4 (step.comp's
+// SHEAR_ELEMENT variant) against the double CPU reference: the force of one
+// step on a deformed box, and 1000 steps of a box released from a shear.
+#include <gtest/gtest.h>
+
+#include "core/gl/gl_backend.h"
+#include "core/sim/cpu_backend.h"
+#include "core/sim/reference_forces.h"
+#include "gl_test_scenes.h"
+
+namespace organsim {
+namespace {
+
+constexpr double kDt = 1e-4;  // s
+
+// With 1 and 3 invocations per point (THREADS_PER_POINT, kernel_test.cpp).
+TEST(GlShearElement, ForceMatchesTheReference) {
+  for (double nu : {0.0, 0.15}) {
+   for (const int32_t threads_per_point : {1, 3}) {
+    // The shared soft box: springs carry lambda, the element mu - lambda (all of it at nu = 0).
+    const Model model = gl_test::poisson_box(nu, Vec3(0, 0, -9.81));
+    ASSERT_TRUE(model.has_shear_element());
+    const double error =
+        gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt, threads_per_point);
+    std::cout << "shear element nu " << nu << ", " << threads_per_point
+              << " invocation(s) per point: max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
+    // Float: the displacements x - X (1 mm) carry the rounding of x (~4e-9
+    // m near 0.1 m), a few 1e-6 of a displacement difference, and the
+    // springs as in kernel_test.cpp (measured 7e-7 of the largest force); a
+    // wrong index, sign, transpose or factor gives errors of order 1.
+    // Tolerance 1e-5, as for the nodal term.
+    EXPECT_LT(error, 1e-5) << "nu " << nu << ", " << threads_per_point << " per point";
+   }
+  }
+}
+
+// Crushed along z to 0.7 and 0.3 of its height (the second below
+// kShearElementMinJ, on the barrier's quadratic extension): the same force
+// as the reference. Tolerance as above; the crushed tets' forces are large,
+// and the float rounding relative to them is no worse.
+TEST(GlShearElement, CrushedForceMatchesTheReference) {
+  const Model model = gl_test::poisson_box(0.0, Vec3::Zero());
+  for (double s : {0.7, 0.3}) {
+    gl_test::MovingState state;
+    state.x = model.rest_position;
+    for (Vec3& p : state.x) p.z() *= s;
+    state.x = gl_test::round_to_float(state.x);
+    state.x_prev = state.x;
+    state.v.assign(state.x.size(), Vec3::Zero());
+    const double error = gl_test::one_substep_force_error(model, state, kDt);
+    std::cout << "shear element crushed to " << s << ": max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
+    EXPECT_LT(error, 1e-5) << "stretch " << s;
+  }
+}
+
+// 1000 steps (100 ticks x 10) of the box released from a 2 % simple shear
+// under gravity, so the element drives the motion: GL against the CPU double
+// reference within 1e-5 of the bounding-box diagonal, the tolerance and
+// reasoning of parity_test.cpp (float positions random-walk ~1e-6 of the
+// diagonal; a wrong or missing element moves points by millimetres).
+TEST(GlShearElement, TrajectoryMatchesTheCpuReference) {
+  const Model model = gl_test::poisson_box(0.05, Vec3(0, 0, -9.81));
+  std::vector<Vec3> sheared = model.rest_position;
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (!model.fixed[i]) sheared[i].x() += 0.02 * sheared[i].z();
+  sheared = gl_test::round_to_float(sheared);
+  const gl_test::TrajectoryDifference d = gl_test::cpu_and_gl_from(model, sheared, kDt, 100);
+  const double diagonal = gl_test::bbox_diagonal(model);
+  std::cout << "shear element trajectory: max |x_gl - x_cpu| / diagonal = " << d.worst / diagonal << ", motion "
+            << d.motion << " m\n";
+  ASSERT_GT(d.motion, 1e-4);  // it moved: a missing term would show
+  EXPECT_LT(d.worst, 1e-5 * diagonal);
+}
+
+}  // namespace
+}  // namespace organsim
