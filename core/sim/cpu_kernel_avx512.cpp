@@ -177,9 +177,15 @@ using V = __m512;
 }
 
 // Adds lane l of (x, y, z) to the 16-byte force of point q[l]. The 16
-// points of a batch are distinct (batch_tets()), so each lane's read, add
-// and write is independent of the others'; padding lanes all point at npad,
-// whose force stays zero (they add zero).
+// points of a batch are distinct (batch_tets()), so all 16 forces are loaded
+// before any is stored; padding lanes all point at npad, whose force stays
+// zero (they add zero).
+template <int Quarter>
+[[gnu::always_inline]] inline void add_quarter(const float* force, const int32_t* q, const V (&r)[4], __m128 (&sum)[kLanes]) {
+  for (int i = 0; i < 4; ++i)
+    sum[4 * Quarter + i] = _mm_add_ps(_mm_load_ps(force + q[4 * Quarter + i]),
+                                      _mm512_extractf32x4_ps(r[i], Quarter));
+}
 [[gnu::always_inline]] inline void scatter_add(float* force, const int32_t* q, V x, V y, V z) {
   // The inverse of gather3: quarter k of r[i] is (x, y, z, 0) of lane 4k + i.
   const V zero = _mm512_setzero_ps();
@@ -187,16 +193,12 @@ using V = __m512;
   const V u2 = _mm512_unpacklo_ps(z, zero), u3 = _mm512_unpackhi_ps(z, zero);
   const V r[4] = {_mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(3, 2, 3, 2)),
                   _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(3, 2, 3, 2))};
-  auto add = [&](int l, __m128 f) {
-    float* const p = force + q[l];
-    _mm_store_ps(p, _mm_add_ps(_mm_load_ps(p), f));
-  };
-  for (int i = 0; i < 4; ++i) {
-    add(i, _mm512_castps512_ps128(r[i]));
-    add(4 + i, _mm512_extractf32x4_ps(r[i], 1));
-    add(8 + i, _mm512_extractf32x4_ps(r[i], 2));
-    add(12 + i, _mm512_extractf32x4_ps(r[i], 3));
-  }
+  __m128 sum[kLanes];
+  add_quarter<0>(force, q, r, sum);
+  add_quarter<1>(force, q, r, sum);
+  add_quarter<2>(force, q, r, sum);
+  add_quarter<3>(force, q, r, sum);
+  for (int l = 0; l < kLanes; ++l) _mm_store_ps(force + q[l], sum[l]);
 }
 
 // Adds the 16-byte forces of 16 consecutive points to (fx, fy, fz) and clears them.
