@@ -28,10 +28,20 @@ void run_ticks(ThreadChoice& choice, int32_t first_tick, int32_t ticks, Cost ste
   }
 }
 
+// Seconds per step on n threads: idle, two threads twice as fast as one;
+// loaded, a two-thread step waits at its barriers for a thread that is not
+// scheduled (30x slower), while one thread slows a little.
+double idle(int32_t n) { return n == 2 ? 1e-4 : 2e-4; }
+double loaded(int32_t n) { return n == 2 ? 3e-3 : 2.5e-4; }
+
+// The machine changes from `before` to `after` at tick `at`.
+auto change_at(int32_t at, double (*before)(int32_t), double (*after)(int32_t)) {
+  return [=](int32_t n, int32_t tick) { return tick < at ? before(n) : after(n); };
+}
+
 TEST(ThreadChoice, SteadyMachineKeepsTheChoiceAndProbesEverMoreRarely) {
   ThreadChoice choice(2, 1);
-  // Two threads twice as fast as one, always.
-  run_ticks(choice, 0, 1000, [](int32_t n, int32_t) { return n == 2 ? 1e-4 : 2e-4; });
+  run_ticks(choice, 0, 1000, [](int32_t n, int32_t) { return idle(n); });
   EXPECT_EQ(choice.chosen(), 2);
   EXPECT_EQ(choice.switches(), 0);
   // Probes after 16, then 32, 64, 128, 256, 512 more ticks (doubling):
@@ -41,12 +51,7 @@ TEST(ThreadChoice, SteadyMachineKeepsTheChoiceAndProbesEverMoreRarely) {
 
 TEST(ThreadChoice, LoadArrivingMidRunMovesTheRunToOneThreadWithinTheShortestInterval) {
   ThreadChoice choice(2, 1);
-  // Idle until tick 300; then the two-thread step waits at its barriers for
-  // a thread that is not scheduled (30x slower), while one thread slows a little.
-  auto cost = [](int32_t n, int32_t tick) {
-    if (tick < 300) return n == 2 ? 1e-4 : 2e-4;
-    return n == 2 ? 3e-3 : 2.5e-4;
-  };
+  const auto cost = change_at(300, idle, loaded);
   run_ticks(choice, 0, 300, cost);
   ASSERT_EQ(choice.chosen(), 2);
   // The slow ticks bring the probe forward: at most the shortest interval
@@ -63,10 +68,7 @@ TEST(ThreadChoice, LoadArrivingMidRunMovesTheRunToOneThreadWithinTheShortestInte
 TEST(ThreadChoice, LoadLeavingMovesTheRunBackToTwoThreads) {
   // Chosen in a loaded moment: one thread; from tick 100 two threads are faster.
   ThreadChoice choice(1, 2);
-  auto cost = [](int32_t n, int32_t tick) {
-    if (tick < 100) return n == 2 ? 3e-3 : 2.5e-4;
-    return n == 2 ? 1e-4 : 2e-4;
-  };
+  const auto cost = change_at(100, loaded, idle);
   run_ticks(choice, 0, 100, cost);
   ASSERT_EQ(choice.chosen(), 1);
   // The interval is at most 1024 ticks (max_interval), so within that the
