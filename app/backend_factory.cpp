@@ -31,8 +31,10 @@ std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, 
   if (s.precision && *s.precision != "float") {
     throw Error(ErrorKind::Usage, "the gl backend computes in float (precision \"" + *s.precision + "\" asked)");
   }
+  GlBackendOptions o;
+  o.threads_per_point = s.gl_threads_per_point;
   // Throws Error(Backend) naming the EGL call when no context can be made.
-  return make_gl_backend(model, tool);
+  return make_gl_backend(model, tool, o);
 }
 }  // namespace
 

@@ -15,6 +15,7 @@ struct BackendSelection {
   std::string name = "auto";             // "auto", "cpu" or "gl"
   std::optional<std::string> precision;  // "double" | "float"; default: cpu double, gl float
   int32_t threads = 0;                   // cpu: 0 = all hardware threads
+  int32_t gl_threads_per_point = 0;      // gl: invocations per point, 0 = the backend's choice
 };
 
 // The backend names organsim knows (whether or not this build can create them).

@@ -3,7 +3,11 @@
 // writes its nodal pressure q_p = k_p (V_p - V_p^r), V_p = sum of V_t / 4.
 // step.comp (variant NODAL_VOLUME) then reads the pressures of each tet's
 // four vertices, after a barrier. Same formulas as core/sim/cpu_backend.cpp.
-layout(local_size_x = ORGANSIM_GL_CHUNK) in;
+// THREADS_PER_POINT T: T invocations share a point's tets, as in step.comp.
+#ifndef THREADS_PER_POINT
+#define THREADS_PER_POINT 1
+#endif
+layout(local_size_x = ORGANSIM_GL_CHUNK * THREADS_PER_POINT) in;
 
 struct TetEntry {
   int a, b, c;  // other vertices, (p, a, b, c) positively oriented; p itself for padding
@@ -17,17 +21,29 @@ layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tet
 layout(std430, binding = ORGANSIM_GL_B_NODAL) readonly buffer Nodal { vec2 nodal[]; };
 layout(std430, binding = ORGANSIM_GL_B_PRESSURE) writeonly buffer Pressure { float pressure[]; };
 
+#if THREADS_PER_POINT > 1
+shared float s_partial[ORGANSIM_GL_CHUNK * THREADS_PER_POINT];
+#endif
+
 void main() {
-  const uint lane = gl_LocalInvocationID.x;
+  const uint lane = gl_LocalInvocationID.x % ORGANSIM_GL_CHUNK;
+  const int part = int(gl_LocalInvocationID.x / ORGANSIM_GL_CHUNK);
   const uint chunk = gl_WorkGroupID.x;
   const int p = int(chunk * ORGANSIM_GL_CHUNK + lane);
   const ivec4 info = chunks[chunk];  // spring offset, spring slots, tet offset, tet slots
   const vec3 xi = x_cur[p].xyz;
   float v = 0.0;
-  for (int j = 0; j < info.w; ++j) {
+  for (int j = part; j < info.w; j += THREADS_PER_POINT) {
     const TetEntry e = tets[info.z + j * ORGANSIM_GL_CHUNK + int(lane)];
     v += dot(x_cur[e.a].xyz - xi, cross(x_cur[e.b].xyz - xi, x_cur[e.c].xyz - xi)) * (1.0 / 24.0);
   }
+#if THREADS_PER_POINT > 1
+  s_partial[gl_LocalInvocationID.x] = v;
+  memoryBarrierShared();
+  barrier();
+  if (part != 0) return;
+  for (int k = 1; k < THREADS_PER_POINT; ++k) v += s_partial[k * ORGANSIM_GL_CHUNK + lane];
+#endif
   const vec2 n = nodal[p];  // {k_p (N/m^5; 0 for padding), V_p^r (m^3)}
   pressure[p] = n.x * (v - n.y);
 }

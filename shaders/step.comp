@@ -6,8 +6,17 @@
 // Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
 // nodal term, pressures from nodal_pressure.comp), HAS_GRAVITY, TOOL_PUSH,
 // TOOL_PULL, and RECORD_FORCE (tests: also store each point's total force).
+// THREADS_PER_POINT T (default 1): T invocations share a point's gathers, slot
+// j going to invocation j mod T, and invocation 0 adds the T partial sums in a
+// fixed order, then integrates. On a GPU a lane's slots are a chain of
+// dependent loads (entry, then neighbour), so the slowest chunk's slot count
+// times the memory latency bounds the step; T > 1 divides that chain by T and
+// gives each multiprocessor T times more warps to hide it (docs/gl.md).
 // Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
-layout(local_size_x = ORGANSIM_GL_CHUNK) in;
+#ifndef THREADS_PER_POINT
+#define THREADS_PER_POINT 1
+#endif
+layout(local_size_x = ORGANSIM_GL_CHUNK * THREADS_PER_POINT) in;
 
 struct SpringEntry {
   int other;   // other end; the point itself for padding (zero length: no force)
@@ -49,6 +58,10 @@ layout(location = ORGANSIM_GL_U_SLOT) uniform int u_slot;
 layout(std430, binding = ORGANSIM_GL_B_FORCE) writeonly buffer Force { vec4 force_out[]; };
 #endif
 
+#if THREADS_PER_POINT > 1
+shared vec3 s_partial[ORGANSIM_GL_CHUNK * THREADS_PER_POINT];  // each invocation's gathered force
+#endif
+
 layout(location = ORGANSIM_GL_U_DT) uniform float u_dt;
 layout(location = ORGANSIM_GL_U_DAMPING) uniform float u_alpha_dt;  // alpha dt
 layout(location = ORGANSIM_GL_U_DT2) uniform float u_dt2;           // dt^2
@@ -67,7 +80,10 @@ shared vec4 s_torque[ORGANSIM_GL_CHUNK];  // {T.xyz, 0}
 #endif
 
 void main() {
-  const uint lane = gl_LocalInvocationID.x;
+  // Invocation part * C + lane: a warp's invocations share one part and read
+  // consecutive entries of a slot.
+  const uint lane = gl_LocalInvocationID.x % ORGANSIM_GL_CHUNK;
+  const int part = int(gl_LocalInvocationID.x / ORGANSIM_GL_CHUNK);
   const uint chunk = gl_WorkGroupID.x;
   const int p = int(chunk * ORGANSIM_GL_CHUNK + lane);
   const ivec4 info = chunks[chunk];  // spring offset, spring slots, tet offset, tet slots
@@ -80,7 +96,7 @@ void main() {
 
   // Springs + dampers: f = [k (L - r) + d ((v_q - v_p) . u)] u. A suture
   // pulls only: no force while slack (L <= r), and its damper never pushes.
-  for (int j = 0; j < info.y; ++j) {
+  for (int j = part; j < info.y; j += THREADS_PER_POINT) {
     const SpringEntry e = springs[info.x + j * ORGANSIM_GL_CHUNK + int(lane)];
     const vec3 xq = x_cur[e.other].xyz;
     const vec3 l = xq - xi;
@@ -97,7 +113,7 @@ void main() {
   // Volume per tet: f = k_v (V_r - V) dV/dx_p, with V = a.(b x c)/6 relative
   // to p and dV/dx_p = (c - a) x (b - a) / 6. Nodal: f = -p_t dV/dx_p with p_t
   // the mean of the tet's four nodal pressures.
-  for (int j = 0; j < info.w; ++j) {
+  for (int j = part; j < info.w; j += THREADS_PER_POINT) {
     const TetEntry e = tets[info.z + j * ORGANSIM_GL_CHUNK + int(lane)];
     const vec3 a = x_cur[e.a].xyz - xi;
     const vec3 b = x_cur[e.b].xyz - xi;
@@ -112,6 +128,19 @@ void main() {
   }
 #endif
 
+#if THREADS_PER_POINT > 1
+  // Invocation 0 of each point adds the others' partial sums in part order
+  // (deterministic). Every invocation reaches every barrier (uniform flow);
+  // only invocation 0 contributes to the reaction and writes the point.
+  s_partial[gl_LocalInvocationID.x] = f;
+  memoryBarrierShared();
+  barrier();
+  if (part == 0) {
+    for (int k = 1; k < THREADS_PER_POINT; ++k) f += s_partial[k * ORGANSIM_GL_CHUNK + lane];
+  }
+#endif
+  const bool owner = part == 0;
+
   const vec4 m = mass[p];  // {1/m, m, tool stiffness scale, 0}
 #ifdef HAS_GRAVITY
   f += m.y * u_gravity;
@@ -121,7 +150,7 @@ void main() {
   vec4 contact_force = vec4(0.0);   // reaction on the tool {-f.xyz, 1}
   vec4 contact_torque = vec4(0.0);  // (x - c) x (-f)
   // Padding lanes (m = 0) sit on a real point's position: they must not touch the tool.
-  if (u_tool_active != 0 && m.y > 0.0) {
+  if (owner && u_tool_active != 0 && m.y > 0.0) {
     const vec3 d = xi - u_tool_center;
 #ifdef TOOL_PUSH
     // Penalty contact inside the sphere: f = k_c (R - |d|) d/|d| (+z at the centre).
@@ -148,25 +177,28 @@ void main() {
   // (fixed tree order, deterministic) into one partial; reduce_reaction.comp
   // sums the partials. u_reduce is uniform, so the barriers are in uniform flow.
   if (u_reduce != 0) {
-    s_force[lane] = contact_force;
-    s_torque[lane] = contact_torque;
+    if (owner) {
+      s_force[lane] = contact_force;
+      s_torque[lane] = contact_torque;
+    }
     memoryBarrierShared();
     barrier();
     for (uint half_size = ORGANSIM_GL_CHUNK / 2; half_size > 0; half_size /= 2) {
-      if (lane < half_size) {
+      if (owner && lane < half_size) {
         s_force[lane] += s_force[lane + half_size];
         s_torque[lane] += s_torque[lane + half_size];
       }
       memoryBarrierShared();
       barrier();
     }
-    if (lane == 0) {
+    if (owner && lane == 0) {
       partials[2 * chunk] = s_force[0];
       partials[2 * chunk + 1] = s_torque[0];
     }
   }
 #endif
 
+  if (!owner) return;  // no barrier below
 #ifdef RECORD_FORCE
   force_out[p] = vec4(f, 0.0);
 #endif

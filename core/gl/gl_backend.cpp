@@ -39,9 +39,17 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (push_) defines.push_back("TOOL_PUSH");
   if (pull_) defines.push_back("TOOL_PULL");
   if (options.record_forces) defines.push_back("RECORD_FORCE");
+  if (options.threads_per_point < 0 || options.threads_per_point > 16) {
+    // 16 x 64 = 1024 invocations, the largest workgroup every GL 4.5 driver must run.
+    throw Error(ErrorKind::Usage, "GL backend: threads per point must be 0 (automatic) or 1 to 16 (got " +
+                                      std::to_string(options.threads_per_point) + ")");
+  }
+  threads_per_point_ = options.threads_per_point > 0 ? options.threads_per_point : context_->software() ? 1 : 8;
+  const std::string split = "THREADS_PER_POINT " + std::to_string(threads_per_point_);
+  defines.push_back(split);
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
-  if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {});
+  if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
 
   // Buffers that do not depend on the model's size: the readback rings.
   const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
@@ -212,6 +220,10 @@ GLuint GlBackend::create_buffer(const char* what, size_t bytes, const void* data
   return buffer;
 }
 
+std::string GlBackend::device() const {
+  return context_->renderer() + ", " + std::to_string(threads_per_point_) + " invocation(s) per point";
+}
+
 Plan GlBackend::plan() const {
   Plan plan;
   const auto& m = *model_;
@@ -223,7 +235,8 @@ Plan GlBackend::plan() const {
   if (push_) fused += ", sphere penalty contact";
   if (pull_) fused += ", grasp attachment springs";
   plan.passes.push_back({"step (step.comp)", "one fused dispatch per substep, " + std::to_string(nchunk_) +
-                                                 " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + ": " + fused +
+                                                 " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + " points x " +
+                                                 std::to_string(threads_per_point_) + " invocation(s) per point: " + fused +
                                                  ", position Verlet"});
   if (nodal_) {
     plan.passes.insert(plan.passes.begin(),

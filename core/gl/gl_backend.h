@@ -21,6 +21,10 @@ struct GlBackendOptions {
   bool debug = gl::EglContextOptions::default_debug();  // GL_KHR_debug errors become Errors
   // Tests: also store every point's total force of the last substep (forces()).
   bool record_forces = false;
+  // Invocations that share one point's gathers in step.comp (1..16); 0: 1 on
+  // a software renderer (llvmpipe runs each invocation on the CPU, where more
+  // of them only add barriers) and 8 on a hardware GPU (docs/gl.md).
+  int32_t threads_per_point = 0;
 };
 
 // Creates its own headless context (gl::EglContext); throws Error(Backend)
@@ -34,10 +38,12 @@ class GlBackend final : public Backend {
   ~GlBackend() override;
 
   std::string name() const override { return "gl"; }
-  std::string device() const override { return context_->renderer(); }
+  std::string device() const override;
   std::string precision() const override { return "float"; }
   Plan plan() const override;
   int32_t reaction_latency_ticks() const override { return 1; }
+  // Non-finite positions are flagged on the GPU every tick (status ring).
+  int32_t default_check_interval_ticks() const override { return 50; }
   Reaction tick(const TickRequest& request) override;
   void attach(const Attachment& attachment) override;
   void release() override;
@@ -62,6 +68,7 @@ class GlBackend final : public Backend {
   // when read (the CPU then waited for it; 0 means the readback never stalled).
   int64_t dispatches() const { return dispatches_; }
   int64_t blocked_readbacks() const { return blocked_readbacks_; }
+  int32_t threads_per_point() const { return threads_per_point_; }
 
  private:
   void make_current() const;
@@ -79,6 +86,7 @@ class GlBackend final : public Backend {
   std::unique_ptr<gl::EglContext> context_;
   int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0;
   bool volume_ = false, nodal_ = false, gravity_ = false, push_ = false, pull_ = false;
+  int32_t threads_per_point_ = 1;
 
   gl::ComputeProgram step_, reduce_, nodal_pressure_;  // the last with the nodal volume term only
   // Ping-pong pairs: x_[cur_], d_[cur_] hold x_t and d_t = x_t - x_{t-1};

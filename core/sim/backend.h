@@ -48,6 +48,13 @@ class Backend {
   // 0 on the CPU, 1 for the GL backend's non-blocking readback.
   virtual int32_t reaction_latency_ticks() const = 0;
 
+  // Default ticks between two full blow-up checks (core/stability/
+  // blowup_monitor.h), which read the positions back. On the CPU a check costs
+  // about one step, so every 10 ticks. A backend that flags non-finite
+  // positions on its device every tick can check the rest less often: on a
+  // GPU the readback drains the pipeline (docs/gl.md "On a GPU").
+  virtual int32_t default_check_interval_ticks() const { return 10; }
+
   // Runs one tick and returns the tool reaction at the end of the tick that
   // is reaction_latency_ticks() old (zero reaction until the first one).
   virtual Reaction tick(const TickRequest& request) = 0;

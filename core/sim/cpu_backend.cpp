@@ -8,9 +8,11 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_avx512_double.h"
 #include "core/sim/thread_choice.h"
 #include "core/util/error.h"
 
@@ -29,10 +31,8 @@ std::string cpu_model_name() {
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
 
-// Why the AVX-512 kernel cannot run `model` in `precision` here ("" if it can).
-template <class Real>
+// Why the AVX-512 kernels cannot run `model` here ("" if they can).
 std::string avx512_refusal(const Model& model) {
-  if (sizeof(Real) != sizeof(float)) return "the avx512 kernel computes in float";
   if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
   return avx512_kernel_unsupported(model);
 }
@@ -82,6 +82,8 @@ template <class Real>
 class CpuBackend final : public Backend {
   // Lanes evaluated together: one 512-bit register of Real.
   static constexpr int32_t kLanes = 64 / static_cast<int32_t>(sizeof(Real));
+  // The AVX-512 kernel of this precision.
+  using FastKernel = std::conditional_t<std::is_same_v<Real, float>, Avx512FloatKernel, Avx512DoubleKernel>;
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options, StepTiming timing)
@@ -176,10 +178,12 @@ class CpuBackend final : public Backend {
       plan.buffers.clear();
       plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
                               fast_->bytes()});
+      const std::string lanes = std::to_string(kLanes);
       if (m.has_volume())
-        plan.passes[1].detail = std::to_string(m.ntet()) +
-                                " tets evaluated once, 16 per batch, into 2 fixed force slices (avx512 kernel)";
-      plan.passes.back().detail = "position Verlet, fused with springs and the tet forces (16 float lanes, avx512 kernel)";
+        plan.passes[1].detail = std::to_string(m.ntet()) + " tets evaluated once, " + lanes +
+                                " per batch, into 2 fixed force slices (avx512 kernel)";
+      plan.passes.back().detail = "position Verlet, fused with springs and the tet forces (" + lanes + " " +
+                                  precision() + " lanes, avx512 kernel)";
     }
     plan.syncs_per_step = 0;
     return plan;
@@ -193,9 +197,9 @@ class CpuBackend final : public Backend {
       attach_offset_[k] = attachment.offsets[k].cast<Real>();
     }
     attached_points_ = attachment.points;
-    attach_offset_f_.clear();
+    attach_offset_flat_.clear();
     for (const Vec3& o : attachment.offsets)
-      for (int k = 0; k < 3; ++k) attach_offset_f_.push_back(static_cast<float>(o[k]));
+      for (int k = 0; k < 3; ++k) attach_offset_flat_.push_back(static_cast<Real>(o[k]));
   }
 
   void release() override {
@@ -206,7 +210,7 @@ class CpuBackend final : public Backend {
   void positions(std::vector<Vec3>& out) const override {
     out.resize(u_.x.size());
     if (fast_) {
-      float u[3], d[3];
+      Real u[3], d[3];
       for (size_t i = 0; i < out.size(); ++i) {
         fast_->get_point(static_cast<int32_t>(i), u, d);
         out[i] = model_->rest_position[i] + Vec3(u[0], u[1], u[2]);
@@ -352,11 +356,7 @@ class CpuBackend final : public Backend {
     mass_.resize(n);
     inv_mass_.resize(n);
     tool_scale_.resize(n);
-    tool_scale_f_.assign(n, 0.f);
-    for (int32_t i = 0; i < n; ++i) {
-      tool_scale_[i] = static_cast<Real>(model.tool_scale(i));
-      tool_scale_f_[i] = static_cast<float>(model.tool_scale(i));
-    }
+    for (int32_t i = 0; i < n; ++i) tool_scale_[i] = static_cast<Real>(model.tool_scale(i));
     for (int32_t i = 0; i < n; ++i) {
       mass_[i] = static_cast<Real>(model.mass[i]);
       inv_mass_[i] = static_cast<Real>(model.inv_mass[i]);
@@ -397,32 +397,32 @@ class CpuBackend final : public Backend {
   // The AVX-512 kernel packs its own streams from the same Model; while it
   // runs, it holds the state (u_, d_ are filled from it only for a rebuild).
   void pack_fast() {
-    const std::string refusal = avx512_refusal<Real>(*model_);
+    const std::string refusal = avx512_refusal(*model_);
     if (kernel_choice_ == CpuKernel::Avx512 && !refusal.empty())
       throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
     if (kernel_choice_ == CpuKernel::Generic || !refusal.empty()) {
       fast_.reset();
       return;
     }
-    if (!fast_) fast_ = std::make_unique<Avx512FloatKernel>();
+    if (!fast_) fast_ = std::make_unique<FastKernel>();
     fast_->pack(*model_);
     fast_partial_.resize(fast_->nchunk());
-    // The kernel reads attachment indices 16 points at a time, padding included.
-    attached_.resize(std::max(attached_.size(), static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size), -1);
+    // The kernel reads attachment indices a register of points at a time, padding included.
+    const size_t npad = static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size;
+    attached_.resize(std::max(attached_.size(), npad), -1);
     // Padding lanes (at the origin, no mass) may fall inside a push tool: scale 0.
-    tool_scale_f_.resize(std::max(tool_scale_f_.size(), static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size), 0.f);
+    tool_scale_padded_.assign(tool_scale_.begin(), tool_scale_.end());
+    tool_scale_padded_.resize(npad, 0);
     push_fast_state();
   }
   void push_fast_state() {
-    float u[3], d[3];
     for (size_t i = 0; i < u_.x.size(); ++i) {
-      u[0] = static_cast<float>(u_.x[i]), u[1] = static_cast<float>(u_.y[i]), u[2] = static_cast<float>(u_.z[i]);
-      d[0] = static_cast<float>(d_.x[i]), d[1] = static_cast<float>(d_.y[i]), d[2] = static_cast<float>(d_.z[i]);
+      const Real u[3] = {u_.x[i], u_.y[i], u_.z[i]}, d[3] = {d_.x[i], d_.y[i], d_.z[i]};
       fast_->set_point(static_cast<int32_t>(i), u, d);
     }
   }
   void pull_fast_state() {
-    float u[3], d[3];
+    Real u[3], d[3];
     for (size_t i = 0; i < u_.x.size(); ++i) {
       fast_->get_point(static_cast<int32_t>(i), u, d);
       u_.x[i] = u[0], u_.y[i] = u[1], u_.z[i] = u[2];
@@ -431,21 +431,21 @@ class CpuBackend final : public Backend {
   }
 
   Reaction fast_step(const StepContext<Real>& ctx, int tool_kind) {
-    FloatStepInputs in;
-    in.dt2 = static_cast<float>(ctx.dt2);
-    in.inv_dt = static_cast<float>(ctx.inv_dt);
-    in.drag = static_cast<float>(ctx.drag);
+    using Inputs = KernelStepInputs<Real>;
+    Inputs in;
+    in.dt2 = ctx.dt2;
+    in.inv_dt = ctx.inv_dt;
+    in.drag = ctx.drag;
     for (int k = 0; k < 3; ++k) {
-      in.gravity[k] = static_cast<float>(ctx.gravity[k]);
-      in.tool_center[k] = static_cast<float>(ctx.tool_center[k]);
+      in.gravity[k] = ctx.gravity[k];
+      in.tool_center[k] = ctx.tool_center[k];
     }
-    in.tool_radius = static_cast<float>(ctx.tool_radius);
-    in.tool_k = static_cast<float>(ctx.tool_k);
-    in.tool = tool_kind == kPush ? FloatStepInputs::Push : tool_kind == kPull ? FloatStepInputs::Pull
-                                                                              : FloatStepInputs::None;
+    in.tool_radius = ctx.tool_radius;
+    in.tool_k = ctx.tool_k;
+    in.tool = tool_kind == kPush ? Inputs::Push : tool_kind == kPull ? Inputs::Pull : Inputs::None;
     in.attached = attached_.data();
-    in.attach_offset = attach_offset_f_.data();
-    in.tool_scale = tool_scale_f_.data();
+    in.attach_offset = attach_offset_flat_.data();
+    in.tool_scale = tool_scale_padded_.data();
     fast_->step(in, threads_, fast_partial_);
     Reaction reaction;
     if (tool_kind != kNoTool) {
@@ -769,9 +769,9 @@ class CpuBackend final : public Backend {
   int threads_;
   StepTiming timing_;                     // stands in for the clock in tests (thread choice)
   std::optional<ThreadChoice> choice_;    // set when the thread count is chosen by timing
-  std::unique_ptr<Avx512FloatKernel> fast_;  // set when the AVX-512 kernel runs this backend
+  std::unique_ptr<FastKernel> fast_;         // set when the AVX-512 kernel runs this backend
   std::vector<ChunkReaction> fast_partial_;  // its tool reaction per chunk
-  std::vector<float> attach_offset_f_;       // pull offsets in float, 3 per attachment
+  std::vector<Real> attach_offset_flat_;     // pull offsets for it, 3 per attachment
   std::string device_;
   double time_ = 0;
   Soa3<Real> rest_;                   // X, rest positions (npoint)
@@ -788,7 +788,7 @@ class CpuBackend final : public Backend {
   int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;
   std::vector<Real> tool_scale_;   // tool stiffness multiplier per point (npoint), Model::tool_k_scale
-  std::vector<float> tool_scale_f_;  // the same for the AVX-512 float kernel (npoint)
+  std::vector<Real> tool_scale_padded_;  // the same for the AVX-512 kernel, 0 for padding (npad)
   std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint)
   std::vector<int32_t> attached_points_;
   std::vector<Eigen::Matrix<Real, 3, 1>> attach_offset_;

@@ -1,14 +1,15 @@
 #pragma once
-// The CPU backend. In double precision it is the reference every other path
-// is tested against; in float it is the fast path. Both gather springs and
-// tets per point through the Model's layout (no atomics, deterministic for
-// any thread count) and fuse force evaluation with Verlet integration.
+// The CPU backend. Its generic kernel in double precision is the reference
+// every other path is tested against. Springs are gathered per point through
+// the Model's layout (no atomics, deterministic for any thread count) and
+// force evaluation is fused with Verlet integration.
 //
 // Two kernels, chosen at construction (and again at every rebuild):
 // - generic: portable C++ the compiler vectorises, any precision, any layout;
 //   the double-precision reference;
-// - avx512: float only, in builds for AVX-512 (cpu_kernel_avx512.h), for
-//   models whose layout it supports; several times faster.
+// - avx512: in builds for AVX-512, float (cpu_kernel_avx512.h, 16 lanes) or
+//   double (cpu_kernel_avx512_double.h, 8 lanes), for the models that
+//   avx512_kernel_unsupported() accepts; several times faster.
 // `Auto` takes avx512 where it can and says so in device() and plan().
 #include <functional>
 #include <memory>
@@ -28,8 +29,8 @@ struct CpuBackendOptions {
   // now and then, one step on the other count (thread_choice.h). Results are
   // bit-identical for any count.
   int32_t threads = 0;
-  // Avx512 when it cannot run here (double, a build without AVX-512, an
-  // unsupported model) is an Error(Backend) naming why; Auto never fails.
+  // Avx512 when it cannot run here (a build without AVX-512, an unsupported
+  // model) is an Error(Backend) naming why; Auto never fails.
   CpuKernel kernel = CpuKernel::Auto;
 };
 

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <new>
+
+#include "core/sim/tet_batches.h"
+#include "core/util/aligned_vector.h"
 
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
 #define ORGANSIM_HAVE_AVX512 1
@@ -24,20 +26,6 @@ constexpr int32_t kLanes = 16;  // floats per 512-bit register
 // array: the threads share the slices, and the per-point total adds the
 // slices in order, so results do not depend on the thread count.
 constexpr int kSlices = 2;
-
-// 64-byte aligned storage: whole-register loads and stores of records and lanes.
-template <class T>
-struct AlignedAllocator {
-  using value_type = T;
-  AlignedAllocator() = default;
-  template <class U>
-  AlignedAllocator(const AlignedAllocator<U>&) {}
-  T* allocate(size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64))); }
-  void deallocate(T* p, size_t) { ::operator delete(p, std::align_val_t(64)); }
-  bool operator==(const AlignedAllocator&) const { return true; }
-};
-template <class T>
-using AlignedVector = std::vector<T, AlignedAllocator<T>>;
 
 }  // namespace
 
@@ -436,46 +424,6 @@ void write_record(Avx512FloatKernel::Data& D, int b, int32_t p) {
   r[3] = r[7] = 0;
 }
 
-// Deals `run` (tets in order of their lowest vertex) out to batches of 16
-// lanes so that no two tets of a batch share a vertex and each batch holds
-// tets from one small part of the mesh: each tet goes to the oldest open
-// batch that holds none of its vertices, and at most kOpenBatches are open
-// at once (the oldest is closed, padded, when another must open). Sharing
-// no vertex lets scatter_add() load all 16 forces before storing any;
-// locality keeps a batch's records and forces in cache (16 lanes from 16
-// distant parts of the mesh, the first version, made the tet pass memory
-// bound at Bunny7 size). Returns the tet of each lane, -1 for padding.
-std::vector<int32_t> batch_tets(const std::vector<int32_t>& run, const std::vector<std::array<int32_t, 4>>& tets,
-                                int32_t npoint) {
-  constexpr int32_t kOpenBatches = 32;  // one bit each in a point's mask
-  std::vector<int32_t> lane_tet, fill;  // fill: lanes used per batch
-  // Bit b % kOpenBatches is set for the open batches b holding the point.
-  std::vector<uint32_t> in_open(static_cast<size_t>(npoint), 0);
-  int32_t oldest = 0;  // batches before it are closed
-  auto close_oldest = [&] {
-    for (int32_t l = 0; l < fill[oldest]; ++l)
-      for (const int32_t v : tets[lane_tet[static_cast<size_t>(oldest) * kLanes + l]])
-        in_open[v] &= ~(1u << (oldest % kOpenBatches));
-    ++oldest;
-  };
-  for (const int32_t t : run) {
-    uint32_t taken = 0;
-    for (const int32_t v : tets[t]) taken |= in_open[v];
-    int32_t b = oldest;
-    const int32_t nbatch = static_cast<int32_t>(fill.size());
-    while (b < nbatch && (fill[b] == kLanes || (taken >> (b % kOpenBatches) & 1))) ++b;
-    if (b == nbatch) {
-      if (nbatch - oldest == kOpenBatches) close_oldest();
-      fill.push_back(0);
-      lane_tet.resize(lane_tet.size() + kLanes, -1);
-    }
-    lane_tet[static_cast<size_t>(b) * kLanes + fill[b]++] = t;
-    for (const int32_t v : tets[t]) in_open[v] |= 1u << (b % kOpenBatches);
-    while (oldest < static_cast<int32_t>(fill.size()) && fill[oldest] == kLanes) close_oldest();
-  }
-  return lane_tet;
-}
-
 }  // namespace
 
 void Avx512FloatKernel::set_point(int32_t p, const float u[3], const float d[3]) {
@@ -574,25 +522,10 @@ void Avx512FloatKernel::pack(const Model& model) {
     _mm512_store_ps(&D.spring_rest[e0], _mm512_mul_ps(len2, inv_length(len2)));
   }
 
-  // Tets in batches of 16 (see Data): sorted by lowest vertex, cut into
-  // kSlices equal runs, each run dealt out to batches by batch_tets().
-  std::vector<int32_t> order;
-  if (D.volume) {
-    order.resize(model.ntet());
-    for (int32_t t = 0; t < model.ntet(); ++t) order[t] = t;
-    auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
-    std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
-  }
-  const int32_t nt = static_cast<int32_t>(order.size());
-  std::vector<int32_t> lane_tet;  // tet per batch lane, -1 for padding
-  D.slice_begin[0] = 0;
-  for (int sl = 0; sl < kSlices; ++sl) {
-    const int32_t first = (nt * sl) / kSlices, last = (nt * (sl + 1)) / kSlices;
-    const std::vector<int32_t> run(order.begin() + first, order.begin() + last);
-    const std::vector<int32_t> slice = batch_tets(run, model.tet_points, D.npoint);
-    lane_tet.insert(lane_tet.end(), slice.begin(), slice.end());
-    D.slice_begin[sl + 1] = static_cast<int32_t>(lane_tet.size() / kLanes);
-  }
+  // Tets in batches of 16 (see Data and tet_batches.h).
+  const TetBatches batches = batch_model_tets(model, kLanes, kSlices);
+  const std::vector<int32_t>& lane_tet = batches.lane_tet;
+  std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.slice_begin);
   const size_t lanes = lane_tet.size();
   for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
   D.tet_k36.assign(lanes, 0.f);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/sim/kernel_inputs.h"
 #include "core/sim/tool.h"
 
 namespace organsim {
@@ -23,28 +24,12 @@ namespace organsim {
 // True when this build contains the AVX-512 kernel.
 bool avx512_kernel_compiled();
 
-// Why `model` cannot run on the AVX-512 kernel ("" when it can). The kernel
-// needs the layout's chunks to be whole groups of 16 points.
+// Why `model` cannot run on the AVX-512 kernels, float and double ("" when
+// it can): the one routing point for both. They need the layout's chunks to
+// be whole groups of 16 points.
 std::string avx512_kernel_unsupported(const Model& model);
 
-// Step-invariant inputs of one substep, in the kernel's precision.
-struct FloatStepInputs {
-  float dt2 = 0, inv_dt = 0, drag = 1;  // dt^2, 1/dt, 1 - alpha dt
-  float gravity[3] = {0, 0, 0};
-  float tool_center[3] = {0, 0, 0};
-  float tool_radius = 0, tool_k = 0;
-  enum Tool { None, Push, Pull } tool = None;
-  const int32_t* attached = nullptr;   // pull: attachment index per point or -1 (npoint)
-  const float* attach_offset = nullptr;  // pull: 3 floats per attachment
-  const float* tool_scale = nullptr;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint)
-};
-
-// Tool reaction of one chunk (summed by the caller in chunk order, so the
-// total is the same for any thread count).
-struct ChunkReaction {
-  Vec3 force{0, 0, 0}, torque{0, 0, 0};
-  int32_t contacts = 0;
-};
+using FloatStepInputs = KernelStepInputs<float>;
 
 class Avx512FloatKernel {
  public:

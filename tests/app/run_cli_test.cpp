@@ -154,8 +154,17 @@ TEST(RunCli, GlBackendRunsOrFailsLoudlyNeverFallsBackToCpu) {
   if (r.exit_code == 0) {
     const auto j = nlohmann::json::parse(test::slurp(dir / "out" / "forces.json"));
     EXPECT_EQ(j["meta"]["backend"], "gl");
-    // Each blow-up check is a GPU sync: checks run every 10 ticks by default.
-    EXPECT_EQ(j["meta"]["stability"]["check_interval_ticks"], 10);
+    // Each blow-up check is a GPU sync and the GPU flags non-finite
+    // positions every tick: full checks every 50 ticks by default.
+    EXPECT_EQ(j["meta"]["stability"]["check_interval_ticks"], 50);
+    // On the CPU every 10; --check-interval sets it on either.
+    const auto cpu = run_organsim("run '" + scene.string() + "' --backend cpu -o '" + (dir / "cpu").string() + "'", dir);
+    ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+    EXPECT_EQ(nlohmann::json::parse(test::slurp(dir / "cpu" / "forces.json"))["meta"]["stability"]["check_interval_ticks"], 10);
+    const auto set = run_organsim(
+        "run '" + scene.string() + "' --backend gl --check-interval 7 -o '" + (dir / "set").string() + "'", dir);
+    ASSERT_EQ(set.exit_code, 0) << set.err;
+    EXPECT_EQ(nlohmann::json::parse(test::slurp(dir / "set" / "forces.json"))["meta"]["stability"]["check_interval_ticks"], 7);
   } else {
     test::expect_no_gl_context_here(r);
     EXPECT_FALSE(fs::exists(dir / "out" / "forces.json"));

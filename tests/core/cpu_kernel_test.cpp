@@ -13,30 +13,14 @@
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/run.h"
 #include "core/util/error.h"
+#include "tests/core/cpu_kernel_test_util.h"
 #include "tests/core/test_models.h"
 
 namespace organsim {
 namespace {
 
-constexpr double kSize = 0.05;  // m, edge of the test box
-
-Model random_model(unsigned seed, int cells, bool volume, bool gravity, int32_t chunk = kDefaultChunkSize) {
-  Material material;
-  material.density = 1000;
-  material.young_modulus = 4000;
-  material.spring_damping_time = 0.01;
-  material.viscous_damping = 2;
-  material.volume_modulus = volume ? 30000 : 0;
-  ModelOptions options;
-  options.gravity = gravity ? Vec3(0.3, -1.0, -9.81) : Vec3::Zero();
-  options.chunk_size = chunk;
-  FixedSelector base;  // hold the base so the tool has something to push against
-  base.kind = FixedSelector::Kind::Plane;
-  base.point = Vec3(0, 0, 1e-9);
-  base.normal = Vec3(0, 0, -1);
-  options.fixed.push_back(base);
-  return build_model(testing::jittered_box(cells, kSize, 0.25, seed), material, options);
-}
+using testing::kSize;
+using testing::random_model;
 
 CpuBackendOptions fast(int threads = 1) { return {Precision::Float, threads, CpuKernel::Avx512}; }
 CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic}; }
@@ -51,26 +35,11 @@ TEST(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
     // packing keeps open, so its closing path runs too.
     for (int cells : {3, 6, 12}) {
       const Model model = random_model(seed, cells, true, true);
-      std::mt19937 rng(seed);
-      std::normal_distribution<double> noise(0, 1);
       const double dt = 1e-4;
-      // A deformed, moving state that float holds exactly (u and d are floats).
-      std::vector<Vec3> x(model.npoint()), x_prev(model.npoint());
-      for (int32_t i = 0; i < model.npoint(); ++i) {
-        const Vec3 u = (5e-4 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
-        const Vec3 d = (dt * 0.05 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
-        x[i] = model.rest_position[i] + u;
-        x_prev[i] = x[i] - d;
-      }
-      auto run_one = [&](const CpuBackendOptions& o) {
-        auto b = make_cpu_backend(model, {}, o);
-        b->set_state(x, x_prev);
-        testing::run_ticks(*b, 1, dt, 1);
-        std::vector<Vec3> after;
-        b->positions(after);
-        return after;
-      };
-      const auto ref = run_one(reference()), got = run_one(fast());
+      std::vector<Vec3> x, x_prev;
+      testing::moving_state(model, seed, dt, x, x_prev);
+      const auto ref = testing::one_step(model, reference(), x, x_prev, dt);
+      const auto got = testing::one_step(model, fast(), x, x_prev, dt);
       // Compare the step increments dt^2 F/m + (1 - alpha dt) d per point.
       double scale = 0, worst = 0;
       for (int32_t i = 0; i < model.npoint(); ++i) scale = std::max(scale, (ref[i] - x[i]).norm());
@@ -84,98 +53,20 @@ TEST(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
   }
 }
 
-enum class Scene { Lean, Full, Push, Pull };
-
-// 1000 steps (50 ticks of 20) of a scene; returns the positions and the last reaction.
-std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBackendOptions& options, Reaction& last,
-                            int ticks = 50) {
-  BackendTool tool;
-  if (scene == Scene::Push) tool = {true, ToolMode::Push, 0.02, 500};
-  if (scene == Scene::Pull) tool = {true, ToolMode::Pull, 0.01, 200};
-  auto backend = make_cpu_backend(model, tool, options);
-  const Vec3 top(0.025, 0.025, kSize);
-  if (scene == Scene::Lean) {
-    // No load at all: start stretched 5 % upwards and let it ring.
-    std::vector<Vec3> x = model.rest_position;
-    for (int32_t i = 0; i < model.npoint(); ++i)
-      if (!model.fixed[i]) x[i].z() *= 1.05;
-    backend->set_state(x, x);
-  }
-  if (scene == Scene::Pull) {
-    std::vector<Vec3> x;
-    backend->positions(x);
-    backend->attach(select_grasp(model, x, top, 0.012));
-  }
-  TickRequest request;
-  request.dt = 5e-5;
-  request.substeps = 20;
-  request.tool_active = tool.present;
-  for (int i = 0; i < ticks; ++i) {
-    // Push: the sphere's centre comes down to 1.5 cm inside the box; pull: the top is lifted 5 mm.
-    const double s0 = i / 50.0, s1 = (i + 1) / 50.0;
-    const Vec3 from = scene == Scene::Push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s0)) : Vec3(top + Vec3(0, 0, 0.005 * s0));
-    const Vec3 to = scene == Scene::Push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s1)) : Vec3(top + Vec3(0, 0, 0.005 * s1));
-    request.tool_from = from;
-    request.tool_to = to;
-    last = backend->tick(request);
-  }
-  std::vector<Vec3> x;
-  backend->positions(x);
-  return x;
-}
-
-const char* scene_name(Scene s) {
-  switch (s) {
-    case Scene::Lean: return "lean (springs only)";
-    case Scene::Full: return "volume + gravity";
-    case Scene::Push: return "push";
-    case Scene::Pull: return "pull";
-  }
-  return "";
-}
-
 TEST(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVariant) {
   SKIP_WITHOUT_AVX512();
-  for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::Pull}) {
-    const bool lean = scene == Scene::Lean;
-    const Model model = random_model(7, 5, !lean, !lean);
-    Reaction rd, rf;
-    const auto xd = run_scene(model, scene, reference(), rd);
-    const auto xf = run_scene(model, scene, fast(), rf);
-    double worst = 0, moved = 0;
-    for (size_t i = 0; i < xd.size(); ++i) {
-      worst = std::max(worst, (xd[i] - xf[i]).norm());
-      moved = std::max(moved, (xd[i] - model.rest_position[i]).norm());
-    }
-    ASSERT_GT(moved, 1e-4) << scene_name(scene) << ": the scene must deform the model to test anything";
-    // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
-    // contact amplifies it); the generic float kernel shows the same drift
-    // (Gather.FloatTracksDoubleReference). Measured 2e-7 to 5.5e-7 of the
-    // box edge (10-27 nm on 5 cm); tolerance 1e-5 of it (0.5 um, against
-    // deformations of 0.8-26 mm here).
-    EXPECT_LT(worst, 1e-5 * kSize) << scene_name(scene);
-    if (scene == Scene::Push || scene == Scene::Pull) {
-      ASSERT_GT(rd.contacts, 0) << scene_name(scene);
-      EXPECT_EQ(rd.contacts, rf.contacts) << scene_name(scene);
-      // The reaction sums the same per-point terms: measured 1.6e-6 relative, tolerance 1e-4.
-      EXPECT_LT((rd.force - rf.force).norm(), 1e-4 * rd.force.norm()) << scene_name(scene);
-    }
-  }
+  // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
+  // contact amplifies it); the generic float kernel shows the same drift
+  // (Gather.FloatTracksDoubleReference). Measured 2e-7 to 5.5e-7 of the
+  // box edge (10-27 nm on 5 cm); tolerance 1e-5 of it (0.5 um, against
+  // deformations of 0.8-26 mm here). The reaction sums the same per-point
+  // terms: measured 1.6e-6 relative, tolerance 1e-4.
+  testing::expect_scenes_track_the_reference(fast(), 1e-5 * kSize, 1e-4);
 }
 
 TEST(CpuKernel, TwoThreadsGiveBitIdenticalResultsToOne) {
   SKIP_WITHOUT_AVX512();
-  for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
-    const Model model = random_model(3, 6, true, true);
-    Reaction r1, r2;
-    // 200 steps: enough for contact and motion (a loaded machine makes
-    // every two-thread step slow, and bitwise equality needs no more).
-    const auto x1 = run_scene(model, scene, fast(1), r1, 10);
-    const auto x2 = run_scene(model, scene, fast(2), r2, 10);
-    EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
-    EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
-    for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
-  }
+  testing::expect_two_threads_bit_identical_to_one(Precision::Float);
 }
 
 TEST(CpuKernel, RestStateStaysPutWithoutGravity) {
@@ -196,13 +87,10 @@ TEST(CpuKernel, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
   EXPECT_NE(avx512_kernel_unsupported(narrow), "");
   EXPECT_EQ(avx512_kernel_unsupported(wide), "");
 
-  // Double always runs on the generic (reference) kernel.
-  EXPECT_NE(make_cpu_backend(wide, {}, {Precision::Double, 1})->device().find("generic kernel"), std::string::npos);
   // Float on an unsupported layout falls back to the generic kernel, and says so.
   EXPECT_NE(make_cpu_backend(narrow, {}, {Precision::Float, 1})->device().find("generic kernel"), std::string::npos);
   // Asked for by name where it cannot run: an error naming why, never a quiet fallback.
   EXPECT_THROW(make_cpu_backend(narrow, {}, fast()), Error);
-  EXPECT_THROW(make_cpu_backend(wide, {}, {Precision::Double, 1, CpuKernel::Avx512}), Error);
   const std::string auto_float = make_cpu_backend(wide, {}, {Precision::Float, 1})->device();
   if (avx512_kernel_compiled()) {
     EXPECT_NE(auto_float.find("avx512 kernel"), std::string::npos) << auto_float;

@@ -248,14 +248,16 @@ TEST(NodalVolume, CriticalStepIncludesTheNodalTerm) {
 TEST(NodalVolume, ModelsWithItRunOnTheGenericKernel) {
   const Model model = nodal_model(1, 3);
   EXPECT_NE(avx512_kernel_unsupported(model).find("nodal volume term"), std::string::npos);
-  try {
-    make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Avx512});
-    FAIL() << "the avx512 kernel accepted a nodal model";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::Backend);
+  for (Precision precision : {Precision::Float, Precision::Double}) {
+    try {
+      make_cpu_backend(model, {}, {precision, 1, CpuKernel::Avx512});
+      FAIL() << "the avx512 kernel accepted a nodal model";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Backend);
+    }
+    auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Auto});
+    EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
   }
-  auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Auto});
-  EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
 }
 
 }  // namespace

@@ -277,31 +277,33 @@ TEST(Suture, AddingSuturesKeepsMassAndInvariantsAndALaterCutKeepsThem) {
 TEST(Suture, ModelsWithSuturesRunOnTheGenericKernel) {
   const SutureCase c = one_suture(0.5);
   EXPECT_NE(avx512_kernel_unsupported(c.sutured).find("sutures"), std::string::npos);
-  // Asked for by name: an error naming why. Auto: the generic kernel, which the plan says.
-  try {
-    make_cpu_backend(c.sutured, {}, {Precision::Float, 1, CpuKernel::Avx512});
-    ADD_FAILURE() << "the avx512 kernel accepted a model with sutures";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::Backend);
-    if (avx512_kernel_compiled()) {
-      EXPECT_NE(std::string(e.what()).find("sutures"), std::string::npos) << e.what();
+  for (Precision precision : {Precision::Float, Precision::Double}) {
+    // Asked for by name: an error naming why. Auto: the generic kernel, which the plan says.
+    try {
+      make_cpu_backend(c.sutured, {}, {precision, 1, CpuKernel::Avx512});
+      ADD_FAILURE() << "the avx512 kernel accepted a model with sutures";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Backend);
+      if (avx512_kernel_compiled()) {
+        EXPECT_NE(std::string(e.what()).find("sutures"), std::string::npos) << e.what();
+      }
     }
+    const auto backend = make_cpu_backend(c.sutured, {}, {precision, 1});
+    EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
+    const std::string springs = backend->plan().passes[0].detail;
+    EXPECT_NE(springs.find("1 of them sutures"), std::string::npos) << springs;
+    // A backend that started on the avx512 kernel moves to the generic one when
+    // sutures are added (Backend::rebuild), with the same state.
+    auto moving = make_cpu_backend(c.plain, {}, {precision, 1});
+    testing::run_ticks(*moving, 3, 1e-4, 2);
+    std::vector<Vec3> before, after;
+    moving->positions(before);
+    moving->rebuild(c.sutured);
+    moving->positions(after);
+    EXPECT_EQ(before, after);
+    EXPECT_NE(moving->device().find("generic kernel"), std::string::npos) << moving->device();
+    for (const PassInfo& p : moving->plan().passes) EXPECT_EQ(p.detail.find("avx512"), std::string::npos) << p.detail;
   }
-  const auto backend = make_cpu_backend(c.sutured, {}, {Precision::Float, 1});
-  EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
-  const std::string springs = backend->plan().passes[0].detail;
-  EXPECT_NE(springs.find("1 of them sutures"), std::string::npos) << springs;
-  // A backend that started on the avx512 kernel moves to the generic one when
-  // sutures are added (Backend::rebuild), with the same state.
-  auto moving = make_cpu_backend(c.plain, {}, {Precision::Float, 1});
-  testing::run_ticks(*moving, 3, 1e-4, 2);
-  std::vector<Vec3> before, after;
-  moving->positions(before);
-  moving->rebuild(c.sutured);
-  moving->positions(after);
-  EXPECT_EQ(before, after);
-  EXPECT_NE(moving->device().find("generic kernel"), std::string::npos) << moving->device();
-  for (const PassInfo& p : moving->plan().passes) EXPECT_EQ(p.detail.find("avx512"), std::string::npos) << p.detail;
 }
 
 // The run's dt check after a change keeps its Gershgorin rows and recomputes

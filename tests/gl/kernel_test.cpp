@@ -7,11 +7,17 @@
 // a relative error of a few 1e-7 and a point sums ~14 springs and ~24 tets
 // whose terms largely cancel (measured: 5e-7), so we allow 1e-5 of the largest force in the
 // model (a wrong sign, index or formula gives errors of order 1).
+//
+// Each test runs with 1, 3 and 8 invocations per point (step.comp's
+// THREADS_PER_POINT: 1 is what llvmpipe runs, 8 what a GPU runs; 3 does not
+// divide the slot counts evenly). The partial sums are added in another
+// order than one invocation's, which the same tolerance covers.
 #include <gtest/gtest.h>
 
 #include "core/gl/gl_backend.h"
 #include "core/gl/gl_program.h"
 #include "core/sim/reference_forces.h"
+#include "core/util/error.h"
 #include "gl_test_scenes.h"
 #include "shaders/bindings.glsl.h"
 
@@ -19,6 +25,16 @@ namespace organsim {
 namespace {
 
 constexpr double kDt = 1e-4;  // s
+
+class GlKernel : public ::testing::TestWithParam<int32_t> {
+ protected:
+  GlBackendOptions recording() const {
+    GlBackendOptions options;
+    options.record_forces = true;
+    options.threads_per_point = GetParam();
+    return options;
+  }
+};
 
 double max_norm(const std::vector<Vec3>& f) {
   double m = 0;
@@ -33,11 +49,10 @@ double relative_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& 
   return d / max_norm(b);
 }
 
-TEST(GlKernel, SpringsVolumeAndGravityMatchTheReferenceScatter) {
+TEST_P(GlKernel, SpringsVolumeAndGravityMatchTheReferenceScatter) {
   const Model model = gl_test::box_model(5, 5, 3, true, 2e4, Vec3(0, 0, -9.81));
   ASSERT_TRUE(model.has_volume());
-  GlBackendOptions options;
-  options.record_forces = true;
+  const GlBackendOptions options = recording();
   GlBackend gl(model, BackendTool{}, options);
   const gl_test::MovingState s = gl_test::moving_state(model, kDt);
   const std::vector<Vec3> got = gl_test::forces_of_one_substep(gl, s, kDt);
@@ -65,11 +80,10 @@ TEST(GlKernel, SpringsVolumeAndGravityMatchTheReferenceScatter) {
   EXPECT_GT(scale, 1e-7);  // the step moved points by more than the tolerance
 }
 
-TEST(GlKernel, PushContactAndReactionMatchTheReference) {
+TEST_P(GlKernel, PushContactAndReactionMatchTheReference) {
   const Model model = gl_test::box_model(5, 5, 3, true, 0, Vec3(0, 0, 0));
   BackendTool tool{true, ToolMode::Push, 0.02, 300.0};
-  GlBackendOptions options;
-  options.record_forces = true;
+  const GlBackendOptions options = recording();
   GlBackend gl(model, tool, options);
   const gl_test::MovingState s = gl_test::moving_state(model, kDt);
   gl.set_state(s.x, s.x_prev);
@@ -100,11 +114,10 @@ TEST(GlKernel, PushContactAndReactionMatchTheReference) {
   EXPECT_LT(r.torque.norm(), 1e-6 * expect.force.norm() * tool.radius);
 }
 
-TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
+TEST_P(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   const Model model = gl_test::box_model(5, 5, 3, true, 0, Vec3(0, 0, 0));
   BackendTool tool{true, ToolMode::Pull, 0.02, 500.0};
-  GlBackendOptions options;
-  options.record_forces = true;
+  const GlBackendOptions options = recording();
   GlBackend gl(model, tool, options);
   const gl_test::MovingState s = gl_test::moving_state(model, kDt);
   gl.set_state(s.x, s.x_prev);
@@ -152,13 +165,15 @@ TEST(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   EXPECT_EQ(gl.tick(request).contacts, 0);
 }
 
-TEST(GlKernel, BindingsAndWorkgroupSizeAgreeBetweenCppAndGlsl) {
+TEST_P(GlKernel, BindingsAndWorkgroupSizeAgreeBetweenCppAndGlsl) {
   const Model model = gl_test::box_model(2, 2, 2, true, 1e4, Vec3(0, 0, -9.81));
-  GlBackend gl(model, BackendTool{true, ToolMode::Pull, 0.01, 100.0}, {});
+  GlBackend gl(model, BackendTool{true, ToolMode::Pull, 0.01, 100.0}, recording());
+  EXPECT_EQ(gl.threads_per_point(), GetParam());
   // Compile the full variant and ask the driver what the GLSL declared.
-  gl::ComputeProgram step("step.comp", {"HAS_VOLUME", "HAS_GRAVITY", "TOOL_PULL", "RECORD_FORCE"});
-  EXPECT_EQ(step.workgroup_size()[0], ORGANSIM_GL_CHUNK);
-  EXPECT_EQ(step.workgroup_size()[0], model.layout.chunk_size);
+  gl::ComputeProgram step("step.comp", {"HAS_VOLUME", "HAS_GRAVITY", "TOOL_PULL", "RECORD_FORCE",
+                                        "THREADS_PER_POINT " + std::to_string(GetParam())});
+  EXPECT_EQ(step.workgroup_size()[0], ORGANSIM_GL_CHUNK * GetParam());
+  EXPECT_EQ(ORGANSIM_GL_CHUNK, model.layout.chunk_size);
   EXPECT_EQ(step.storage_block_binding("XCur"), ORGANSIM_GL_B_X_CUR);
   EXPECT_EQ(step.storage_block_binding("DCur"), ORGANSIM_GL_B_D_CUR);
   EXPECT_EQ(step.storage_block_binding("XNext"), ORGANSIM_GL_B_X_NEXT);
@@ -187,6 +202,24 @@ TEST(GlKernel, BindingsAndWorkgroupSizeAgreeBetweenCppAndGlsl) {
   EXPECT_EQ(lean.storage_block_binding("Tets"), -1);
   EXPECT_EQ(lean.storage_block_binding("Partials"), -1);
   gl.context().check_errors("binding queries");
+}
+
+INSTANTIATE_TEST_SUITE_P(ThreadsPerPoint, GlKernel, ::testing::Values(1, 3, 8),
+                         [](const ::testing::TestParamInfo<int32_t>& info) { return std::to_string(info.param); });
+
+TEST(GlBackendOptions, ThreadsPerPointOutsideOneToSixteenIsAUsageError) {
+  const Model model = gl_test::box_model(2, 2, 2, true, 0, Vec3(0, 0, 0));
+  for (const int32_t bad : {-1, 17}) {
+    GlBackendOptions options;
+    options.threads_per_point = bad;
+    try {
+      GlBackend gl(model, BackendTool{}, options);
+      ADD_FAILURE() << "threads_per_point " << bad << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Usage);
+      EXPECT_NE(std::string(e.what()).find("1 to 16"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

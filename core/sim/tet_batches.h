@@ -1,0 +1,21 @@
+#pragma once
+// How the AVX-512 kernels group tets: each tet evaluated once, `lanes` per
+// batch (one register), the lanes of a batch sharing no vertex, and the
+// batches cut into fixed slices that each add into their own force array.
+#include <cstdint>
+#include <vector>
+
+#include "core/model/model.h"
+
+namespace organsim {
+
+struct TetBatches {
+  std::vector<int32_t> lane_tet;     // tet of each batch lane, -1 for padding (nbatch x lanes)
+  std::vector<int32_t> slice_begin;  // first batch of each slice (nslice + 1)
+};
+
+// The model's tets sorted by lowest vertex, cut into `slices` equal runs,
+// each run dealt out to batches of `lanes` by batch_tets() (tet_batches.cpp).
+TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices);
+
+}  // namespace organsim

@@ -1,0 +1,158 @@
+#pragma once
+// Models and scenes shared by the AVX-512 kernel tests (float and double):
+// a jittered box with a fixed base, and 1000-step runs of every scene
+// variant (lean, volume + gravity, push, pull).
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "core/sim/cpu_backend.h"
+#include "core/sim/run.h"
+#include "tests/core/test_models.h"
+
+namespace organsim::testing {
+
+constexpr double kSize = 0.05;  // m, edge of the test box
+
+// A box of cells^3 cubes cut into tets, interior points moved by up to
+// `jitter` of a cell, its base (z = 0) fixed.
+inline Model random_model(unsigned seed, int cells, bool volume, bool gravity, int32_t chunk = kDefaultChunkSize,
+                          double jitter = 0.25) {
+  Material material;
+  material.density = 1000;
+  material.young_modulus = 4000;
+  material.spring_damping_time = 0.01;
+  material.viscous_damping = 2;
+  material.volume_modulus = volume ? 30000 : 0;
+  ModelOptions options;
+  options.gravity = gravity ? Vec3(0.3, -1.0, -9.81) : Vec3::Zero();
+  options.chunk_size = chunk;
+  FixedSelector base;  // hold the base so the tool has something to push against
+  base.kind = FixedSelector::Kind::Plane;
+  base.point = Vec3(0, 0, 1e-9);
+  base.normal = Vec3(0, 0, -1);
+  options.fixed.push_back(base);
+  return build_model(jittered_box(cells, kSize, jitter, seed), material, options);
+}
+
+// A deformed, moving state (displacements of ~0.5 mm, increments of ~5e-6 m
+// per step of dt) that float holds exactly (u and d are floats there).
+inline void moving_state(const Model& model, unsigned seed, double dt, std::vector<Vec3>& x, std::vector<Vec3>& x_prev) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, 1);
+  x.resize(model.npoint());
+  x_prev.resize(model.npoint());
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    const Vec3 u = (5e-4 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
+    const Vec3 d = (dt * 0.05 * Vec3(noise(rng), noise(rng), noise(rng))).cast<float>().cast<double>();
+    x[i] = model.rest_position[i] + u;
+    x_prev[i] = x[i] - d;
+  }
+}
+
+// Positions after one step of dt from (x, x_prev).
+inline std::vector<Vec3> one_step(const Model& model, const CpuBackendOptions& options, const std::vector<Vec3>& x,
+                                  const std::vector<Vec3>& x_prev, double dt) {
+  auto backend = make_cpu_backend(model, {}, options);
+  backend->set_state(x, x_prev);
+  run_ticks(*backend, 1, dt, 1);
+  std::vector<Vec3> after;
+  backend->positions(after);
+  return after;
+}
+
+enum class Scene { Lean, Full, Push, Pull };
+
+// 1000 steps (50 ticks of 20) of a scene; returns the positions and the last reaction.
+inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBackendOptions& options, Reaction& last,
+                            int ticks = 50) {
+  BackendTool tool;
+  if (scene == Scene::Push) tool = {true, ToolMode::Push, 0.02, 500};
+  if (scene == Scene::Pull) tool = {true, ToolMode::Pull, 0.01, 200};
+  auto backend = make_cpu_backend(model, tool, options);
+  const Vec3 top(0.025, 0.025, kSize);
+  if (scene == Scene::Lean) {
+    // No load at all: start stretched 5 % upwards and let it ring.
+    std::vector<Vec3> x = model.rest_position;
+    for (int32_t i = 0; i < model.npoint(); ++i)
+      if (!model.fixed[i]) x[i].z() *= 1.05;
+    backend->set_state(x, x);
+  }
+  if (scene == Scene::Pull) {
+    std::vector<Vec3> x;
+    backend->positions(x);
+    backend->attach(select_grasp(model, x, top, 0.012));
+  }
+  TickRequest request;
+  request.dt = 5e-5;
+  request.substeps = 20;
+  request.tool_active = tool.present;
+  for (int i = 0; i < ticks; ++i) {
+    // Push: the sphere's centre comes down to 1.5 cm inside the box; pull: the top is lifted 5 mm.
+    const double s0 = i / 50.0, s1 = (i + 1) / 50.0;
+    const Vec3 from = scene == Scene::Push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s0)) : Vec3(top + Vec3(0, 0, 0.005 * s0));
+    const Vec3 to = scene == Scene::Push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s1)) : Vec3(top + Vec3(0, 0, 0.005 * s1));
+    request.tool_from = from;
+    request.tool_to = to;
+    last = backend->tick(request);
+  }
+  std::vector<Vec3> x;
+  backend->positions(x);
+  return x;
+}
+
+inline const char* scene_name(Scene s) {
+  switch (s) {
+    case Scene::Lean: return "lean (springs only)";
+    case Scene::Full: return "volume + gravity";
+    case Scene::Push: return "push";
+    case Scene::Pull: return "pull";
+  }
+  return "";
+}
+
+// Every scene variant on `options` against the generic double kernel (the
+// reference), 1000 steps each: the scene must deform the model; positions
+// must agree within `position_tol` m and, with a tool, the contacts exactly
+// and the reaction force within `reaction_tol` of its size.
+inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, double position_tol,
+                                              double reaction_tol) {
+  for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::Pull}) {
+    const bool lean = scene == Scene::Lean;
+    const Model model = random_model(7, 5, !lean, !lean);
+    Reaction rd, rf;
+    const auto xd = run_scene(model, scene, {Precision::Double, 1, CpuKernel::Generic}, rd);
+    const auto xf = run_scene(model, scene, options, rf);
+    double worst = 0, moved = 0;
+    for (size_t i = 0; i < xd.size(); ++i) {
+      worst = std::max(worst, (xd[i] - xf[i]).norm());
+      moved = std::max(moved, (xd[i] - model.rest_position[i]).norm());
+    }
+    ASSERT_GT(moved, 1e-4) << scene_name(scene) << ": the scene must deform the model to test anything";
+    EXPECT_LT(worst, position_tol) << scene_name(scene);
+    if (scene == Scene::Push || scene == Scene::Pull) {
+      ASSERT_GT(rd.contacts, 0) << scene_name(scene);
+      EXPECT_EQ(rd.contacts, rf.contacts) << scene_name(scene);
+      EXPECT_LT((rd.force - rf.force).norm(), reaction_tol * rd.force.norm()) << scene_name(scene);
+    }
+  }
+}
+
+// The avx512 kernel of `precision` on two threads against one, bitwise, in
+// the scenes with volume, push and pull. 200 steps: enough for contact and
+// motion (a loaded machine makes every two-thread step slow, and bitwise
+// equality needs no more).
+inline void expect_two_threads_bit_identical_to_one(Precision precision) {
+  for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
+    const Model model = random_model(3, 6, true, true);
+    Reaction r1, r2;
+    const auto x1 = run_scene(model, scene, {precision, 1, CpuKernel::Avx512}, r1, 10);
+    const auto x2 = run_scene(model, scene, {precision, 2, CpuKernel::Avx512}, r2, 10);
+    EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
+    EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
+    for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
+  }
+}
+
+}  // namespace organsim::testing
