@@ -267,11 +267,11 @@ void run_bench(const BenchArgs& args) {
       row.mesh_seconds = report.seconds;
       row.backend = backend->name();
       row.precision = backend->precision();
-      row.device = backend->device();
       row.plan = backend->plan();
       row.dt = dt;
       row.dt_crit = dt_crit;
       row.timing = time_backend(*backend, args, dt, positions);
+      row.device = backend->device();  // after the timing: the thread count it ran on
       row.scatter = row.precision == "float" ? time_scatter<float>(model, args, dt, positions)
                                              : time_scatter<double>(model, args, dt, positions);
       row.check_ms = measure_check_ms(model, *backend);

@@ -259,6 +259,8 @@ void run_command(const RunArgs& args) {
   std::cout << "done:     " << result.samples.size() << " ticks in " << std::setprecision(3)
             << result.meta.wall_seconds << " s wall, " << std::setprecision(4) << result.meta.steps_per_second
             << " steps/s, peak tool force " << peak << " N\n";
+  if (result.meta.extra.contains("device_at_end"))
+    std::cout << "device:   " << result.meta.extra["device_at_end"].get<std::string>() << " (at the end)\n";
   std::cout << "real time: " << std::setprecision(3) << result.meta.real_time_factor
             << "x (simulated seconds per wall second, checks and outputs included; >= 1 keeps up with the clock)\n";
   if (s.tool && s.tool->spec.mode == ToolMode::Pull) {

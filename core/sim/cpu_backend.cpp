@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -14,6 +15,7 @@
 #include "core/model/shear_element.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/cpu_kernel_avx512_double.h"
+#include "core/sim/thread_choice.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -88,9 +90,9 @@ class CpuBackend final : public Backend {
   using FastKernel = std::conditional_t<std::is_same_v<Real, float>, Avx512FloatKernel, Avx512DoubleKernel>;
 
  public:
-  CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options)
+  CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options, StepTiming timing)
       : model_(&model), tool_(tool), kernel_choice_(options.kernel),
-        threads_(options.threads > 0 ? options.threads : 1) {
+        threads_(options.threads > 0 ? options.threads : 1), timing_(std::move(timing)) {
     // State is the displacement u = x - X from rest and the last step's
     // increment d = u_t - u_{t-1}. In float, x itself would round away the
     // per-step increment dt^2 F/m (~1e-9 m against a 4e-9 m spacing of floats
@@ -103,8 +105,11 @@ class CpuBackend final : public Backend {
     attached_.assign(n, -1);
     pack();
     std::string how;
-    if (options.threads <= 0 && omp_get_max_threads() > 1) how = choose_threads_by_timing();
-    device_ = cpu_model_name() + ", " + std::to_string(threads_) + " thread" + (threads_ > 1 ? "s" : "") + how;
+    if (options.threads <= 0 && omp_get_max_threads() > 1) {
+      how = choose_threads_by_timing();
+      choice_.emplace(threads_, threads_ == 1 ? omp_get_max_threads() : 1);
+    }
+    device_ = cpu_model_name() + ", " + threads_text(threads_) + how;
   }
 
   void rebuild(const Model& next) override {
@@ -126,7 +131,16 @@ class CpuBackend final : public Backend {
 
   std::string name() const override { return "cpu"; }
   // The kernel as of now: a rebuild may move a model to the generic one (sutures).
-  std::string device() const override { return device_ + ", " + (fast_ ? "avx512" : "generic") + " kernel"; }
+  // With the thread count chosen by timing, also what the re-timing during the run did.
+  std::string device() const override {
+    std::string retimed;
+    if (choice_ && choice_->probes() > 0) {
+      retimed = ", re-timed during the run: " + std::to_string(choice_->probes()) + " probe step" +
+                (choice_->probes() > 1 ? "s" : "") + ", " + std::to_string(choice_->switches()) + " switch" +
+                (choice_->switches() == 1 ? "" : "es") + ", now " + threads_text(choice_->chosen());
+    }
+    return device_ + retimed + ", " + (fast_ ? "avx512" : "generic") + " kernel";
+  }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
@@ -246,14 +260,28 @@ class CpuBackend final : public Backend {
                                                                  : kPull;
     refresh_suture_rest();
     Reaction reaction;
-    for (int32_t s = 0; s < request.substeps; ++s) {
+    auto substep = [&](int32_t s) {
       // The force of substep s acts at its start: tool centre interpolated there.
       const double f = static_cast<double>(s) / request.substeps;
       const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
       for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
       reaction = fast_ ? fast_step(ctx, tool_kind) : step(ctx, tool_kind);
       time_ += request.dt;
+    };
+    if (!choice_) {
+      for (int32_t s = 0; s < request.substeps; ++s) substep(s);
+      return reaction;
     }
+    // Thread count chosen by timing: keep timing (thread_choice.h).
+    int32_t first = 0;
+    if (choice_->probe_due() && request.substeps > 0) {
+      threads_ = choice_->other();
+      choice_->record_probe(timed(1, [&] { substep(first++); }));
+    }
+    threads_ = choice_->chosen();
+    choice_->record_tick(request.substeps - first, timed(request.substeps - first, [&] {
+                           for (int32_t s = first; s < request.substeps; ++s) substep(s);
+                         }));
     return reaction;
   }
 
@@ -464,9 +492,9 @@ class CpuBackend final : public Backend {
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
     auto time_steps = [&](int threads, int32_t steps) {
       threads_ = threads;
-      const auto start = std::chrono::steady_clock::now();
-      for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
-      return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / steps;
+      return 1e3 * timed(steps, [&] {
+               for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
+             }) / steps;
     };
     // Warm-up: the first parallel step also starts the thread pool.
     time_steps(all, 1);
@@ -483,6 +511,18 @@ class CpuBackend final : public Backend {
     std::snprintf(buf, sizeof buf, " (timed: %.4f ms per step on 1, %.4f on %d)", best[0], best[1], all);
     return buf;
   }
+
+  // Seconds that run() of `steps` steps on threads_ threads took, as the
+  // thread choice sees them (timing_ may stand in for the clock).
+  template <class F>
+  double timed(int32_t steps, F run) {
+    const auto start = std::chrono::steady_clock::now();
+    run();
+    const double measured = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return timing_ ? timing_(threads_, steps, measured) : measured;
+  }
+
+  static std::string threads_text(int32_t n) { return std::to_string(n) + " thread" + (n > 1 ? "s" : ""); }
 
   static Vec3 displacement(const Soa3<Real>& u, size_t i) {
     return Vec3(static_cast<double>(u.x[i]), static_cast<double>(u.y[i]), static_cast<double>(u.z[i]));
@@ -798,6 +838,8 @@ class CpuBackend final : public Backend {
   BackendTool tool_;
   CpuKernel kernel_choice_;
   int threads_;
+  StepTiming timing_;                     // stands in for the clock in tests (thread choice)
+  std::optional<ThreadChoice> choice_;    // set when the thread count is chosen by timing
   std::unique_ptr<FastKernel> fast_;         // set when the AVX-512 kernel runs this backend
   std::vector<ChunkReaction> fast_partial_;  // its tool reaction per chunk
   std::vector<Real> attach_offset_flat_;     // pull offsets for it, 3 per attachment
@@ -828,9 +870,10 @@ class CpuBackend final : public Backend {
 }  // namespace
 
 std::unique_ptr<Backend> make_cpu_backend(const Model& model, const BackendTool& tool,
-                                          const CpuBackendOptions& options) {
-  if (options.precision == Precision::Float) return std::make_unique<CpuBackend<float>>(model, tool, options);
-  return std::make_unique<CpuBackend<double>>(model, tool, options);
+                                          const CpuBackendOptions& options, StepTiming timing) {
+  if (options.precision == Precision::Float)
+    return std::make_unique<CpuBackend<float>>(model, tool, options, std::move(timing));
+  return std::make_unique<CpuBackend<double>>(model, tool, options, std::move(timing));
 }
 
 }  // namespace organsim

@@ -11,6 +11,7 @@
 //   double (cpu_kernel_avx512_double.h, 8 lanes), for the models that
 //   avx512_kernel_unsupported() accepts; several times faster.
 // `Auto` takes avx512 where it can and says so in device() and plan().
+#include <functional>
 #include <memory>
 
 #include "core/sim/backend.h"
@@ -24,14 +25,21 @@ enum class CpuKernel { Auto, Generic, Avx512 };
 struct CpuBackendOptions {
   Precision precision = Precision::Double;
   // 0: chosen by timing a few steps on 1 thread and on all hardware threads
-  // at construction (results are bit-identical for any count).
+  // at construction, and kept right during a run by timing its ticks and,
+  // now and then, one step on the other count (thread_choice.h). Results are
+  // bit-identical for any count.
   int32_t threads = 0;
   // Avx512 when it cannot run here (a build without AVX-512, an unsupported
   // model) is an Error(Backend) naming why; Auto never fails.
   CpuKernel kernel = CpuKernel::Auto;
 };
 
+// What the thread choice is told a run of `steps` steps on `threads`
+// threads took, given the `measured` seconds. Empty: the measured time.
+// Tests inject timings that make a thread count look slow.
+using StepTiming = std::function<double(int32_t threads, int32_t steps, double measured)>;
+
 std::unique_ptr<Backend> make_cpu_backend(const Model& model, const BackendTool& tool,
-                                          const CpuBackendOptions& options = {});
+                                          const CpuBackendOptions& options = {}, StepTiming timing = {});
 
 }  // namespace organsim

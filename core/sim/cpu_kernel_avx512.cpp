@@ -125,11 +125,15 @@ using V = __m512;
 // Neighbour positions only (tets): 16-byte loads, four per register, and a
 // 4 x 4 transpose inside each 128-bit quarter.
 [[gnu::always_inline]] inline void gather3(const float* rec, const int32_t* q, V& x, V& y, V& z) {
+  // 64-bit before the doubling, so that it folds into the load's addressing
+  // (in 32 bits the compiler keeps the wrap-around: an add and a sign
+  // extension per point, a sixth of the tet loop's instructions).
+  auto at = [&](int l) { return rec + 2 * static_cast<ptrdiff_t>(q[l]); };
   auto quad = [&](int i) {
-    V r = _mm512_castps128_ps512(_mm_load_ps(rec + 2 * q[i]));
-    r = _mm512_insertf32x4(r, _mm_load_ps(rec + 2 * q[i + 4]), 1);
-    r = _mm512_insertf32x4(r, _mm_load_ps(rec + 2 * q[i + 8]), 2);
-    return _mm512_insertf32x4(r, _mm_load_ps(rec + 2 * q[i + 12]), 3);
+    V r = _mm512_castps128_ps512(_mm_load_ps(at(i)));
+    r = _mm512_insertf32x4(r, _mm_load_ps(at(i + 4)), 1);
+    r = _mm512_insertf32x4(r, _mm_load_ps(at(i + 8)), 2);
+    return _mm512_insertf32x4(r, _mm_load_ps(at(i + 12)), 3);
   };
   const V r0 = quad(0), r1 = quad(1), r2 = quad(2), r3 = quad(3);
   const V t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpackhi_ps(r0, r1);

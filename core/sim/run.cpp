@@ -213,6 +213,9 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   result.meta.steps_per_second = step_seconds > 0 ? static_cast<double>(steps) / step_seconds : 0;
   result.meta.real_time_factor =
       result.meta.wall_seconds > 0 ? static_cast<double>(ticks_done) * tick / result.meta.wall_seconds : 0;
+  // The CPU backend may change its thread count during the run (thread_choice.h).
+  if (const std::string device = backend.device(); device != result.meta.device)
+    result.meta.extra["device_at_end"] = device;
   result.meta.extra["step_seconds"] = step_seconds;
   result.meta.extra["steps"] = steps;
   if (pull) result.meta.extra["grasped_points"] = result.grasped_points;
