@@ -147,9 +147,13 @@ template <int Scale>
 // shuffles than to_quads() and the extraction of its halves.
 [[gnu::always_inline]] inline void scatter_add(double* force, const int32_t* q, V x, V y, V z) {
   __m256d sum[kLanes];
+  // The halves up front: the extraction's index must be a constant (clang
+  // insists even where the loop below is unrolled).
+  const __m256d xs[2] = {_mm512_castpd512_pd256(x), _mm512_extractf64x4_pd(x, 1)};
+  const __m256d ys[2] = {_mm512_castpd512_pd256(y), _mm512_extractf64x4_pd(y, 1)};
+  const __m256d zs[2] = {_mm512_castpd512_pd256(z), _mm512_extractf64x4_pd(z, 1)};
   for (int h = 0; h < 2; ++h) {
-    const __m256d xh = _mm512_extractf64x4_pd(x, h), yh = _mm512_extractf64x4_pd(y, h);
-    const __m256d zh = _mm512_extractf64x4_pd(z, h), zero = _mm256_setzero_pd();
+    const __m256d xh = xs[h], yh = ys[h], zh = zs[h], zero = _mm256_setzero_pd();
     // a = (x0 y0 | x2 y2), b = (x1 y1 | x3 y3), c = (z0 0 | z2 0), d = (z1 0 | z3 0)
     const __m256d a = _mm256_unpacklo_pd(xh, yh), b = _mm256_unpackhi_pd(xh, yh);
     const __m256d c = _mm256_unpacklo_pd(zh, zero), d = _mm256_unpackhi_pd(zh, zero);
