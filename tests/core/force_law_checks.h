@@ -14,17 +14,16 @@
 
 namespace organsim::testing {
 
-// The bottom face (z <= 0) held, with gravity and a chunk size.
-inline ModelOptions fixed_bottom_options(const Vec3& gravity = Vec3::Zero(), int32_t chunk = kDefaultChunkSize) {
-  ModelOptions options;
-  options.gravity = gravity;
-  options.chunk_size = chunk;
-  FixedSelector base;
-  base.kind = FixedSelector::Kind::Plane;
-  base.point = Vec3(0, 0, 1e-9);
-  base.normal = Vec3(0, 0, -1);
-  options.fixed.push_back(base);
-  return options;
+// The soft material of the force-law tests: E = 4 kPa, the given Poisson
+// ratio, springs damped at 10 ms and drag of 2 / s.
+inline Material soft_material(double nu) {
+  Material m;
+  m.density = 1000;
+  m.young_modulus = 4000;
+  m.poisson_ratio = nu;
+  m.spring_damping_time = 0.01;
+  m.viscous_damping = 2;
+  return m;
 }
 
 // A deformed, moving state: displacements ~1 mm on a 5 cm box, rounded to

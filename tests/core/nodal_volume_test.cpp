@@ -20,15 +20,7 @@
 namespace organsim {
 namespace {
 
-Material nodal_material(double nu = 0.45) {
-  Material m;
-  m.density = 1000;
-  m.young_modulus = 4000;
-  m.poisson_ratio = nu;
-  m.spring_damping_time = 0.01;
-  m.viscous_damping = 2;
-  return m;
-}
+Material nodal_material(double nu = 0.45) { return testing::soft_material(nu); }
 
 Model nodal_model(unsigned seed, int cells, int32_t chunk = kDefaultChunkSize, const Vec3& gravity = Vec3::Zero()) {
   return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), nodal_material(),

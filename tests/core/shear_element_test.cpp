@@ -29,15 +29,7 @@
 namespace organsim {
 namespace {
 
-Material shear_material(double nu = 0.1) {
-  Material m;
-  m.density = 1000;
-  m.young_modulus = 4000;
-  m.poisson_ratio = nu;
-  m.spring_damping_time = 0.01;
-  m.viscous_damping = 2;
-  return m;
-}
+Material shear_material(double nu = 0.1) { return testing::soft_material(nu); }
 
 Model shear_model(unsigned seed, int cells, double nu = 0.1, int32_t chunk = kDefaultChunkSize,
                   const Vec3& gravity = Vec3::Zero()) {

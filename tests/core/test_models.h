@@ -11,6 +11,19 @@
 
 namespace organsim::testing {
 
+// The bottom face (z <= 0) held, with gravity and a chunk size.
+inline ModelOptions fixed_bottom_options(const Vec3& gravity = Vec3::Zero(), int32_t chunk = kDefaultChunkSize) {
+  ModelOptions options;
+  options.gravity = gravity;
+  options.chunk_size = chunk;
+  FixedSelector base;
+  base.kind = FixedSelector::Kind::Plane;
+  base.point = Vec3(0, 0, 1e-9);
+  base.normal = Vec3(0, 0, -1);
+  options.fixed.push_back(base);
+  return options;
+}
+
 // Points joined by explicit springs (no tets): masses in kg, k in N/m, d in N s/m.
 inline Model make_spring_model(const std::vector<Vec3>& points, const std::vector<double>& masses,
                                const std::vector<Edge>& springs, double k, double d,

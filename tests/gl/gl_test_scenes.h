@@ -14,6 +14,7 @@
 #include "core/sim/reference_forces.h"
 #include "core/sim/run.h"
 #include "core/sim/run_observer.h"
+#include "tests/core/test_models.h"
 
 namespace organsim::gl_test {
 
@@ -26,13 +27,10 @@ inline Model box_model(int nx, int ny, int nz, bool fixed_bottom, double volume_
   material.volume_modulus = volume_modulus;
   material.viscous_damping = viscous_damping;
   ModelOptions options;
-  options.gravity = gravity;
   if (fixed_bottom) {
-    FixedSelector bottom;
-    bottom.kind = FixedSelector::Kind::Plane;
-    bottom.point = Vec3(0, 0, 1e-9);
-    bottom.normal = Vec3(0, 0, -1);  // points with z <= 1e-9
-    options.fixed.push_back(bottom);
+    options = testing::fixed_bottom_options(gravity);
+  } else {
+    options.gravity = gravity;
   }
   return build_model(mesh, material, options, "test box");
 }
@@ -44,14 +42,7 @@ inline Model poisson_box(double nu, const Vec3& gravity) {
   Material material;
   material.young_modulus = 3000;
   material.poisson_ratio = nu;
-  ModelOptions options;
-  options.gravity = gravity;
-  FixedSelector bottom;
-  bottom.kind = FixedSelector::Kind::Plane;
-  bottom.point = Vec3(0, 0, 1e-9);
-  bottom.normal = Vec3(0, 0, -1);
-  options.fixed.push_back(bottom);
-  return build_model(mesh, material, options, "test box");
+  return build_model(mesh, material, testing::fixed_bottom_options(gravity), "test box");
 }
 
 inline double bbox_diagonal(const Model& model) {
