@@ -190,9 +190,12 @@ class CpuBackend final : public Backend {
       plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
                               fast_->bytes()});
       const std::string lanes = std::to_string(kLanes);
+      const std::string batches = std::to_string(m.ntet()) + " tets evaluated once, " + lanes + " per batch, ";
+      if (m.has_nodal_volume())
+        plan.passes[1].detail = batches + "6 V_t into their vertices' nodal volumes (2 fixed slices), a barrier, "
+                                          "the pressures per point, a barrier (avx512 kernel)";
       if (m.has_volume())
-        plan.passes[1].detail = std::to_string(m.ntet()) + " tets evaluated once, " + lanes +
-                                " per batch, into 2 fixed force slices (avx512 kernel)";
+        plan.passes[m.has_nodal_volume() ? 2 : 1].detail = batches + "into 2 fixed force slices (avx512 kernel)";
       plan.passes.back().detail = "position Verlet, fused with springs and the tet forces (" + lanes + " " +
                                   precision() + " lanes, avx512 kernel)";
     }

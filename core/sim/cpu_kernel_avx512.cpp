@@ -26,6 +26,9 @@ constexpr int32_t kLanes = 16;  // floats per 512-bit register
 // array: the threads share the slices, and the per-point total adds the
 // slices in order, so results do not depend on the thread count.
 constexpr int kSlices = 2;
+// The tet pass: none, the per-tet volume term, or the averaged nodal term
+// (a volume pass and a pressure pass before the force pass).
+enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
 
 }  // namespace
 
@@ -36,18 +39,19 @@ std::string avx512_kernel_unsupported(const Model& model) {
   if (model.layout.chunk_size % kLanes != 0)
     return "layout chunk size " + std::to_string(model.layout.chunk_size) + " is not a multiple of " +
            std::to_string(kLanes);
-  if (model.has_nodal_volume()) return "the nodal volume term runs on the generic kernel only";
   if (model.has_shear_element()) return "the shear element (poisson_ratio < 0.25) runs on the generic kernel only";
   return "";
 }
 
 struct Avx512FloatKernel::Data {
   int32_t npoint = 0, npad = 0, chunk = 0, nchunk = 0, groups = 0;  // groups of 16 per chunk
-  bool volume = false, gravity = false;
+  VolumeKind volume = kNoVolume;
+  bool gravity = false;
   AlignedVector<float> rest[3], mass, inv_mass;  // (npad)
   AlignedVector<float> u[2][3], d[2][3];         // state, double-buffered (npad)
-  // (x, y, z, 0, dx, dy, dz, 0) per point, double-buffered (8 (npad + 16));
-  // the record at npad stays zero: padding tets point at it.
+  // (x, y, z, q, dx, dy, dz, 0) per point, double-buffered (8 (npad + 16));
+  // q is the nodal term's scaled pressure (node_k), 0 without it. The record
+  // at npad stays zero: padding tets point at it.
   AlignedVector<float> rec[2];
   int cur = 0;                                   // which buffer holds step t
   std::vector<int32_t> spring_offset;            // first entry of each chunk (nchunk)
@@ -59,9 +63,16 @@ struct Avx512FloatKernel::Data {
   // Tets, each evaluated once, 16 per batch: 16 nearby tets that share no
   // vertex (batch_tets()); each slice is a run of tets by lowest vertex.
   AlignedVector<int32_t> tet_v[4];               // 4 x vertex per batch lane; padding lanes: 4 npad
-  AlignedVector<float> tet_k36, tet_det_rest;    // k_v / 36 and 6 V_r as the kernel computes it
+  AlignedVector<float> tet_k36, tet_det_rest;    // per tet: k_v / 36 and 6 V_r as the kernel computes it; else empty
+  // Nodal term: q = node_k (S - node_rest) per point, S the sum of 6 V_t over
+  // its tets, node_k = -k_a / 576 (so that a tet's four q add up to
+  // -p_t / 6, its force factor), node_rest = S at rest as the kernel computes
+  // it (npad); else empty.
+  AlignedVector<float> node_k, node_rest;
   int32_t slice_begin[kSlices + 1] = {};         // batches of each slice
-  AlignedVector<float> tet_force[kSlices];       // (x, y, z, 0) per point, zero between steps (4 (npad + 16))
+  // (x, y, z, S) per point, zero between steps (4 (npad + 16)): the tet
+  // forces, and with the nodal term the slice's part of S.
+  AlignedVector<float> tet_force[kSlices];
 };
 
 Avx512FloatKernel::Avx512FloatKernel() : data_(std::make_unique<Data>()) {}
@@ -74,7 +85,8 @@ size_t Avx512FloatKernel::bytes() const {
   const size_t n = static_cast<size_t>(D.npad);
   return n * sizeof(float) * (3 + 2 + 12 + 16 + 4 * kSlices) +
          D.spring_other.size() * (sizeof(int32_t) + 3 * sizeof(float)) +
-         D.tet_k36.size() * (4 * sizeof(int32_t) + 2 * sizeof(float));
+         D.tet_v[0].size() * 4 * sizeof(int32_t) + (D.tet_k36.size() + D.tet_det_rest.size()) * sizeof(float) +
+         (D.node_k.size() + D.node_rest.size()) * sizeof(float);
 }
 
 void Avx512FloatKernel::get_point(int32_t p, float u[3], float d[3]) const {
@@ -122,9 +134,9 @@ using V = __m512;
   dz = _mm512_shuffle_f32x4(sz0, sz1, _MM_SHUFFLE(3, 1, 3, 1));
 }
 
-// Neighbour positions only (tets): 16-byte loads, four per register, and a
-// 4 x 4 transpose inside each 128-bit quarter.
-[[gnu::always_inline]] inline void gather3(const float* rec, const int32_t* q, V& x, V& y, V& z) {
+// Neighbour positions and the records' 4th float (tets): 16-byte loads, four
+// per register, and a 4 x 4 transpose inside each 128-bit quarter.
+[[gnu::always_inline]] inline void gather4(const float* rec, const int32_t* q, V& x, V& y, V& z, V& w) {
   // 64-bit before the doubling, so that it folds into the load's addressing
   // (in 32 bits the compiler keeps the wrap-around: an add and a sign
   // extension per point, a sixth of the tet loop's instructions).
@@ -141,6 +153,12 @@ using V = __m512;
   x = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
   y = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
   z = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  w = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+// Positions only (the unused shuffle for w is dropped by the compiler).
+[[gnu::always_inline]] inline void gather3(const float* rec, const int32_t* q, V& x, V& y, V& z) {
+  V unused;
+  gather4(rec, q, x, y, z, unused);
 }
 
 // Writes the records of 16 consecutive points p0.. (the inverse transpose):
@@ -227,7 +245,7 @@ inline V det6(V ax, V ay, V az, V bx, V by, V bz, V cx, V cy, V cz) {
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 
-template <bool Volume, bool Gravity, int Tool>
+template <int Volume, bool Gravity, int Tool>
 void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c, ChunkReaction& partial) {
   const int cur = D.cur, nxt = 1 - cur;
   const float* rec = D.rec[cur].data();
@@ -271,7 +289,7 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
       fz = _mm512_fmadd_ps(s, lz, fz);
     }
 
-    if constexpr (Volume) {
+    if constexpr (Volume != kNoVolume) {
       // Volume forces, summed per slice by tet_slice(); slices in order.
       for (int sl = 0; sl < kSlices; ++sl) take_forces(&D.tet_force[sl][4 * static_cast<size_t>(p0)], fx, fy, fz);
     }
@@ -341,9 +359,55 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
   }
 }
 
-// Volume forces of one slice's tets into its force array:
-// f_i = k_v (V_r - V) dV/dx_i with V = e1 . (e2 x e3) / 6, e_i = x_i - x_0,
-// so dV/dx_1 = e2 x e3 / 6 (and cyclically) and f_0 = -(f_1 + f_2 + f_3).
+// The nodal term's first pass over one slice's tets: S of each vertex (its
+// 4th float in the slice's force array) += 6 V_t of the tet, from the
+// records at `rec`. pack() runs it on the rest records for node_rest, so
+// the rest state gives exactly q = 0.
+void nodal_volume_slice(Avx512FloatKernel::Data& D, const float* rec, int slice) {
+  float* const force = D.tet_force[slice].data();
+  const int32_t* const tet_v[4] = {D.tet_v[0].data(), D.tet_v[1].data(), D.tet_v[2].data(), D.tet_v[3].data()};
+  const int32_t end = D.slice_begin[slice + 1];
+  for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
+    const size_t e = static_cast<size_t>(b) * kLanes;
+    const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
+    V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
+    gather3(rec, q[0], x0, y0, z0);
+    gather3(rec, q[1], x1, y1, z1);
+    gather3(rec, q[2], x2, y2, z2);
+    gather3(rec, q[3], x3, y3, z3);
+    alignas(64) float det[kLanes];
+    _mm512_store_ps(det, det6(_mm512_sub_ps(x1, x0), _mm512_sub_ps(y1, y0), _mm512_sub_ps(z1, z0),
+                              _mm512_sub_ps(x2, x0), _mm512_sub_ps(y2, y0), _mm512_sub_ps(z2, z0),
+                              _mm512_sub_ps(x3, x0), _mm512_sub_ps(y3, y0), _mm512_sub_ps(z3, z0)));
+    // One float per vertex: plain adds (the 16 vertices of a batch are distinct).
+    for (int k = 0; k < 4; ++k)
+      for (int l = 0; l < kLanes; ++l) force[q[k][l] + 3] += det[l];
+  }
+}
+
+// S of point p: the slices' parts added in order (thread-count independent).
+inline float nodal_volume_sum(const Avx512FloatKernel::Data& D, int32_t p) {
+  float s = D.tet_force[0][4 * static_cast<size_t>(p) + 3];
+  for (int sl = 1; sl < kSlices; ++sl) s += D.tet_force[sl][4 * static_cast<size_t>(p) + 3];
+  return s;
+}
+
+// The nodal term's second pass, per point of chunk c: q = node_k (S - S_r)
+// into the 4th float of its record for the force pass to gather. S stays in
+// the force arrays until take_forces() clears them.
+void nodal_pressure_chunk(Avx512FloatKernel::Data& D, int32_t c) {
+  float* const rec = D.rec[D.cur].data();
+  const int32_t first = c * D.chunk, last = first + D.chunk;
+  for (int32_t p = first; p < last; ++p)
+    rec[8 * static_cast<size_t>(p) + 3] = D.node_k[p] * (nodal_volume_sum(D, p) - D.node_rest[p]);
+}
+
+// Volume forces of one slice's tets into its force array: with
+// V = e1 . (e2 x e3) / 6, e_i = x_i - x_0, dV/dx_1 = e2 x e3 / 6 (and
+// cyclically) and f_0 = -(f_1 + f_2 + f_3). Per tet f_i = k_v (V_r - V)
+// dV/dx_i; nodal f_i = -p_t dV/dx_i, p_t the mean of its vertices' pressures,
+// whose scaled q the records carry.
+template <int Volume>
 void tet_slice(Avx512FloatKernel::Data& D, int slice) {
   // Local pointers: the intrinsic stores may alias anything, so pointers
   // read through D would be reloaded after every store.
@@ -357,15 +421,27 @@ void tet_slice(Avx512FloatKernel::Data& D, int slice) {
     const size_t e = static_cast<size_t>(b) * kLanes;
     const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
     V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
-    gather3(rec, q[0], x0, y0, z0);
-    gather3(rec, q[1], x1, y1, z1);
-    gather3(rec, q[2], x2, y2, z2);
-    gather3(rec, q[3], x3, y3, z3);
+    V s;
+    if constexpr (Volume == kNodalVolume) {
+      V q0, q1, q2, q3;
+      gather4(rec, q[0], x0, y0, z0, q0);
+      gather4(rec, q[1], x1, y1, z1, q1);
+      gather4(rec, q[2], x2, y2, z2, q2);
+      gather4(rec, q[3], x3, y3, z3, q3);
+      s = _mm512_add_ps(_mm512_add_ps(_mm512_add_ps(q0, q1), q2), q3);  // -p_t / 6
+    } else {
+      gather3(rec, q[0], x0, y0, z0);
+      gather3(rec, q[1], x1, y1, z1);
+      gather3(rec, q[2], x2, y2, z2);
+      gather3(rec, q[3], x3, y3, z3);
+    }
     x1 = _mm512_sub_ps(x1, x0), y1 = _mm512_sub_ps(y1, y0), z1 = _mm512_sub_ps(z1, z0);
     x2 = _mm512_sub_ps(x2, x0), y2 = _mm512_sub_ps(y2, y0), z2 = _mm512_sub_ps(z2, z0);
     x3 = _mm512_sub_ps(x3, x0), y3 = _mm512_sub_ps(y3, y0), z3 = _mm512_sub_ps(z3, z0);
-    const V det = det6(x1, y1, z1, x2, y2, z2, x3, y3, z3);
-    const V s = _mm512_mul_ps(_mm512_load_ps(k36 + e), _mm512_sub_ps(_mm512_load_ps(det_rest + e), det));
+    if constexpr (Volume != kNodalVolume) {
+      const V det = det6(x1, y1, z1, x2, y2, z2, x3, y3, z3);
+      s = _mm512_mul_ps(_mm512_load_ps(k36 + e), _mm512_sub_ps(_mm512_load_ps(det_rest + e), det));
+    }
     auto cross_scaled = [&](V ax, V ay, V az, V bx, V by, V bz, V& fx, V& fy, V& fz) {
       fx = _mm512_mul_ps(s, _mm512_fmsub_ps(ay, bz, _mm512_mul_ps(az, by)));
       fy = _mm512_mul_ps(s, _mm512_fmsub_ps(az, bx, _mm512_mul_ps(ax, bz)));
@@ -386,15 +462,22 @@ void tet_slice(Avx512FloatKernel::Data& D, int slice) {
   }
 }
 
-template <bool Volume, bool Gravity, int Tool>
+template <int Volume, bool Gravity, int Tool>
 void step_all(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
               std::vector<ChunkReaction>& partial) {
   const int32_t nchunk = D.nchunk;
 #pragma omp parallel num_threads(threads)
   {
-    if constexpr (Volume) {
+    if constexpr (Volume == kNodalVolume) {
+      // Every nodal volume before any pressure, every pressure before any force.
 #pragma omp for schedule(static)
-      for (int sl = 0; sl < kSlices; ++sl) tet_slice(D, sl);
+      for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, D.rec[D.cur].data(), sl);
+#pragma omp for schedule(static)
+      for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(D, c);
+    }
+    if constexpr (Volume != kNoVolume) {
+#pragma omp for schedule(static)
+      for (int sl = 0; sl < kSlices; ++sl) tet_slice<Volume>(D, sl);
     }
 #pragma omp for schedule(static)
     for (int32_t c = 0; c < nchunk; ++c) {
@@ -405,7 +488,7 @@ void step_all(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads
   }
 }
 
-template <bool Volume, bool Gravity>
+template <int Volume, bool Gravity>
 void step_tool(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
                std::vector<ChunkReaction>& partial) {
   switch (in.tool) {
@@ -413,6 +496,13 @@ void step_tool(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int thread
     case FloatStepInputs::Pull: return step_all<Volume, Gravity, kPull>(D, in, threads, partial);
     default: return step_all<Volume, Gravity, kNoTool>(D, in, threads, partial);
   }
+}
+
+template <int Volume>
+void step_gravity(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
+                  std::vector<ChunkReaction>& partial) {
+  if (D.gravity) step_tool<Volume, true>(D, in, threads, partial);
+  else step_tool<Volume, false>(D, in, threads, partial);
 }
 
 // The record of point p for the state in buffer b.
@@ -438,16 +528,13 @@ void Avx512FloatKernel::set_point(int32_t p, const float u[3], const float d[3])
 
 void Avx512FloatKernel::step(const FloatStepInputs& in, int threads, std::vector<ChunkReaction>& partial) {
   Data& D = *data_;
-  if (D.volume) {
-    if (D.gravity) step_tool<true, true>(D, in, threads, partial);
-    else step_tool<true, false>(D, in, threads, partial);
-  } else {
-    if (D.gravity) step_tool<false, true>(D, in, threads, partial);
-    else step_tool<false, false>(D, in, threads, partial);
+  switch (D.volume) {
+    case kNodalVolume: step_gravity<kNodalVolume>(D, in, threads, partial); break;
+    case kTetVolume: step_gravity<kTetVolume>(D, in, threads, partial); break;
+    default: step_gravity<kNoVolume>(D, in, threads, partial); break;
   }
   D.cur = 1 - D.cur;
 }
-
 void Avx512FloatKernel::pack(const Model& model) {
   Data& D = *data_;
   const GatherLayout& L = model.layout;
@@ -457,7 +544,7 @@ void Avx512FloatKernel::pack(const Model& model) {
   D.nchunk = L.nchunk;
   D.groups = L.chunk_size / kLanes;
   D.npad = D.nchunk * D.chunk;
-  D.volume = model.has_volume();
+  D.volume = model.has_nodal_volume() ? kNodalVolume : model.has_volume() ? kTetVolume : kNoVolume;
   D.gravity = model.has_gravity();
   const size_t n = static_cast<size_t>(D.npad);
 
@@ -529,15 +616,16 @@ void Avx512FloatKernel::pack(const Model& model) {
   std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.slice_begin);
   const size_t lanes = lane_tet.size();
   for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
-  D.tet_k36.assign(lanes, 0.f);
-  D.tet_det_rest.assign(lanes, 0.f);
+  const size_t per_tet = D.volume == kTetVolume ? lanes : 0;
+  D.tet_k36.assign(per_tet, 0.f);
+  D.tet_det_rest.assign(per_tet, 0.f);
   for (size_t e = 0; e < lanes; ++e) {
     const int32_t t = lane_tet[e];
     if (t < 0) continue;
     for (int k = 0; k < 4; ++k) D.tet_v[k][e] = 4 * model.tet_points[t][k];
-    D.tet_k36[e] = static_cast<float>(model.tet_k[t] / 36);
+    if (per_tet) D.tet_k36[e] = static_cast<float>(model.tet_k[t] / 36);
   }
-  for (size_t e0 = 0; e0 < lanes; e0 += kLanes) {
+  for (size_t e0 = 0; e0 < per_tet; e0 += kLanes) {
     V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
     gather3(rec, &D.tet_v[0][e0], x0, y0, z0);
     gather3(rec, &D.tet_v[1][e0], x1, y1, z1);
@@ -549,6 +637,17 @@ void Avx512FloatKernel::pack(const Model& model) {
     _mm512_store_ps(&D.tet_det_rest[e0], det);
   }
   for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0.f);
+  D.node_k.assign(D.volume == kNodalVolume ? n : 0, 0.f);
+  D.node_rest.assign(D.node_k.size(), 0.f);
+  if (D.volume == kNodalVolume) {
+    // S at rest by the step's own passes, so that q is exactly 0 there.
+    for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, rec, sl);
+    for (int32_t p = 0; p < D.npoint; ++p) {
+      D.node_k[p] = static_cast<float>(-model.point_volume_k[p] / 576);
+      D.node_rest[p] = nodal_volume_sum(D, p);
+    }
+    for (auto& f : D.tet_force) std::fill(f.begin(), f.end(), 0.f);
+  }
   for (int32_t p = 0; p < D.npad; ++p) write_record(D, D.cur, p);
 }
 

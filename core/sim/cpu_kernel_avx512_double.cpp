@@ -30,15 +30,20 @@ constexpr int kSlices = 2;
 // index scaling and the record stores differ); split measured faster (the
 // tet pass reads positions only, and half the bytes; docs/bench.md).
 constexpr int32_t kRecord = 4;
+// The tet pass: none, the per-tet volume term, or the averaged nodal term
+// (a volume pass and a pressure pass before the force pass).
+enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
 
 }  // namespace
 
 struct Avx512DoubleKernel::Data {
   int32_t npoint = 0, npad = 0, chunk = 0, nchunk = 0, groups = 0;  // groups of 8 per chunk
-  bool volume = false, gravity = false;
+  VolumeKind volume = kNoVolume;
+  bool gravity = false;
   AlignedVector<double> rest[3], mass, inv_mass;  // (npad)
   AlignedVector<double> u[2][3], d[2][3];         // state, double-buffered (npad)
-  // Records, double-buffered (kRecord (npad + 8)): positions, and with
+  // Records, double-buffered (kRecord (npad + 8)): positions (x, y, z, q),
+  // q the nodal term's scaled pressure (node_k), 0 without it, and with
   // kRecord = 8 also the increments; with kRecord = 4 the increments are in
   // `inc` (4 (npad + 8)). The entry at npad stays zero: padding tets point at it.
   AlignedVector<double> rec[2], inc[2];
@@ -50,9 +55,15 @@ struct Avx512DoubleKernel::Data {
   AlignedVector<int32_t> spring_other;            // kRecord x other end per entry; padding points at itself
   AlignedVector<double> spring_rest, spring_k, spring_d;
   AlignedVector<int32_t> tet_v[4];                // 4 x vertex per batch lane; padding lanes: 4 npad
-  AlignedVector<double> tet_k36, tet_det_rest;    // k_v / 36 and 6 V_r as the kernel computes it
+  AlignedVector<double> tet_k36, tet_det_rest;    // per tet: k_v / 36 and 6 V_r as the kernel computes it; else empty
+  // Nodal term, as in the float kernel: q = node_k (S - node_rest) per
+  // point, S the sum of 6 V_t over its tets, node_k = -k_a / 576, node_rest
+  // = S at rest as the kernel computes it (npad); else empty.
+  AlignedVector<double> node_k, node_rest;
   int32_t slice_begin[kSlices + 1] = {};          // batches of each slice
-  AlignedVector<double> tet_force[kSlices];       // (x, y, z, 0) per point, zero between steps (4 (npad + 8))
+  // (x, y, z, S) per point, zero between steps (4 (npad + 8)): the tet
+  // forces, and with the nodal term the slice's part of S.
+  AlignedVector<double> tet_force[kSlices];
 };
 
 Avx512DoubleKernel::Avx512DoubleKernel() : data_(std::make_unique<Data>()) {}
@@ -65,7 +76,8 @@ size_t Avx512DoubleKernel::bytes() const {
   const size_t n = static_cast<size_t>(D.npad);
   return n * sizeof(double) * (3 + 2 + 12 + 2 * 8 + 4 * kSlices) +
          D.spring_other.size() * (sizeof(int32_t) + 3 * sizeof(double)) +
-         D.tet_k36.size() * (4 * sizeof(int32_t) + 2 * sizeof(double));
+         D.tet_v[0].size() * 4 * sizeof(int32_t) + (D.tet_k36.size() + D.tet_det_rest.size()) * sizeof(double) +
+         (D.node_k.size() + D.node_rest.size()) * sizeof(double);
 }
 
 void Avx512DoubleKernel::get_point(int32_t p, double u[3], double d[3]) const {
@@ -87,23 +99,30 @@ double* increments(Avx512DoubleKernel::Data& D, int b) {
   return kRecord == 8 ? D.rec[b].data() + 4 : D.inc[b].data();
 }
 
-// (x, y, z) of 8 points from their 32-byte quads (x, y, z, 0) at
-// base + Scale q[i]: four 512-bit registers of two quads each, transposed in
-// registers. Register i holds quads (q_a, q_b) with (a, b) = (0, 2), (1, 3),
-// (4, 6), (5, 7), so that the shuffles below leave lanes in q order.
+// (x, y, z, w) of 8 points from their 32-byte quads at base + Scale q[i]:
+// four 512-bit registers of two quads each, transposed in registers.
+// Register i holds quads (q_a, q_b) with (a, b) = (0, 2), (1, 3), (4, 6),
+// (5, 7), so that the shuffles below leave lanes in q order.
 template <int Scale>
-[[gnu::always_inline]] inline void gather3(const double* base, const int32_t* q, V& x, V& y, V& z) {
+[[gnu::always_inline]] inline void gather4(const double* base, const int32_t* q, V& x, V& y, V& z, V& w) {
   auto pair = [&](int a, int b) {
     return _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(base + Scale * q[a])),
                               _mm256_load_pd(base + Scale * q[b]), 1);
   };
   const V r0 = pair(0, 2), r1 = pair(1, 3), r2 = pair(4, 6), r3 = pair(5, 7);
-  // t0 = (x0 x1 | z0 z1 | x2 x3 | z2 z3), t1 = (y0 y1 | 0 0 | y2 y3 | 0 0), t2, t3 likewise for 4..7.
+  // t0 = (x0 x1 | z0 z1 | x2 x3 | z2 z3), t1 = (y0 y1 | w0 w1 | y2 y3 | w2 w3), t2, t3 likewise for 4..7.
   const V t0 = _mm512_unpacklo_pd(r0, r1), t1 = _mm512_unpackhi_pd(r0, r1);
   const V t2 = _mm512_unpacklo_pd(r2, r3), t3 = _mm512_unpackhi_pd(r2, r3);
   x = _mm512_shuffle_f64x2(t0, t2, _MM_SHUFFLE(2, 0, 2, 0));
   y = _mm512_shuffle_f64x2(t1, t3, _MM_SHUFFLE(2, 0, 2, 0));
   z = _mm512_shuffle_f64x2(t0, t2, _MM_SHUFFLE(3, 1, 3, 1));
+  w = _mm512_shuffle_f64x2(t1, t3, _MM_SHUFFLE(3, 1, 3, 1));
+}
+// (x, y, z) only (the unused shuffle for w is dropped by the compiler).
+template <int Scale>
+[[gnu::always_inline]] inline void gather3(const double* base, const int32_t* q, V& x, V& y, V& z) {
+  V unused;
+  gather4<Scale>(base, q, x, y, z, unused);
 }
 
 // The inverse of gather3 for 8 consecutive points: out[i] holds the quads
@@ -201,21 +220,36 @@ inline V det6(V ax, V ay, V az, V bx, V by, V bz, V cx, V cy, V cz) {
   return _mm512_fmadd_pd(az, nz, _mm512_fmadd_pd(ay, ny, _mm512_mul_pd(ax, nx)));
 }
 
-// 6 x signed volume of the tets of 8 lanes from the position records.
-[[gnu::always_inline]] inline V tet_det6(const double* rec, const int32_t* const (&q)[4], V (&e)[3][3]) {
+// The edges e_i = x_i - x_0 of the tets of 8 lanes from the position
+// records; with Nodal, also the sum of their vertices' q (the records' 4th
+// entries).
+template <bool Nodal>
+[[gnu::always_inline]] inline void tet_edges(const double* rec, const int32_t* const (&q)[4], V (&e)[3][3], V& qsum) {
   constexpr int kScale = kRecord / 4;
-  V x0, y0, z0;
-  gather3<kScale>(rec, q[0], x0, y0, z0);
+  V x0, y0, z0, w;
+  if constexpr (Nodal) gather4<kScale>(rec, q[0], x0, y0, z0, qsum);
+  else gather3<kScale>(rec, q[0], x0, y0, z0);
   for (int i = 0; i < 3; ++i) {
-    gather3<kScale>(rec, q[i + 1], e[i][0], e[i][1], e[i][2]);
+    if constexpr (Nodal) {
+      gather4<kScale>(rec, q[i + 1], e[i][0], e[i][1], e[i][2], w);
+      qsum = _mm512_add_pd(qsum, w);
+    } else {
+      gather3<kScale>(rec, q[i + 1], e[i][0], e[i][1], e[i][2]);
+    }
     e[i][0] = _mm512_sub_pd(e[i][0], x0), e[i][1] = _mm512_sub_pd(e[i][1], y0), e[i][2] = _mm512_sub_pd(e[i][2], z0);
   }
+}
+
+// 6 x signed volume of the tets of 8 lanes from the position records.
+[[gnu::always_inline]] inline V tet_det6(const double* rec, const int32_t* const (&q)[4], V (&e)[3][3]) {
+  V unused;
+  tet_edges<false>(rec, q, e, unused);
   return det6(e[0][0], e[0][1], e[0][2], e[1][0], e[1][1], e[1][2], e[2][0], e[2][1], e[2][2]);
 }
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 
-template <bool Volume, bool Gravity, int Tool>
+template <int Volume, bool Gravity, int Tool>
 void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t c, ChunkReaction& partial) {
   const int cur = D.cur, nxt = 1 - cur;
   const double* const rec = positions(D, cur);
@@ -267,7 +301,7 @@ void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t
       fz = _mm512_fmadd_pd(s, lz, fz);
     }
 
-    if constexpr (Volume) {
+    if constexpr (Volume != kNoVolume) {
       // Volume forces, summed per slice by tet_slice(); slices in order.
       for (int sl = 0; sl < kSlices; ++sl) take_forces(&D.tet_force[sl][4 * static_cast<size_t>(p0)], fx, fy, fz);
     }
@@ -321,9 +355,49 @@ void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t
   }
 }
 
-// Volume forces of one slice's tets into its force array:
-// f_i = k_v (V_r - V) dV/dx_i with V = e1 . (e2 x e3) / 6, e_i = x_i - x_0,
-// so dV/dx_1 = e2 x e3 / 6 (and cyclically) and f_0 = -(f_1 + f_2 + f_3).
+// The nodal term's first pass over one slice's tets: S of each vertex (its
+// 4th entry in the slice's force array) += 6 V_t of the tet, from the
+// position records at `rec`. pack() runs it on the rest records for
+// node_rest, so the rest state gives exactly q = 0.
+void nodal_volume_slice(Avx512DoubleKernel::Data& D, const double* rec, int slice) {
+  double* const force = D.tet_force[slice].data();
+  const int32_t* const tet_v[4] = {D.tet_v[0].data(), D.tet_v[1].data(), D.tet_v[2].data(), D.tet_v[3].data()};
+  const int32_t end = D.slice_begin[slice + 1];
+  for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
+    const size_t e = static_cast<size_t>(b) * kLanes;
+    const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
+    V unused[3][3];
+    alignas(64) double det[kLanes];
+    _mm512_store_pd(det, tet_det6(rec, q, unused));
+    // One double per vertex: plain adds (the 8 vertices of a batch are distinct).
+    for (int k = 0; k < 4; ++k)
+      for (int l = 0; l < kLanes; ++l) force[q[k][l] + 3] += det[l];
+  }
+}
+
+// S of point p: the slices' parts added in order (thread-count independent).
+inline double nodal_volume_sum(const Avx512DoubleKernel::Data& D, int32_t p) {
+  double s = D.tet_force[0][4 * static_cast<size_t>(p) + 3];
+  for (int sl = 1; sl < kSlices; ++sl) s += D.tet_force[sl][4 * static_cast<size_t>(p) + 3];
+  return s;
+}
+
+// The nodal term's second pass, per point of chunk c: q = node_k (S - S_r)
+// into the 4th entry of its position record for the force pass to gather.
+// S stays in the force arrays until take_forces() clears them.
+void nodal_pressure_chunk(Avx512DoubleKernel::Data& D, int32_t c) {
+  double* const rec = positions(D, D.cur);
+  const int32_t first = c * D.chunk, last = first + D.chunk;
+  for (int32_t p = first; p < last; ++p)
+    rec[kRecord * static_cast<size_t>(p) + 3] = D.node_k[p] * (nodal_volume_sum(D, p) - D.node_rest[p]);
+}
+
+// Volume forces of one slice's tets into its force array: with
+// V = e1 . (e2 x e3) / 6, e_i = x_i - x_0, dV/dx_1 = e2 x e3 / 6 (and
+// cyclically) and f_0 = -(f_1 + f_2 + f_3). Per tet f_i = k_v (V_r - V)
+// dV/dx_i; nodal f_i = -p_t dV/dx_i, p_t the mean of its vertices' pressures,
+// whose scaled q the records carry.
+template <int Volume>
 void tet_slice(Avx512DoubleKernel::Data& D, int slice) {
   // Local pointers: the intrinsic stores may alias anything, so pointers
   // read through D would be reloaded after every store.
@@ -336,9 +410,13 @@ void tet_slice(Avx512DoubleKernel::Data& D, int slice) {
   for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
     const size_t e = static_cast<size_t>(b) * kLanes;
     const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
-    V ev[3][3];
-    const V det = tet_det6(rec, q, ev);
-    const V s = _mm512_mul_pd(_mm512_load_pd(k36 + e), _mm512_sub_pd(_mm512_load_pd(det_rest + e), det));
+    V ev[3][3], s;
+    if constexpr (Volume == kNodalVolume) {
+      tet_edges<true>(rec, q, ev, s);  // s = the sum of the four q = -p_t / 6
+    } else {
+      const V det = tet_det6(rec, q, ev);
+      s = _mm512_mul_pd(_mm512_load_pd(k36 + e), _mm512_sub_pd(_mm512_load_pd(det_rest + e), det));
+    }
     auto cross_scaled = [&](const V (&a)[3], const V (&b)[3], V& fx, V& fy, V& fz) {
       fx = _mm512_mul_pd(s, _mm512_fmsub_pd(a[1], b[2], _mm512_mul_pd(a[2], b[1])));
       fy = _mm512_mul_pd(s, _mm512_fmsub_pd(a[2], b[0], _mm512_mul_pd(a[0], b[2])));
@@ -359,15 +437,22 @@ void tet_slice(Avx512DoubleKernel::Data& D, int slice) {
   }
 }
 
-template <bool Volume, bool Gravity, int Tool>
+template <int Volume, bool Gravity, int Tool>
 void step_all(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threads,
               std::vector<ChunkReaction>& partial) {
   const int32_t nchunk = D.nchunk;
 #pragma omp parallel num_threads(threads)
   {
-    if constexpr (Volume) {
+    if constexpr (Volume == kNodalVolume) {
+      // Every nodal volume before any pressure, every pressure before any force.
 #pragma omp for schedule(static)
-      for (int sl = 0; sl < kSlices; ++sl) tet_slice(D, sl);
+      for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, positions(D, D.cur), sl);
+#pragma omp for schedule(static)
+      for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(D, c);
+    }
+    if constexpr (Volume != kNoVolume) {
+#pragma omp for schedule(static)
+      for (int sl = 0; sl < kSlices; ++sl) tet_slice<Volume>(D, sl);
     }
 #pragma omp for schedule(static)
     for (int32_t c = 0; c < nchunk; ++c) {
@@ -378,7 +463,7 @@ void step_all(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threa
   }
 }
 
-template <bool Volume, bool Gravity>
+template <int Volume, bool Gravity>
 void step_tool(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threads,
                std::vector<ChunkReaction>& partial) {
   switch (in.tool) {
@@ -386,6 +471,13 @@ void step_tool(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int thre
     case DoubleStepInputs::Pull: return step_all<Volume, Gravity, kPull>(D, in, threads, partial);
     default: return step_all<Volume, Gravity, kNoTool>(D, in, threads, partial);
   }
+}
+
+template <int Volume>
+void step_gravity(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threads,
+                  std::vector<ChunkReaction>& partial) {
+  if (D.gravity) step_tool<Volume, true>(D, in, threads, partial);
+  else step_tool<Volume, false>(D, in, threads, partial);
 }
 
 // The record of point p for the state in buffer b.
@@ -412,12 +504,10 @@ void Avx512DoubleKernel::set_point(int32_t p, const double u[3], const double d[
 
 void Avx512DoubleKernel::step(const DoubleStepInputs& in, int threads, std::vector<ChunkReaction>& partial) {
   Data& D = *data_;
-  if (D.volume) {
-    if (D.gravity) step_tool<true, true>(D, in, threads, partial);
-    else step_tool<true, false>(D, in, threads, partial);
-  } else {
-    if (D.gravity) step_tool<false, true>(D, in, threads, partial);
-    else step_tool<false, false>(D, in, threads, partial);
+  switch (D.volume) {
+    case kNodalVolume: step_gravity<kNodalVolume>(D, in, threads, partial); break;
+    case kTetVolume: step_gravity<kTetVolume>(D, in, threads, partial); break;
+    default: step_gravity<kNoVolume>(D, in, threads, partial); break;
   }
   D.cur = 1 - D.cur;
 }
@@ -431,7 +521,7 @@ void Avx512DoubleKernel::pack(const Model& model) {
   D.nchunk = L.nchunk;
   D.groups = L.chunk_size / kLanes;
   D.npad = D.nchunk * D.chunk;
-  D.volume = model.has_volume();
+  D.volume = model.has_nodal_volume() ? kNodalVolume : model.has_volume() ? kTetVolume : kNoVolume;
   D.gravity = model.has_gravity();
   const size_t n = static_cast<size_t>(D.npad);
 
@@ -502,20 +592,32 @@ void Avx512DoubleKernel::pack(const Model& model) {
   std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.slice_begin);
   const size_t lanes = batches.lane_tet.size();
   for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
-  D.tet_k36.assign(lanes, 0.0);
-  D.tet_det_rest.assign(lanes, 0.0);
+  const size_t per_tet = D.volume == kTetVolume ? lanes : 0;
+  D.tet_k36.assign(per_tet, 0.0);
+  D.tet_det_rest.assign(per_tet, 0.0);
   for (size_t e = 0; e < lanes; ++e) {
     const int32_t t = batches.lane_tet[e];
     if (t < 0) continue;
     for (int k = 0; k < 4; ++k) D.tet_v[k][e] = 4 * model.tet_points[t][k];
-    D.tet_k36[e] = model.tet_k[t] / 36;
+    if (per_tet) D.tet_k36[e] = model.tet_k[t] / 36;
   }
-  for (size_t e0 = 0; e0 < lanes; e0 += kLanes) {
+  for (size_t e0 = 0; e0 < per_tet; e0 += kLanes) {
     const int32_t* const q[4] = {&D.tet_v[0][e0], &D.tet_v[1][e0], &D.tet_v[2][e0], &D.tet_v[3][e0]};
     V unused[3][3];
     _mm512_store_pd(&D.tet_det_rest[e0], tet_det6(rec, q, unused));
   }
   for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0.0);
+  D.node_k.assign(D.volume == kNodalVolume ? n : 0, 0.0);
+  D.node_rest.assign(D.node_k.size(), 0.0);
+  if (D.volume == kNodalVolume) {
+    // S at rest by the step's own passes, so that q is exactly 0 there.
+    for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, rec, sl);
+    for (int32_t p = 0; p < D.npoint; ++p) {
+      D.node_k[p] = -model.point_volume_k[p] / 576;
+      D.node_rest[p] = nodal_volume_sum(D, p);
+    }
+    for (auto& f : D.tet_force) std::fill(f.begin(), f.end(), 0.0);
+  }
   for (int32_t p = 0; p < D.npad; ++p) write_record(D, D.cur, p);
 }
 

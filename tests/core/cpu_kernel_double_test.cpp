@@ -1,6 +1,7 @@
 // The AVX-512 double kernel against the reference (the generic kernel in
 // double): forces per point on random meshes, 1000-step trajectories for
-// every scene variant, threads, a rebuild after a cut, and which kernel a
+// every scene variant, threads, the rest state, a rebuild after a cut, each
+// with the per-tet and the averaged nodal volume term, and which kernel a
 // model gets. The two sum the same terms in different orders (and the
 // kernel's 1/|l| is two Newton steps from a 14-bit estimate, not a square
 // root and a division), so they agree to rounding, not bit for bit. In a
@@ -11,6 +12,7 @@
 #include <limits>
 
 #include "core/model/model_rebuild.h"
+#include "core/model/nodal_volume.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/util/error.h"
@@ -21,6 +23,7 @@ namespace {
 
 using testing::kSize;
 using testing::random_model;
+using testing::VolumeTerm;
 
 CpuBackendOptions fast() { return {Precision::Double, 1, CpuKernel::Avx512}; }
 CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic}; }
@@ -31,8 +34,9 @@ CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic
 // Per point, the sum of the magnitudes its force is summed from, before any
 // cancellation: per spring k max(L, r) (the stretch k (L - r) is the
 // difference of two such) and d |dv| / dt, per tet k_v max(|V|, |V_r|)
-// |dV/dx_i| (likewise), and m |g|. Rounding in either kernel is a few ulps
-// of each of these.
+// |dV/dx_i| (likewise) or, with the nodal term, the mean over its vertices
+// a of k_a max(|V_a|, V_a^r) times |dV/dx_i|, and m |g|. Rounding in either
+// kernel is a few ulps of each of these.
 std::vector<double> force_term_magnitudes(const Model& m, const std::vector<Vec3>& x,
                                           const std::vector<Vec3>& x_prev, double dt) {
   std::vector<double> sum(m.npoint());
@@ -45,13 +49,20 @@ std::vector<double> force_term_magnitudes(const Model& m, const std::vector<Vec3
     sum[a] += term;
     sum[b] += term;
   }
+  std::vector<double> nodal;
+  if (m.has_nodal_volume()) nodal_volumes(m, x, nodal);
   for (int32_t t = 0; t < m.ntet(); ++t) {
     const auto& v = m.tet_points[t];
     const Vec3 e1 = x[v[1]] - x[v[0]], e2 = x[v[2]] - x[v[0]], e3 = x[v[3]] - x[v[0]];
-    const double volume = std::max(std::abs(e1.dot(e2.cross(e3)) / 6), m.tet_rest_volume[t]);
+    double pressure = 0;
+    if (m.has_nodal_volume()) {
+      for (int32_t a : v) pressure += m.point_volume_k[a] * std::max(std::abs(nodal[a]), m.point_rest_volume[a]) / 4;
+    } else {
+      pressure = m.tet_k[t] * std::max(std::abs(e1.dot(e2.cross(e3)) / 6), m.tet_rest_volume[t]);
+    }
     const Vec3 g1 = e2.cross(e3) / 6, g2 = e3.cross(e1) / 6, g3 = e1.cross(e2) / 6;
     const double grad[4] = {(g1 + g2 + g3).norm(), g1.norm(), g2.norm(), g3.norm()};
-    for (int k = 0; k < 4; ++k) sum[v[k]] += m.tet_k[t] * volume * grad[k];
+    for (int k = 0; k < 4; ++k) sum[v[k]] += pressure * grad[k];
   }
   return sum;
 }
@@ -59,28 +70,32 @@ std::vector<double> force_term_magnitudes(const Model& m, const std::vector<Vec3
 TEST(CpuKernelDouble, OneStepForcesMatchTheReferenceOnRandomMeshesToRounding) {
   SKIP_WITHOUT_AVX512();
   constexpr double kEps = std::numeric_limits<double>::epsilon();
-  for (unsigned seed : {1u, 2u, 3u}) {
-    // 12 cells (about 10k tets) open more tet batches at once than the
-    // packing keeps open, so its closing path runs too.
-    for (int cells : {3, 6, 12}) {
-      const Model model = random_model(seed, cells, true, true);
-      const double dt = 1e-4;
-      std::vector<Vec3> x, x_prev;
-      testing::moving_state(model, seed, dt, x, x_prev);
-      const auto ref = testing::one_step(model, reference(), x, x_prev, dt);
-      const auto got = testing::one_step(model, fast(), x, x_prev, dt);
-      const auto terms = force_term_magnitudes(model, x, x_prev, dt);
-      for (int32_t i = 0; i < model.npoint(); ++i) {
-        // Both compute the increment (1 - alpha dt) d + dt^2 F / m; allowed:
-        // 64 ulps of its parts before cancellation (a few ulps per term in
-        // each kernel, summed over ~40 terms in two different orders), plus
-        // 2 ulps of x for positions() rounding X + u either way. The second
-        // dominates (1 ulp of 5 cm is 7e-18 m against increments of ~5e-6 m)
-        // and is what was measured: at most 1 ulp of x. A kernel off by one
-        // part in 1e10 of a spring force would fail here.
-        const double parts = (x[i] - x_prev[i]).norm() + model.inv_mass[i] * dt * dt * terms[i];
-        EXPECT_LE((got[i] - ref[i]).norm(), 64 * kEps * parts + 2 * kEps * x[i].norm())
-            << "seed " << seed << ", " << cells << " cells, point " << i;
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    SCOPED_TRACE(testing::volume_term_name(volume));
+    for (unsigned seed : {1u, 2u, 3u}) {
+      // 12 cells (about 10k tets) open more tet batches at once than the
+      // packing keeps open, so its closing path runs too.
+      for (int cells : {3, 6, 12}) {
+        const Model model = random_model(seed, cells, volume, true);
+        const double dt = 1e-4;
+        std::vector<Vec3> x, x_prev;
+        testing::moving_state(model, seed, dt, x, x_prev);
+        const auto ref = testing::one_step(model, reference(), x, x_prev, dt);
+        const auto got = testing::one_step(model, fast(), x, x_prev, dt);
+        const auto terms = force_term_magnitudes(model, x, x_prev, dt);
+        for (int32_t i = 0; i < model.npoint(); ++i) {
+          // Both compute the increment (1 - alpha dt) d + dt^2 F / m; allowed:
+          // 64 ulps of its parts before cancellation (a few ulps per term in
+          // each kernel, summed over ~40 terms in two different orders), plus
+          // 2 ulps of x for positions() rounding X + u either way. The second
+          // dominates (1 ulp of 5 cm is 7e-18 m against increments of ~5e-6 m)
+          // and is what was measured: at most 1 ulp of x, with either volume
+          // term (0.76 and 0.63 ulps). A kernel off by one
+          // part in 1e10 of a spring force would fail here.
+          const double parts = (x[i] - x_prev[i]).norm() + model.inv_mass[i] * dt * dt * terms[i];
+          EXPECT_LE((got[i] - ref[i]).norm(), 64 * kEps * parts + 2 * kEps * x[i].norm())
+              << "seed " << seed << ", " << cells << " cells, point " << i;
+        }
       }
     }
   }
@@ -90,10 +105,12 @@ TEST(CpuKernelDouble, ThousandStepTrajectoriesTrackTheReferenceInEverySceneVaria
   SKIP_WITHOUT_AVX512();
   // Rounding differences of a few ulps per step, carried by a damped
   // stable system over 1000 steps: measured up to 7.6e-17 m (about 10 ulps
-  // of a 5 cm coordinate). Tolerance 1e-12 of the box edge (5e-14 m),
-  // seven orders below the float kernel's. The reaction sums the same
-  // per-point terms: measured 7.5e-16 relative, tolerance 1e-12.
-  testing::expect_scenes_track_the_reference(fast(), 1e-12 * kSize, 1e-12);
+  // of a 5 cm coordinate) with the per-tet term, 1.0e-17 m with the nodal
+  // term. Tolerance 1e-12 of the box edge (5e-14 m), seven orders below the
+  // float kernel's. The reaction sums the same per-point terms: measured
+  // 7.5e-16 relative (per tet), 2.2e-15 (nodal); tolerance 1e-12.
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal})
+    testing::expect_scenes_track_the_reference(fast(), 1e-12 * kSize, 1e-12, volume);
 }
 
 TEST(CpuKernelDouble, TwoThreadsGiveBitIdenticalResultsToOne) {
@@ -103,66 +120,37 @@ TEST(CpuKernelDouble, TwoThreadsGiveBitIdenticalResultsToOne) {
 
 TEST(CpuKernelDouble, RestStateStaysPutWithoutGravity) {
   SKIP_WITHOUT_AVX512();
-  // Rest lengths and volumes come from the kernel's own arithmetic on the
-  // rest positions: no force at rest, so nothing may move at all.
-  const Model model = random_model(5, 4, true, false);
-  auto backend = make_cpu_backend(model, {}, fast());
-  testing::run_ticks(*backend, 10, 1e-4, 10);
-  std::vector<Vec3> x;
-  backend->positions(x);
-  for (int32_t i = 0; i < model.npoint(); ++i) EXPECT_EQ(x[i], model.rest_position[i]) << "point " << i;
+  testing::expect_rest_state_stays_put(Precision::Double);
 }
 
 TEST(CpuKernelDouble, KeepsTrackingTheReferenceAfterACut) {
   SKIP_WITHOUT_AVX512();
-  // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
-  const Model model = random_model(4, 4, true, true, kDefaultChunkSize, 0);
-  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.025));
-  ASSERT_GT(cut.npoint(), model.npoint());
-  BackendTool tool{true, ToolMode::Push, 0.02, 500};
-  TickRequest request;
-  request.dt = 5e-5;
-  request.substeps = 20;
-  request.tool_active = true;
-  request.tool_from = request.tool_to = Vec3(0.025, 0.025, kSize + 0.01);
-  std::vector<Vec3> x[2];
-  const CpuBackendOptions options[2] = {reference(), fast()};
-  for (int k = 0; k < 2; ++k) {
-    auto backend = make_cpu_backend(model, tool, options[k]);
-    for (int i = 0; i < 10; ++i) backend->tick(request);
-    backend->rebuild(cut);
-    EXPECT_NE(backend->device().find(k ? "avx512 kernel" : "generic kernel"), std::string::npos) << backend->device();
-    // The tool pushes into the cut's top edge, so the sides part.
-    request.tool_to = Vec3(0.025, 0.025, kSize - 0.01);
-    for (int i = 0; i < 20; ++i) backend->tick(request);
-    request.tool_to = request.tool_from;
-    backend->positions(x[k]);
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    const testing::CutRunDifference d = testing::cut_run_against_the_reference(fast(), volume);
+    EXPECT_GT(d.apart, 1e-6) << "the cut's two sides must move apart for the test to mean anything";
+    // As for the trajectories above (600 steps; measured 2e-17 m per tet, 3.3e-17 m nodal).
+    EXPECT_LT(d.worst, 1e-12 * kSize) << testing::volume_term_name(volume);
   }
-  ASSERT_EQ(x[0].size(), static_cast<size_t>(cut.npoint()));
-  ASSERT_EQ(x[1].size(), x[0].size());
-  double worst = 0, apart = 0;
-  for (int32_t p = model.npoint(); p < cut.npoint(); ++p)
-    apart = std::max(apart, (x[0][p] - x[0][cut.origin[p]]).norm());
-  for (size_t i = 0; i < x[0].size(); ++i) worst = std::max(worst, (x[0][i] - x[1][i]).norm());
-  EXPECT_GT(apart, 1e-6) << "the cut's two sides must move apart for the test to mean anything";
-  // As for the trajectories above (600 steps; measured 2e-17 m).
-  EXPECT_LT(worst, 1e-12 * kSize);
 }
 
 TEST(CpuKernelDouble, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
-  const Model wide = random_model(1, 3, true, true);
-  const Model narrow = random_model(1, 3, true, true, 8);  // chunks of 8: not whole groups of 16
+  const Model wide = random_model(1, 3, VolumeTerm::PerTet, true);
+  const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 8);  // chunks of 8: not whole groups of 16
+  const Model nodal = random_model(1, 3, VolumeTerm::Nodal, true);
   // Auto: the avx512 kernel where it can run, the generic one otherwise, and device() says which.
   const std::string auto_wide = make_cpu_backend(wide, {}, {Precision::Double, 1})->device();
+  const std::string auto_nodal = make_cpu_backend(nodal, {}, {Precision::Double, 1})->device();
   const std::string auto_narrow = make_cpu_backend(narrow, {}, {Precision::Double, 1})->device();
   EXPECT_NE(auto_narrow.find("generic kernel"), std::string::npos) << auto_narrow;
   EXPECT_THROW(make_cpu_backend(narrow, {}, fast()), Error);
   if (avx512_kernel_compiled()) {
     EXPECT_NE(auto_wide.find("avx512 kernel"), std::string::npos) << auto_wide;
+    EXPECT_NE(auto_nodal.find("avx512 kernel"), std::string::npos) << auto_nodal;
     const Plan plan = make_cpu_backend(wide, {}, fast())->plan();
     EXPECT_NE(plan.passes.back().detail.find("8 double lanes"), std::string::npos) << plan.passes.back().detail;
   } else {
     EXPECT_NE(auto_wide.find("generic kernel"), std::string::npos) << auto_wide;
+    EXPECT_NE(auto_nodal.find("generic kernel"), std::string::npos) << auto_nodal;
     EXPECT_THROW(make_cpu_backend(wide, {}, fast()), Error);
   }
   // Asked for by name, the generic kernel runs even where avx512 could.

@@ -1,7 +1,8 @@
 // The AVX-512 float kernel against the double-precision reference (the
 // generic kernel in double): forces per point on random meshes, 1000-step
-// trajectories for every scene variant, threads, and which kernel a model
-// gets. In a build without AVX-512 the kernel-specific tests are skipped and
+// trajectories for every scene variant, threads, the rest state, a rebuild
+// after a cut, each with the per-tet and the averaged nodal volume term,
+// and which kernel a model gets. In a build without AVX-512 the kernel-specific tests are skipped and
 // the routing test checks that the fallback is taken and said.
 #include <gtest/gtest.h>
 
@@ -21,6 +22,7 @@ namespace {
 
 using testing::kSize;
 using testing::random_model;
+using testing::VolumeTerm;
 
 CpuBackendOptions fast(int threads = 1) { return {Precision::Float, threads, CpuKernel::Avx512}; }
 CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic}; }
@@ -30,25 +32,33 @@ CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic
 
 TEST(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
   SKIP_WITHOUT_AVX512();
-  for (unsigned seed : {1u, 2u, 3u}) {
-    // 12 cells (about 10k tets) open more tet batches at once than the
-    // packing keeps open, so its closing path runs too.
-    for (int cells : {3, 6, 12}) {
-      const Model model = random_model(seed, cells, true, true);
-      const double dt = 1e-4;
-      std::vector<Vec3> x, x_prev;
-      testing::moving_state(model, seed, dt, x, x_prev);
-      const auto ref = testing::one_step(model, reference(), x, x_prev, dt);
-      const auto got = testing::one_step(model, fast(), x, x_prev, dt);
-      // Compare the step increments dt^2 F/m + (1 - alpha dt) d per point.
-      double scale = 0, worst = 0;
-      for (int32_t i = 0; i < model.npoint(); ++i) scale = std::max(scale, (ref[i] - x[i]).norm());
-      for (int32_t i = 0; i < model.npoint(); ++i) worst = std::max(worst, ((got[i] - x[i]) - (ref[i] - x[i])).norm());
-      // Float: positions carry ~6e-8 relative rounding, so an edge vector of
-      // 8 mm (and the spring stretch and tet volume from it) is off by ~1e-9 m
-      // against stretches of ~1e-4 m: ~1e-5 of the force. Measured up to
-      // 5e-6 of the largest increment; tolerance 1e-4.
-      EXPECT_LT(worst, 1e-4 * scale) << "seed " << seed << ", " << cells << " cells, " << model.npoint() << " points";
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    SCOPED_TRACE(testing::volume_term_name(volume));
+    for (unsigned seed : {1u, 2u, 3u}) {
+      // 12 cells (about 10k tets) open more tet batches at once than the
+      // packing keeps open, so its closing path runs too.
+      for (int cells : {3, 6, 12}) {
+        const Model model = random_model(seed, cells, volume, true);
+        const double dt = 1e-4;
+        std::vector<Vec3> x, x_prev;
+        testing::moving_state(model, seed, dt, x, x_prev);
+        const auto ref = testing::one_step(model, reference(), x, x_prev, dt);
+        const auto got = testing::one_step(model, fast(), x, x_prev, dt);
+        // Compare the step increments dt^2 F/m + (1 - alpha dt) d per point.
+        double scale = 0, worst = 0;
+        for (int32_t i = 0; i < model.npoint(); ++i) scale = std::max(scale, (ref[i] - x[i]).norm());
+        for (int32_t i = 0; i < model.npoint(); ++i)
+          worst = std::max(worst, ((got[i] - x[i]) - (ref[i] - x[i])).norm());
+        // Float: positions carry ~6e-8 relative rounding, so an edge vector
+        // of 8 mm (and the spring stretch and tet volume from it) is off by
+        // ~1e-9 m against stretches of ~1e-4 m: ~1e-5 of the force; the
+        // nodal volumes, sums of ~24 tet volumes, add ~24 roundings of
+        // 6e-8 against volume changes of a few percent, ~1e-5 again.
+        // Measured up to 5.2e-6 (per tet) and 6.3e-6 (nodal) of the largest
+        // increment; tolerance 1e-4.
+        EXPECT_LT(worst, 1e-4 * scale) << "seed " << seed << ", " << cells << " cells, " << model.npoint()
+                                       << " points";
+      }
     }
   }
 }
@@ -57,11 +67,14 @@ TEST(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVaria
   SKIP_WITHOUT_AVX512();
   // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
   // contact amplifies it); the generic float kernel shows the same drift
-  // (Gather.FloatTracksDoubleReference). Measured 2e-7 to 5.5e-7 of the
-  // box edge (10-27 nm on 5 cm); tolerance 1e-5 of it (0.5 um, against
-  // deformations of 0.8-26 mm here). The reaction sums the same per-point
-  // terms: measured 1.6e-6 relative, tolerance 1e-4.
-  testing::expect_scenes_track_the_reference(fast(), 1e-5 * kSize, 1e-4);
+  // (Gather.FloatTracksDoubleReference). Measured 1.2e-7 to 5.5e-7 of the
+  // box edge (6-27 nm on 5 cm) with the per-tet term, 1.9e-7 to 5.3e-7
+  // with the nodal term; tolerance 1e-5 of it (0.5 um, against
+  // deformations of 0.8-27 mm here). The reaction sums the same per-point
+  // terms: measured up to 1.6e-6 relative (per tet) and 3.3e-6 (nodal);
+  // tolerance 1e-4.
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal})
+    testing::expect_scenes_track_the_reference(fast(), 1e-5 * kSize, 1e-4, volume);
 }
 
 TEST(CpuKernel, TwoThreadsGiveBitIdenticalResultsToOne) {
@@ -71,37 +84,51 @@ TEST(CpuKernel, TwoThreadsGiveBitIdenticalResultsToOne) {
 
 TEST(CpuKernel, RestStateStaysPutWithoutGravity) {
   SKIP_WITHOUT_AVX512();
-  // Rest lengths and volumes come from the kernel's own arithmetic on the
-  // rounded rest positions: no force at rest, so nothing may move at all.
-  const Model model = random_model(5, 4, true, false);
-  auto backend = make_cpu_backend(model, {}, fast());
-  testing::run_ticks(*backend, 10, 1e-4, 10);
-  std::vector<Vec3> x;
-  backend->positions(x);
-  for (int32_t i = 0; i < model.npoint(); ++i) EXPECT_EQ(x[i], model.rest_position[i]) << "point " << i;
+  testing::expect_rest_state_stays_put(Precision::Float);
+}
+
+TEST(CpuKernel, KeepsTrackingTheReferenceAfterACut) {
+  SKIP_WITHOUT_AVX512();
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    const testing::CutRunDifference d = testing::cut_run_against_the_reference(fast(), volume);
+    EXPECT_GT(d.apart, 1e-6) << "the cut's two sides must move apart for the test to mean anything";
+    // As for the trajectories above (600 steps; measured 6.3e-8 m per tet,
+    // 3.3e-8 m nodal, against sides 2 cm apart).
+    EXPECT_LT(d.worst, 1e-5 * kSize) << testing::volume_term_name(volume);
+  }
 }
 
 TEST(CpuKernel, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
-  const Model wide = random_model(1, 3, true, true);
-  const Model narrow = random_model(1, 3, true, true, 8);  // chunks of 8: not whole groups of 16
+  const Model wide = random_model(1, 3, VolumeTerm::PerTet, true);
+  const Model nodal = random_model(1, 3, VolumeTerm::Nodal, true);
+  const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 8);  // chunks of 8: not whole groups of 16
   EXPECT_NE(avx512_kernel_unsupported(narrow), "");
   EXPECT_EQ(avx512_kernel_unsupported(wide), "");
+  EXPECT_EQ(avx512_kernel_unsupported(nodal), "");
 
   // Float on an unsupported layout falls back to the generic kernel, and says so.
   EXPECT_NE(make_cpu_backend(narrow, {}, {Precision::Float, 1})->device().find("generic kernel"), std::string::npos);
   // Asked for by name where it cannot run: an error naming why, never a quiet fallback.
   EXPECT_THROW(make_cpu_backend(narrow, {}, fast()), Error);
-  const std::string auto_float = make_cpu_backend(wide, {}, {Precision::Float, 1})->device();
+  for (const Model* model : {&wide, &nodal}) {
+    const std::string auto_float = make_cpu_backend(*model, {}, {Precision::Float, 1})->device();
+    if (avx512_kernel_compiled()) {
+      EXPECT_NE(auto_float.find("avx512 kernel"), std::string::npos) << auto_float;
+    } else {
+      EXPECT_NE(auto_float.find("generic kernel"), std::string::npos) << auto_float;
+      EXPECT_THROW(make_cpu_backend(*model, {}, fast()), Error);
+    }
+  }
   if (avx512_kernel_compiled()) {
-    EXPECT_NE(auto_float.find("avx512 kernel"), std::string::npos) << auto_float;
-  } else {
-    EXPECT_NE(auto_float.find("generic kernel"), std::string::npos) << auto_float;
-    EXPECT_THROW(make_cpu_backend(wide, {}, fast()), Error);
+    // The plan says what the nodal term's extra passes are.
+    const Plan plan = make_cpu_backend(nodal, {}, fast())->plan();
+    ASSERT_EQ(plan.passes[1].name, "nodal-volume");
+    EXPECT_NE(plan.passes[1].detail.find("avx512 kernel"), std::string::npos) << plan.passes[1].detail;
   }
 }
 
 TEST(CpuKernel, ThreadCountIsChosenByTimingAndReported) {
-  const Model model = random_model(2, 3, true, true);
+  const Model model = random_model(2, 3, VolumeTerm::PerTet, true);
   const std::string device = make_cpu_backend(model, {}, {Precision::Float, 0})->device();
   // With one hardware thread there is nothing to choose.
   if (omp_get_max_threads() > 1) {

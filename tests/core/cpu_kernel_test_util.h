@@ -1,7 +1,8 @@
 #pragma once
 // Models and scenes shared by the AVX-512 kernel tests (float and double):
 // a jittered box with a fixed base, and 1000-step runs of every scene
-// variant (lean, volume + gravity, push, pull).
+// variant (lean, volume + gravity, push, pull), with the per-tet or the
+// averaged nodal volume term.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -15,16 +16,31 @@ namespace organsim::testing {
 
 constexpr double kSize = 0.05;  // m, edge of the test box
 
+// Which volume term a test model has: none, per tet (volume_modulus
+// 30 kPa) or averaged nodal (poisson_ratio 0.45, where the volume term
+// is most of the stiffness).
+enum class VolumeTerm { None, PerTet, Nodal };
+
+inline const char* volume_term_name(VolumeTerm v) {
+  switch (v) {
+    case VolumeTerm::None: return "no volume term";
+    case VolumeTerm::PerTet: return "per-tet volume term";
+    case VolumeTerm::Nodal: return "nodal volume term";
+  }
+  return "";
+}
+
 // A box of cells^3 cubes cut into tets, interior points moved by up to
 // `jitter` of a cell, its base (z = 0) fixed.
-inline Model random_model(unsigned seed, int cells, bool volume, bool gravity, int32_t chunk = kDefaultChunkSize,
-                          double jitter = 0.25) {
+inline Model random_model(unsigned seed, int cells, VolumeTerm volume, bool gravity,
+                          int32_t chunk = kDefaultChunkSize, double jitter = 0.25) {
   Material material;
   material.density = 1000;
   material.young_modulus = 4000;
   material.spring_damping_time = 0.01;
   material.viscous_damping = 2;
-  material.volume_modulus = volume ? 30000 : 0;
+  if (volume == VolumeTerm::PerTet) material.volume_modulus = 30000;
+  if (volume == VolumeTerm::Nodal) material.poisson_ratio = 0.45;
   ModelOptions options;
   options.gravity = gravity ? Vec3(0.3, -1.0, -9.81) : Vec3::Zero();
   options.chunk_size = chunk;
@@ -113,14 +129,18 @@ inline const char* scene_name(Scene s) {
 }
 
 // Every scene variant on `options` against the generic double kernel (the
-// reference), 1000 steps each: the scene must deform the model; positions
-// must agree within `position_tol` m and, with a tool, the contacts exactly
-// and the reaction force within `reaction_tol` of its size.
+// reference), 1000 steps each, with `volume` in all but the lean scene
+// (springs only, so run only with the per-tet term): the scene must deform
+// the model; positions must agree within `position_tol` m and, with a
+// tool, the contacts exactly and the reaction force within `reaction_tol`
+// of its size.
 inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, double position_tol,
-                                              double reaction_tol) {
+                                              double reaction_tol, VolumeTerm volume = VolumeTerm::PerTet) {
   for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::Pull}) {
     const bool lean = scene == Scene::Lean;
-    const Model model = random_model(7, 5, !lean, !lean);
+    if (lean && volume != VolumeTerm::PerTet) continue;
+    SCOPED_TRACE(volume_term_name(volume));
+    const Model model = random_model(7, 5, lean ? VolumeTerm::None : volume, !lean);
     Reaction rd, rf;
     const auto xd = run_scene(model, scene, {Precision::Double, 1, CpuKernel::Generic}, rd);
     const auto xf = run_scene(model, scene, options, rf);
@@ -140,19 +160,92 @@ inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, 
 }
 
 // The avx512 kernel of `precision` on two threads against one, bitwise, in
-// the scenes with volume, push and pull. 200 steps: enough for contact and
-// motion (a loaded machine makes every two-thread step slow, and bitwise
-// equality needs no more).
+// the scenes with volume, push and pull, for each volume term. 200 steps:
+// enough for contact and motion (a loaded machine makes every two-thread
+// step slow, and bitwise equality needs no more).
 inline void expect_two_threads_bit_identical_to_one(Precision precision) {
-  for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
-    const Model model = random_model(3, 6, true, true);
-    Reaction r1, r2;
-    const auto x1 = run_scene(model, scene, {precision, 1, CpuKernel::Avx512}, r1, 10);
-    const auto x2 = run_scene(model, scene, {precision, 2, CpuKernel::Avx512}, r2, 10);
-    EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
-    EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
-    for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    const Model model = random_model(3, 6, volume, true);
+    for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
+      SCOPED_TRACE(volume_term_name(volume));
+      Reaction r1, r2;
+      const auto x1 = run_scene(model, scene, {precision, 1, CpuKernel::Avx512}, r1, 10);
+      const auto x2 = run_scene(model, scene, {precision, 2, CpuKernel::Avx512}, r2, 10);
+      EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
+      EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
+      for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
+    }
   }
+}
+
+// The avx512 kernel of `precision` from rest without gravity, 100 steps,
+// for each volume term and, with the nodal term, after a cut (a rebuild):
+// rest lengths, tet volumes and nodal volumes come from the kernel's own
+// arithmetic on the rounded rest positions, so there is no force at rest
+// and nothing may move at all.
+inline void expect_rest_state_stays_put(Precision precision) {
+  const CpuBackendOptions options{precision, 1, CpuKernel::Avx512};
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    const Model model = random_model(5, 4, volume, false);
+    auto backend = make_cpu_backend(model, {}, options);
+    run_ticks(*backend, 10, 1e-4, 10);
+    std::vector<Vec3> x;
+    backend->positions(x);
+    for (int32_t i = 0; i < model.npoint(); ++i)
+      ASSERT_EQ(x[i], model.rest_position[i]) << volume_term_name(volume) << ", point " << i;
+  }
+  // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
+  const Model model = random_model(5, 4, VolumeTerm::Nodal, false, kDefaultChunkSize, 0);
+  const Model cut = rebuild_model(model, split_across_plane_x(model, 0.025));
+  ASSERT_GT(cut.npoint(), model.npoint());
+  auto backend = make_cpu_backend(model, {}, options);
+  backend->rebuild(cut);
+  run_ticks(*backend, 10, 1e-4, 10);
+  std::vector<Vec3> x;
+  backend->positions(x);
+  for (int32_t i = 0; i < cut.npoint(); ++i) ASSERT_EQ(x[i], cut.rest_position[i]) << "after a cut, point " << i;
+}
+
+// A push into the top of a box (no jitter, `volume`) that is cut through
+// at x = 0.025 after 10 ticks, then pushed 20 ticks more, on the generic
+// double kernel (the reference) and on `options` (600 steps). Returns the
+// largest position difference between the two runs and how far the cut's
+// sides moved apart in the reference, m.
+struct CutRunDifference {
+  double worst = 0, apart = 0;
+};
+inline CutRunDifference cut_run_against_the_reference(const CpuBackendOptions& options, VolumeTerm volume) {
+  // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
+  const Model model = random_model(4, 4, volume, true, kDefaultChunkSize, 0);
+  const Model cut = rebuild_model(model, split_across_plane_x(model, 0.025));
+  EXPECT_GT(cut.npoint(), model.npoint());
+  BackendTool tool{true, ToolMode::Push, 0.02, 500};
+  std::vector<Vec3> x[2];
+  const CpuBackendOptions run_options[2] = {{Precision::Double, 1, CpuKernel::Generic}, options};
+  for (int k = 0; k < 2; ++k) {
+    TickRequest request;
+    request.dt = 5e-5;
+    request.substeps = 20;
+    request.tool_active = true;
+    request.tool_from = request.tool_to = Vec3(0.025, 0.025, kSize + 0.01);
+    auto backend = make_cpu_backend(model, tool, run_options[k]);
+    for (int i = 0; i < 10; ++i) backend->tick(request);
+    backend->rebuild(cut);
+    EXPECT_NE(backend->device().find(k ? "avx512 kernel" : "generic kernel"), std::string::npos) << backend->device();
+    // The tool pushes into the cut's top edge, so the sides part.
+    request.tool_to = Vec3(0.025, 0.025, kSize - 0.01);
+    for (int i = 0; i < 20; ++i) backend->tick(request);
+    backend->positions(x[k]);
+  }
+  CutRunDifference d;
+  if (x[0].size() != static_cast<size_t>(cut.npoint()) || x[1].size() != x[0].size()) {
+    ADD_FAILURE() << "a run lost points in the rebuild";
+    return d;
+  }
+  for (int32_t p = model.npoint(); p < cut.npoint(); ++p)
+    d.apart = std::max(d.apart, (x[0][p] - x[0][cut.origin[p]]).norm());
+  for (size_t i = 0; i < x[0].size(); ++i) d.worst = std::max(d.worst, (x[0][i] - x[1][i]).norm());
+  return d;
 }
 
 }  // namespace organsim::testing

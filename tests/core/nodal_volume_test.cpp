@@ -1,18 +1,16 @@
 // The averaged nodal volume term (Model::point_volume_k, docs/physics.md):
 // its energy and forces, the generic CPU kernel and the scatter step against
-// the double reference, the rest state, topology rebuilds, dt_crit against
-// the integrator, and the routing away from the AVX-512 kernel.
+// the double reference, the rest state, topology rebuilds, and dt_crit
+// against the integrator. The AVX-512 kernels' nodal term is tested with
+// the kernels (cpu_kernel_test.cpp, cpu_kernel_double_test.cpp).
 #include <gtest/gtest.h>
-
 
 #include "core/model/nodal_volume.h"
 #include "core/model/stiffness.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/reference_forces.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
-#include "core/util/error.h"
 #include "tests/core/force_law_checks.h"
 #include "tests/core/stability_test_util.h"
 #include "tests/core/test_models.h"
@@ -170,21 +168,6 @@ TEST(NodalVolume, CriticalStepIncludesTheNodalTerm) {
   // 2 % either side: enough growth per step to show in 3000 steps.
   EXPECT_FALSE(testing::perturbation_grows(model, 0.98 * r.dt_crit));
   EXPECT_TRUE(testing::perturbation_grows(model, 1.02 * r.dt_crit));
-}
-
-TEST(NodalVolume, ModelsWithItRunOnTheGenericKernel) {
-  const Model model = nodal_model(1, 3);
-  EXPECT_NE(avx512_kernel_unsupported(model).find("nodal volume term"), std::string::npos);
-  for (Precision precision : {Precision::Float, Precision::Double}) {
-    try {
-      make_cpu_backend(model, {}, {precision, 1, CpuKernel::Avx512});
-      FAIL() << "the avx512 kernel accepted a nodal model";
-    } catch (const Error& e) {
-      EXPECT_EQ(e.kind(), ErrorKind::Backend);
-    }
-    auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Auto});
-    EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
-  }
 }
 
 }  // namespace
