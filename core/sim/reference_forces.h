@@ -11,7 +11,7 @@ namespace organsim {
 
 // Forces on every point (internal numbering) for positions x and velocities v:
 // springs + dampers, volume conservation (per tet or nodal, if the model has
-// it), the shear element (if it has it), gravity. Fixed points get their
+// it), the shear element and its damper (if it has it), gravity. Fixed points get their
 // force too (integration ignores it).
 // Sutures pull only (no force while slack, never a push) with their rest
 // length at time t.
