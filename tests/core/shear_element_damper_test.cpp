@@ -244,25 +244,28 @@ TEST(ShearElementDamper, GenericKernelAndScatterStepMatchTheReference) {
   EXPECT_LT(d.worst, 1e-9 * d.motion);
 }
 
-// dt_crit with the damper: at nu = 0 every mode is damped at tau omega^2,
-// so with tau = 1 / omega_max the top mode's damping ratio is 1/2 and the
-// step shrinks to (sqrt(5) - 1) / 2 of the undamped one. The integrator
-// agrees: stable 2 % below, unstable 2 % above (without the damper in the
-// estimate dt_crit would be 1.6 times too long, and the step at 0.98 of it
-// would blow up). The guaranteed (Gershgorin) step stays below it.
+// dt_crit with the damper: below nu = 1/4 the springs and the element
+// share one damping time, so every mode is damped at tau omega^2; with
+// tau = 1 / omega_max the top mode's damping ratio is 1/2 and the step
+// shrinks to (sqrt(5) - 1) / 2 of the undamped one. The integrator agrees:
+// stable 2 % below, unstable 2 % above (without the element's damper in the
+// estimate dt_crit would be 1.6 times too long at nu = 0, and the step at
+// 0.98 of it would blow up). The guaranteed (Gershgorin) step stays below it.
 TEST(ShearElementDamper, CriticalStepIncludesTheDamper) {
-  Material m = testing::undamped_material(3000);
-  m.poisson_ratio = 0;
-  const StabilityReport undamped = estimate_critical_step(testing::stability_box(3, 0.03, m, 0.2, 5));
-  m.spring_damping_time = 1 / undamped.omega_max;
-  const Model model = testing::stability_box(3, 0.03, m, 0.2, 5);
-  const StabilityReport r = estimate_critical_step(model);
-  EXPECT_TRUE(r.converged);
-  EXPECT_NEAR(r.damping_ratio, 0.5, 1e-6);
-  EXPECT_NEAR(r.dt_crit / r.dt_crit_undamped, (std::sqrt(5.0) - 1) / 2, 1e-6);
-  EXPECT_LE(r.dt_crit_gershgorin, r.dt_crit);
-  EXPECT_FALSE(testing::perturbation_grows(model, 0.98 * r.dt_crit));
-  EXPECT_TRUE(testing::perturbation_grows(model, 1.02 * r.dt_crit));
+  for (double nu : {0.0, 0.15}) {
+    Material m = testing::undamped_material(3000);
+    m.poisson_ratio = nu;
+    const StabilityReport undamped = estimate_critical_step(testing::stability_box(3, 0.03, m, 0.2, 5));
+    m.spring_damping_time = 1 / undamped.omega_max;
+    const Model model = testing::stability_box(3, 0.03, m, 0.2, 5);
+    const StabilityReport r = estimate_critical_step(model);
+    EXPECT_TRUE(r.converged) << nu;
+    EXPECT_NEAR(r.damping_ratio, 0.5, 1e-6) << nu;
+    EXPECT_NEAR(r.dt_crit / r.dt_crit_undamped, (std::sqrt(5.0) - 1) / 2, 1e-6) << nu;
+    EXPECT_LE(r.dt_crit_gershgorin, r.dt_crit) << nu;
+    EXPECT_FALSE(testing::perturbation_grows(model, 0.98 * r.dt_crit)) << nu;
+    EXPECT_TRUE(testing::perturbation_grows(model, 1.02 * r.dt_crit)) << nu;
+  }
 }
 
 }  // namespace
