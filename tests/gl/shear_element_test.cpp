@@ -63,12 +63,7 @@ TEST(GlShearElement, CrushedForceMatchesTheReference) {
 // differences of float positions, exact in float, so the tolerance is that
 // of the force above.
 TEST(GlShearElement, DamperForceMatchesTheReference) {
-  const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.05), 5, 5, 3);
-  Material material;
-  material.young_modulus = 3000;
-  material.poisson_ratio = 0.0;
-  material.spring_damping_time = 0.01;
-  const Model model = build_model(mesh, material, testing::fixed_bottom_options(), "test box");
+  const Model model = gl_test::poisson_box(0.0, Vec3::Zero(), 0.01);
   ASSERT_GT(model.shear_damping_time, 0);
   gl_test::MovingState moving = gl_test::moving_state(model, kDt);
   gl_test::MovingState crushed = moving;
