@@ -32,7 +32,7 @@
 #define ORGANSIM_GL_B_NODAL 13    // vec2 {k_a (N/m^5), V_a^r (m^3)} of the nodal volume term (npad); 0 for padding
 #define ORGANSIM_GL_B_PRESSURE 14 // float nodal pressure q_a = k_a (V_a - V_a^r), Pa (npad); nodal_pressure.comp
 #define ORGANSIM_GL_B_REST 15     // vec4 rest positions X, m (npad); the shear element's displacements x - X
-#define ORGANSIM_GL_B_SHEAR 16    // {vec4 g_a k_t, g_b 0, g_c 0} shear element per tet entry (ntet_entry); 0 for padding
+#define ORGANSIM_GL_B_SHEAR 16    // {vec4 g_a k_t, g_b d_t, g_c 0} shear element per tet entry (ntet_entry); 0 for padding
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s

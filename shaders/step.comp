@@ -44,7 +44,7 @@ layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tet
 #ifdef SHEAR_ELEMENT
 struct ShearEntry {
   vec4 ga;  // rest gradient of a's barycentric coordinate (1/m), w = k_t = mu_e V_t^r (J)
-  vec4 gb;  // b's, w unused
+  vec4 gb;  // b's, w = d_t = tau k_t, the damper (J s)
   vec4 gc;  // c's, w unused
 };
 layout(std430, binding = ORGANSIM_GL_B_REST) readonly buffer Rest { vec4 rest[]; };
@@ -143,7 +143,9 @@ void main() {
   // (u_q - u_p) g_q^T from displacements u = x - X, s = g_a + g_b + g_c
   // (core/model/shear_element.h). GLSL matrices are column-major:
   // outerProduct(du, g) is du g^T, and cof F's columns are the cross
-  // products of F's other columns.
+  // products of F's other columns. The damper adds
+  // (d_t / (dt J_d)) (G (cof^T c) + cof (G^T c)), c = cof s, G = sum over the
+  // others q of (d_q - d_p) g_q^T = dt Fdot, J_d = max(J, J_min).
   const vec3 ui = xi - rest[p].xyz;
   const float jm = 0.5;  // kShearElementMinJ
   for (int j = part; j < info.w; j += THREADS_PER_POINT) {
@@ -157,7 +159,11 @@ void main() {
     const float J = dot(F[0], cof[0]);
     const float slope = J >= jm ? -1.0 / J : (J - 2.0 * jm) / (jm * jm);
     const vec3 s = g.ga.xyz + g.gb.xyz + g.gc.xyz;
-    f += g.ga.w * (F * s + slope * (cof * s));
+    const vec3 c = cof * s;
+    const mat3 G = outerProduct(d_cur[e.a].xyz - di, g.ga.xyz) + outerProduct(d_cur[e.b].xyz - di, g.gb.xyz) +
+                   outerProduct(d_cur[e.c].xyz - di, g.gc.xyz);
+    f += g.ga.w * (F * s + slope * c) +
+         (g.gb.w * inv_dt / max(J, jm)) * (G * (transpose(cof) * c) + cof * (transpose(G) * c));
   }
 #endif
 

@@ -240,7 +240,9 @@ Plan GlBackend::plan() const {
                       std::to_string(m.layout.springs.item.size()) + " slots)";
   if (m.nsuture() > 0) fused += " of which " + std::to_string(m.nsuture()) + " sutures (tension only, rest length per tick)";
   if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
-  if (shear_) fused += ", shear element of " + std::to_string(m.ntet()) + " tets per vertex";
+  if (shear_)
+    fused += ", shear element" + std::string(m.shear_damping_time > 0 ? " and its damper" : "") + " of " +
+             std::to_string(m.ntet()) + " tets per vertex";
   if (gravity_) fused += ", gravity";
   if (push_) fused += ", sphere penalty contact";
   if (pull_) fused += ", grasp attachment springs";

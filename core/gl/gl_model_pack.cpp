@@ -90,6 +90,7 @@ PackedModel pack_model(const Model& model) {
         for (int axis = 0; axis < 3; ++axis)
           g[k][axis] = static_cast<float>(shape_gradient_of(model, t, L.tet_others[e][k])[axis]);
       p.shear[e].k = static_cast<float>(model.tet_shear_k[t]);
+      p.shear[e].d = static_cast<float>(model.shear_damping_time * model.tet_shear_k[t]);
     }
   }
   if (model.has_nodal_volume()) {

@@ -27,11 +27,12 @@ struct TetEntry {
 static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has stride 20
 
 // The shear element's parameters of one gathered tet (p, a, b, c): the rest
-// gradients of a's, b's and c's barycentric coordinates (1/m) and k_t =
-// mu_e V_t^r (J); mirrors `ShearEntry` in step.comp (three vec4).
+// gradients of a's, b's and c's barycentric coordinates (1/m), k_t =
+// mu_e V_t^r (J) and its damper d_t = tau k_t (J s); mirrors `ShearEntry` in
+// step.comp (three vec4).
 struct ShearEntry {
   float ga[3], k;
-  float gb[3], pad_b;
+  float gb[3], d;
   float gc[3], pad_c;
 };
 static_assert(sizeof(ShearEntry) == 48);

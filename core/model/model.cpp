@@ -198,6 +198,7 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   // volume term (stiffness.h), which lets the kernels treat them as one pass.
   model.tet_shear_k = tet_shear_stiffness(material, model.tet_rest_volume);
   model.tet_shape_gradient.clear();
+  model.shear_damping_time = model.has_shear_element() ? material.spring_damping_time : 0;
   if (model.has_shear_element()) {
     if (model.has_volume())
       throw Error(ErrorKind::Scenario, "material: the shear element (poisson_ratio < 0.25) and a volume term together");

@@ -62,6 +62,11 @@ struct Model {
   // tet_points order).
   std::vector<double> tet_shear_k;                   // mu_e V_t^r, J (ntet); empty unless the element is on
   std::vector<std::array<Vec3, 4>> tet_shape_gradient;  // g_i, 1/m (ntet x 4); empty unless the element is on
+  // Its damper's time constant tau, s (material.spring_damping_time, as the
+  // springs' d = tau k): viscous stress 2 mu_e tau D, D the rate of
+  // deformation; at rest its damping matrix is tau times the element's
+  // stiffness (core/model/shear_element.h). 0 without the element.
+  double shear_damping_time = 0;
 
   // Scene parameters.
   Vec3 gravity{0, 0, 0};             // m/s^2

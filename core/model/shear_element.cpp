@@ -70,6 +70,22 @@ void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, st
   }
 }
 
+void add_shear_element_damping_forces(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                                      std::vector<Vec3>& force) {
+  if (!(model.shear_damping_time > 0)) return;
+  for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
+    const Eigen::Matrix3d F = deformation_gradient(model, t, x);
+    const Eigen::Matrix3d Fdot = deformation_gradient(model, t, v);  // sum_i v_i g_i^T
+    const Eigen::Matrix3d cof = cofactor(F);
+    const double J = F.col(0).dot(cof.col(0));
+    const Eigen::Matrix3d A = Fdot * cof.transpose();  // J times the velocity gradient Fdot F^-1
+    // V times the viscous first Piola-Kirchhoff stress J sigma F^-T = 2 mu_e tau D cof.
+    const Eigen::Matrix3d P = (model.shear_damping_time * model.tet_shear_k[t] /
+                               std::max(J, kShearElementMinJ)) * (A + A.transpose()) * cof;
+    for (int i = 0; i < 4; ++i) force[model.tet_points[t][i]] -= P * model.tet_shape_gradient[t][i];
+  }
+}
+
 Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, int j) {
   const Vec3& gi = model.tet_shape_gradient[t][i];
   const Vec3& gj = model.tet_shape_gradient[t][j];

@@ -20,6 +20,19 @@
 // pushing an inverted tet (J <= 0) back. The force on vertex i is
 // f_i = -dW/dx_i = -k_t (F + phi'(J) cof F) g_i, cof F = J F^-T.
 //
+// Its damper (Kelvin-Voigt, docs/physics.md): a viscous Cauchy stress
+// 2 mu_e tau D with the rate of deformation D = sym(Fdot F^-1), Fdot =
+// sum_i v_i g_i^T, and tau = Model::shear_damping_time. As a force,
+//   f_i = -(2 tau k_t / J_d) sym(Fdot cof(F)^T) cof(F) g_i,  J_d = max(J, J_min),
+// which is exactly -V sigma grad_x N_i for J >= J_min. At rest (F = I) it is
+// -tau K v with K the element's stiffness, as a spring's damper is tau times
+// its stiffness; a rigid rotation has Fdot cof^T = J W (W skew), so no
+// force; and its power is -2 tau k_t J_d |D_d|^2 <= 0 for any F (D_d =
+// sym(Fdot cof^T) / J_d), an inverted tet included. J_d stops the 1/J
+// growth where the barrier hands over to its quadratic extension, so the
+// damper's stiffness, like the barrier's, stays within a few times its rest
+// value and the damped dt_crit stays meaningful.
+//
 // This file evaluates it in double precision outside the kernels (reference
 // forces, energy, rest stiffness); the kernels evaluate the same formulas.
 #include <array>
@@ -57,6 +70,12 @@ double shear_element_energy(const Model& model, const std::vector<Vec3>& x);
 // Adds f_i = -k_t (F + phi'(J) cof F) g_i of every tet into force (npoint);
 // nothing without the element.
 void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& force);
+
+// Adds the damper's f_i = -(2 tau k_t / J_d) sym(Fdot cof^T) cof g_i of every
+// tet at positions x and velocities v into force (npoint); nothing without
+// the element or with tau = 0.
+void add_shear_element_damping_forces(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                                      std::vector<Vec3>& force);
 
 // Block (i, j) of the element's stiffness at rest, N/m, for corners i, j of
 // tet t: k_t ((g_i . g_j) I + g_j g_i^T), the linear solid with lambda = 0.

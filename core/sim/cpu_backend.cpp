@@ -51,6 +51,7 @@ std::string sutures_detail(const Model& m) {
 template <class Real>
 struct StepContext {
   Real dt, inv_dt, dt2, drag;  // drag = 1 - alpha dt
+  Real shear_damping;          // tau / dt: the shear element's damper on the increments d = dt v
   Real gravity[3], tool_center[3];
   Real tool_radius, tool_k;
 };
@@ -159,7 +160,9 @@ class CpuBackend final : public Backend {
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_shear_element())
       plan.passes.push_back({"shear-element", std::to_string(m.ntet()) +
-                                                  " tets' shear element (neo-Hookean, no lambda), gathered per vertex (" +
+                                                  " tets' shear element (neo-Hookean, no lambda" +
+                                                  (m.shear_damping_time > 0 ? ", with its damper" : "") +
+                                                  "), gathered per vertex (" +
                                                   std::to_string(m.layout.tets.item.size()) + " slots)"});
     if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
     if (tool_.present)
@@ -255,6 +258,7 @@ class CpuBackend final : public Backend {
     ctx.inv_dt = static_cast<Real>(1.0 / request.dt);
     ctx.dt2 = static_cast<Real>(request.dt * request.dt);
     ctx.drag = static_cast<Real>(1.0 - model_->viscous_damping * request.dt);
+    ctx.shear_damping = static_cast<Real>(model_->shear_damping_time / request.dt);
     for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(model_->gravity[k]);
     ctx.tool_radius = static_cast<Real>(tool_.radius);
     ctx.tool_k = static_cast<Real>(tool_.contact_stiffness);
@@ -493,6 +497,7 @@ class CpuBackend final : public Backend {
     const int all = omp_get_max_threads();
     StepContext<Real> ctx{};
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
+    ctx.shear_damping = static_cast<Real>(model_->shear_damping_time * 1e6);
     auto time_steps = [&](int threads, int32_t steps) {
       threads_ = threads;
       return 1e3 * timed(steps, [&] {
@@ -708,6 +713,9 @@ class CpuBackend final : public Backend {
         // F = I + H, H = sum over the others q of (u_q - u_p) g_q^T and
         // s = g_a + g_b + g_c = -g_p (core/model/shear_element.h). From
         // displacements: F = I, cof F = I, J = 1 exactly at rest, no force.
+        // Its damper: f_p += (tau k / (dt J_d)) (G (cof^T c) + cof (G^T c)),
+        // c = cof s, G = sum over the others q of (d_q - d_p) g_q^T = dt Fdot,
+        // J_d = max(J, J_min): -(2 tau k / J_d) sym(Fdot cof^T) cof g_p.
         const int32_t* __restrict ta = tet_a_.data();
         const int32_t* __restrict tb = tet_b_.data();
         const int32_t* __restrict tc = tet_c_.data();
@@ -742,11 +750,38 @@ class CpuBackend final : public Backend {
             const Real k00 = f11 * f22 - f12 * f21, k01 = f12 * f20 - f10 * f22, k02 = f10 * f21 - f11 * f20;
             const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
             const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
-            const Real slope = shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
+            const Real J = f00 * k00 + f01 * k01 + f02 * k02;
+            const Real slope = shear_barrier_slope(J);
             const Real sx = gax[e] + gbx[e] + gcx[e], sy = gay[e] + gby[e] + gcy[e], sz = gaz[e] + gbz[e] + gcz[e];
-            fx[l] += kt[e] * (f00 * sx + f01 * sy + f02 * sz + slope * (k00 * sx + k01 * sy + k02 * sz));
-            fy[l] += kt[e] * (f10 * sx + f11 * sy + f12 * sz + slope * (k10 * sx + k11 * sy + k12 * sz));
-            fz[l] += kt[e] * (f20 * sx + f21 * sy + f22 * sz + slope * (k20 * sx + k21 * sy + k22 * sz));
+            const Real cx0 = k00 * sx + k01 * sy + k02 * sz;  // c = cof s
+            const Real cx1 = k10 * sx + k11 * sy + k12 * sz;
+            const Real cx2 = k20 * sx + k21 * sy + k22 * sz;
+            const Real da_x = dx[a] - dx[p], da_y = dy[a] - dy[p], da_z = dz[a] - dz[p];
+            const Real db_x = dx[b] - dx[p], db_y = dy[b] - dy[p], db_z = dz[b] - dz[p];
+            const Real dc_x = dx[cc] - dx[p], dc_y = dy[cc] - dy[p], dc_z = dz[cc] - dz[p];
+            const Real g00 = da_x * gax[e] + db_x * gbx[e] + dc_x * gcx[e];
+            const Real g01 = da_x * gay[e] + db_x * gby[e] + dc_x * gcy[e];
+            const Real g02 = da_x * gaz[e] + db_x * gbz[e] + dc_x * gcz[e];
+            const Real g10 = da_y * gax[e] + db_y * gbx[e] + dc_y * gcx[e];
+            const Real g11 = da_y * gay[e] + db_y * gby[e] + dc_y * gcy[e];
+            const Real g12 = da_y * gaz[e] + db_y * gbz[e] + dc_y * gcz[e];
+            const Real g20 = da_z * gax[e] + db_z * gbx[e] + dc_z * gcx[e];
+            const Real g21 = da_z * gay[e] + db_z * gby[e] + dc_z * gcy[e];
+            const Real g22 = da_z * gaz[e] + db_z * gbz[e] + dc_z * gcz[e];
+            const Real w0 = k00 * cx0 + k10 * cx1 + k20 * cx2;  // cof^T c
+            const Real w1 = k01 * cx0 + k11 * cx1 + k21 * cx2;
+            const Real w2 = k02 * cx0 + k12 * cx1 + k22 * cx2;
+            const Real h0 = g00 * cx0 + g10 * cx1 + g20 * cx2;  // G^T c
+            const Real h1 = g01 * cx0 + g11 * cx1 + g21 * cx2;
+            const Real h2 = g02 * cx0 + g12 * cx1 + g22 * cx2;
+            const Real jm = static_cast<Real>(kShearElementMinJ);
+            const Real damper = ctx.shear_damping / (J > jm ? J : jm);
+            fx[l] += kt[e] * (f00 * sx + f01 * sy + f02 * sz + slope * cx0 +
+                              damper * (g00 * w0 + g01 * w1 + g02 * w2 + k00 * h0 + k01 * h1 + k02 * h2));
+            fy[l] += kt[e] * (f10 * sx + f11 * sy + f12 * sz + slope * cx1 +
+                              damper * (g10 * w0 + g11 * w1 + g12 * w2 + k10 * h0 + k11 * h1 + k12 * h2));
+            fz[l] += kt[e] * (f20 * sx + f21 * sy + f22 * sz + slope * cx2 +
+                              damper * (g20 * w0 + g21 * w1 + g22 * w2 + k20 * h0 + k21 * h1 + k22 * h2));
           }
         }
       } else if constexpr (Volume != kNoVolume) {

@@ -43,8 +43,9 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
       force[tet[3]] += scale * g3;
     }
   }
-  // Shear element (nu < 1/4): f_i = -2 k_t F E g_i.
+  // Shear element (nu < 1/4) and its damper (core/model/shear_element.h).
   add_shear_element_forces(model, x, force);
+  add_shear_element_damping_forces(model, x, v, force);
   if (model.has_gravity())
     for (int32_t i = 0; i < model.npoint(); ++i) force[i] += model.mass[i] * model.gravity;
 }

@@ -11,8 +11,8 @@ namespace organsim {
 
 // Forces on every point (internal numbering) for positions x and velocities v:
 // springs + dampers, volume conservation (per tet or nodal, if the model has
-// it), the shear element (if it has it), gravity. Fixed points get their
-// force too (integration ignores it).
+// it), the shear element and its damper (if it has it), gravity. Fixed points
+// get their force too (integration ignores it).
 // Sutures pull only (no force while slack, never a push) with their rest
 // length at time t.
 void reference_internal_forces(const Model& model, const std::vector<Vec3>& x,

@@ -1,5 +1,7 @@
 #include "core/sim/scatter_step.h"
 
+#include <algorithm>
+
 #include "core/model/shear_element.h"
 
 namespace organsim {
@@ -65,18 +67,25 @@ void ScatterStep<Real>::step(double dt_seconds) {
     }
   }
   // Shear element: f_i = -k_t (F + phi'(J) cof F) g_i with F = I + sum_i u_i g_i^T
-  // (from the displacements, so the rest state is exactly force-free).
+  // (from the displacements, so the rest state is exactly force-free), and
+  // its damper -(2 tau k_t / J_d) sym(Fdot cof^T) cof g_i, dt Fdot = sum_i d_i g_i^T.
+  const Real damping = static_cast<Real>(m.shear_damping_time) * inv_dt, jm = Real(kShearElementMinJ);
   for (int32_t t = 0; t < static_cast<int32_t>(m.tet_shear_k.size()); ++t) {
     const Tet& tet = m.tet_points[t];
     const auto& g = m.tet_shape_gradient[t];
-    M3 F = M3::Identity();
-    for (int i = 1; i < 4; ++i) F += (u_[tet[i]] - u_[tet[0]]) * g[i].cast<Real>().transpose();
+    M3 F = M3::Identity(), G = M3::Zero();
+    for (int i = 1; i < 4; ++i) {
+      F += (u_[tet[i]] - u_[tet[0]]) * g[i].cast<Real>().transpose();
+      G += (d_[tet[i]] - d_[tet[0]]) * g[i].cast<Real>().transpose();
+    }
     M3 cof;
     cof.col(0) = F.col(1).cross(F.col(2));
     cof.col(1) = F.col(2).cross(F.col(0));
     cof.col(2) = F.col(0).cross(F.col(1));
     const Real J = F.col(0).dot(cof.col(0));
-    const M3 P = Real(m.tet_shear_k[t]) * (F + shear_barrier_slope(J) * cof);
+    const M3 A = G * cof.transpose();
+    const M3 P = Real(m.tet_shear_k[t]) *
+                 (F + shear_barrier_slope(J) * cof + (damping / std::max(J, jm)) * (A + A.transpose()) * cof);
     for (int i = 0; i < 4; ++i) force_[tet[i]] -= P * g[i].cast<Real>();
   }
   // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m, u' = u + d'.

@@ -17,7 +17,8 @@ class ScatterStep {
  public:
   explicit ScatterStep(const Model& model);
   // One step of dt (springs + dampers, volume (per tet or nodal) or the shear
-  // element if the model has it, gravity, position Verlet with drag); no tool.
+  // element and its damper if the model has it, gravity, position Verlet
+  // with drag); no tool.
   void step(double dt);
   // Current positions x_t (internal numbering).
   void positions(std::vector<Vec3>& out) const;

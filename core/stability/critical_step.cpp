@@ -244,9 +244,10 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   const int32_t n = model.npoint();
   StabilityReport r;
   r.viscous_damping = model.viscous_damping;
-  // c = d / k from the springs themselves (the largest, to stay safe), so
-  // hand-built models with their own dampers are covered too.
-  r.spring_damping_time = spring_damping_time(model);
+  // c = d / k from the springs themselves and the shear element's tau (the
+  // largest, to stay safe), so hand-built models with their own dampers are
+  // covered too.
+  r.spring_damping_time = damping_time(model);
   r.tool_contact_stiffness = options.tool_contact_stiffness;
 
   const RestStiffness k = rest_stiffness(model, options);
@@ -290,24 +291,33 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
     }
   }
   const double c = r.spring_damping_time, alpha = r.viscous_damping;
-  const double top_rate = c * r.share_springs * r.lambda_max + alpha;
+  // The dampers are D = c_s K_springs + tau K_shear (d = c_s k per spring,
+  // the shear element's damper tau times its stiffness at rest), so the top
+  // mode's damping rate is c_s s lambda + tau e lambda + alpha, with c_s the
+  // springs' own damping time.
+  const double c_springs = spring_damping_time(model), tau = model.shear_damping_time;
+  const double top_rate = (c_springs * r.share_springs + tau * r.share_shear) * r.lambda_max + alpha;
   r.damping_ratio = r.omega_max > 0 ? top_rate / (2 * r.omega_max) : 0;
   r.dt_crit_undamped = r.omega_max > 0 ? 2 / r.omega_max : std::numeric_limits<double>::infinity();
   r.dt_crit = critical_step_for_mode(r.lambda_max, top_rate);
-  // Candidate 2: the top mode of the damped part (springs): the most damped
-  // stiff mode, whose damping may shrink the step more than candidate 1's.
-  r.lambda_springs = r.lambda_max;
-  if (c > 0 && r.share_springs < 0.999) {
-    const PowerResult sp = power_iteration(model, k, inv_sqrt_m, kSprings, options, r.lambda_gershgorin);
-    r.lambda_springs = sp.lambda;
+  // Candidate 2: the top mode of the damped part (springs, and the shear
+  // element with its damper): the most damped stiff mode, whose damping may
+  // shrink the step more than candidate 1's.
+  const int damped = kSprings | (tau > 0 ? kShear : 0);
+  const double damped_share = r.share_springs + (tau > 0 ? r.share_shear : 0);
+  r.lambda_damped = r.lambda_max;
+  if (c > 0 && damped_share < 0.999) {
+    const PowerResult sp = power_iteration(model, k, inv_sqrt_m, damped, options, r.lambda_gershgorin);
+    r.lambda_damped = sp.lambda;
     if (sp.lambda > 0) {
       const double omega2 = rayleigh(sp.y, kAll);
       r.dt_crit = std::min(r.dt_crit, critical_step_for_mode(omega2, c * sp.lambda + alpha));
     }
   }
   // Rigorous for exact eigenvalues: every mode has omega^2 <= lambda_max and
-  // damping rate <= c lambda_springs + alpha.
-  r.dt_crit_bound = critical_step_for_mode(r.lambda_max, c * r.lambda_springs + alpha);
+  // damping rate <= c lambda_damped + alpha (D <= c K_damped, both parts
+  // positive semi-definite).
+  r.dt_crit_bound = critical_step_for_mode(r.lambda_max, c * r.lambda_damped + alpha);
   r.dt_crit_gershgorin = guaranteed_critical_step(model, gershgorin, options);
 
 

@@ -63,10 +63,13 @@ struct StabilityReport {
   // Shares of the top mode's stiffness y^T W y from each term (sum 1).
   double share_springs = 0, share_volume = 0, share_tool = 0, share_shear = 0;  // shear: the shear element
 
-  double lambda_springs = 0;       // largest eigenvalue of M^-1 K_springs (the damped part), 1/s^2
-  // Damping of the top mode: xi = (c s omega^2 + alpha) / (2 omega), with c the
-  // spring damping time (d = c k), s the springs' share of the mode, alpha the drag.
-  double spring_damping_time = 0;  // s
+  // Largest eigenvalue of M^-1 K_damped, the damped part: the springs, and
+  // the shear element when it has its damper, 1/s^2.
+  double lambda_damped = 0;
+  // Damping of the top mode: xi = ((c_s s + tau e) omega^2 + alpha) / (2 omega),
+  // with c_s the springs' damping time (d = c_s k), s their share of the
+  // mode, tau and e the shear element's damping time and share, alpha the drag.
+  double spring_damping_time = 0;  // the largest of c_s and tau, s
   double viscous_damping = 0;      // 1/s
   double tool_contact_stiffness = 0;  // N/m, as included
   int32_t tool_points = 0;         // points the tool term was applied to
@@ -77,7 +80,7 @@ struct StabilityReport {
   // modes' limits: the top mode of K with its own damping, and the top mode
   // of the springs (the damped part) with its frequency under the full K.
   double dt_crit = 0;
-  double dt_crit_bound = 0;        // every mode at once: omega^2 = lambda_max, rate c lambda_springs + alpha, s
+  double dt_crit_bound = 0;        // every mode at once: omega^2 = lambda_max, rate c lambda_damped + alpha, s
   double dt_crit_gershgorin = 0;   // the same from the Gershgorin bound: a guaranteed-stable step, s
 
   std::vector<LimitingPoint> mode_points;        // largest components of the top mode
@@ -94,7 +97,8 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
 // is stable iff h^2 w^2 + 2 h (c w^2 + a) < 4, i.e.
 //   h < (2 / w) (sqrt(1 + xi^2) - xi),  xi = (c w^2 + a) / (2 w).
 // The same bound holds for the whole model when every mode's damping is at
-// most c w^2 + a (spring dampers d = c k are c times part of K).
+// most c w^2 + a (spring dampers d = c k and the shear element's damper
+// are c times part of K).
 double damped_critical_step(double omega, double spring_damping_time, double viscous_damping);
 
 // The general form: a mode with omega^2 (1/s^2) and damping rate a = y^T M^-1 D y

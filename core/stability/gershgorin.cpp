@@ -40,7 +40,7 @@ double largest_eigenvalue_from_above(const Mat3& a) {
 }  // namespace
 
 void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows) {
-  rows.all[i] = rows.springs[i] = 0;
+  rows.all[i] = rows.damped[i] = 0;
   if (model.inv_mass[i] <= 0) return;
   auto free = [&](int32_t j) { return model.inv_mass[j] > 0; };
   // sqrt(m_i / m_j): the row of M^-1/2 K M^-1/2, scaled back by m_i.
@@ -62,7 +62,6 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
     diag_springs += model.spring_k[s] * u * u.transpose();
     if (free(other)) off_springs += model.spring_k[s] * weight(other);
   }
-  rows.springs[i] = largest_eigenvalue_from_above(diag_springs) + off_springs;
 
   Mat3 diag = diag_springs;
   double off = off_springs;
@@ -111,6 +110,9 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
           off += model.tet_k[t] * gi.norm() * volume_gradient(model, tet, k).norm() * weight(tet[k]);
     }
   }
+  // The shear element's blocks, also part of the damped rows with its damper.
+  Mat3 diag_shear = Mat3::Zero();
+  double off_shear = 0;
   if (model.has_shear_element()) {
     // K_ij = k_t ((g_i . g_j) I + g_j g_i^T) per tet: ||K_ij|| <= k_t (|g_i . g_j| + |g_i| |g_j|).
     const int32_t first_tet = layout.tets.chunk_offset[i / c] + i % c;
@@ -119,15 +121,18 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
       const Tet& tet = model.tet_points[t];
       const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), i) - tet.begin());
       const Vec3& gi = model.tet_shape_gradient[t][corner];
-      diag += shear_element_rest_block(model, t, corner, corner);
+      diag_shear += shear_element_rest_block(model, t, corner, corner);
       for (int k = 0; k < 4; ++k) {
         const Vec3& gk = model.tet_shape_gradient[t][k];
         if (k != corner && free(tet[k]))
-          off += model.tet_shear_k[t] * (std::abs(gi.dot(gk)) + gi.norm() * gk.norm()) * weight(tet[k]);
+          off_shear += model.tet_shear_k[t] * (std::abs(gi.dot(gk)) + gi.norm() * gk.norm()) * weight(tet[k]);
       }
     }
   }
-  rows.all[i] = largest_eigenvalue_from_above(diag) + off;
+  rows.all[i] = largest_eigenvalue_from_above(diag + diag_shear) + off + off_shear;
+  rows.damped[i] = model.shear_damping_time > 0
+                       ? largest_eigenvalue_from_above(diag_springs + diag_shear) + off_springs + off_shear
+                       : largest_eigenvalue_from_above(diag_springs) + off_springs;
 }
 
 GershgorinRows gershgorin_rows(const Model& model) {
@@ -139,7 +144,7 @@ GershgorinRows gershgorin_rows(const Model& model) {
                                       std::to_string(model.npoint()) + " (build_gather_layout)");
   GershgorinRows rows;
   rows.all.assign(model.npoint(), 0.0);
-  rows.springs.assign(model.npoint(), 0.0);
+  rows.damped.assign(model.npoint(), 0.0);
   for (int32_t i = 0; i < model.npoint(); ++i) compute_gershgorin_row(model, i, rows);
   return rows;
 }
@@ -171,12 +176,14 @@ double spring_damping_time(const Model& model) {
   return c;
 }
 
+double damping_time(const Model& model) { return std::max(spring_damping_time(model), model.shear_damping_time); }
+
 double guaranteed_critical_step(const Model& model, const GershgorinRows& rows, const CriticalStepOptions& options) {
   const std::vector<double> bound = gershgorin_bounds(model, rows, options);
   const double lambda = bound.empty() ? 0 : *std::max_element(bound.begin(), bound.end());
-  double lambda_springs = 0;
-  for (int32_t i = 0; i < model.npoint(); ++i) lambda_springs = std::max(lambda_springs, rows.springs[i] * model.inv_mass[i]);
-  return critical_step_for_mode(lambda, spring_damping_time(model) * lambda_springs + model.viscous_damping);
+  double lambda_damped = 0;
+  for (int32_t i = 0; i < model.npoint(); ++i) lambda_damped = std::max(lambda_damped, rows.damped[i] * model.inv_mass[i]);
+  return critical_step_for_mode(lambda, damping_time(model) * lambda_damped + model.viscous_damping);
 }
 
 }  // namespace organsim

@@ -24,14 +24,15 @@
 namespace organsim {
 
 // Per point, without the tool term and before dividing by the mass, N/m:
-// lambda_max(K_ii) + sum_j ||K_ij|| for all terms, and for the springs alone
-// (the damped part). Zero at fixed points.
+// lambda_max(K_ii) + sum_j ||K_ij|| for all terms, and for the damped part
+// alone (the springs, and the shear element when it has its damper). Zero
+// at fixed points.
 struct GershgorinRows {
-  std::vector<double> all;      // (npoint)
-  std::vector<double> springs;  // (npoint)
+  std::vector<double> all;     // (npoint)
+  std::vector<double> damped;  // (npoint)
 };
 
-// Row `i` of `model` (through its gather layout) into rows.all[i] and rows.springs[i].
+// Row `i` of `model` (through its gather layout) into rows.all[i] and rows.damped[i].
 void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows);
 
 // Every row.
@@ -44,8 +45,12 @@ std::vector<double> gershgorin_bounds(const Model& model, const GershgorinRows& 
 // Largest spring damping time d/k over the springs, s.
 double spring_damping_time(const Model& model);
 
+// Largest damping time c of the dampers D = c K: spring_damping_time and
+// the shear element's tau, s.
+double damping_time(const Model& model);
+
 // A step every mode is stable at (position Verlet with the backends'
-// dampers): lambda = the largest bound, damping rate c lambda_springs + alpha.
+// dampers): lambda = the largest bound, damping rate c lambda_damped + alpha.
 // Never above estimate_critical_step's dt_crit, which is this same value's
 // dt_crit_gershgorin.
 double guaranteed_critical_step(const Model& model, const GershgorinRows& rows, const CriticalStepOptions& options);

@@ -14,7 +14,7 @@ void ChangeStepCheck::update(const Model& previous, const Model& next) {
                            " points, previous version has " + std::to_string(old_n) + ", next " +
                            std::to_string(n));
   rows_.all.resize(n, 0.0);
-  rows_.springs.resize(n, 0.0);
+  rows_.damped.resize(n, 0.0);
   touched_.assign(n, 0);
   std::vector<int32_t> changed;
   for (int32_t p = old_n; p < n; ++p)

@@ -59,7 +59,7 @@ nlohmann::json to_json(const StabilityReport& r) {
   j["dt_crit_undamped"] = r.dt_crit_undamped;
   j["dt_crit_bound"] = r.dt_crit_bound;
   j["dt_crit_gershgorin"] = r.dt_crit_gershgorin;
-  j["lambda_springs"] = r.lambda_springs;
+  j["lambda_damped"] = r.lambda_damped;
   j["omega_max"] = r.omega_max;
   j["lambda_max"] = r.lambda_max;
   j["lambda_gershgorin"] = r.lambda_gershgorin;

@@ -1,7 +1,10 @@
 // The GL backend with the shear element of nu < 1/4 (step.comp's
 // SHEAR_ELEMENT variant) against the double CPU reference: the force of one
-// step on a deformed box, and 1000 steps of a box released from a shear.
+// step on a deformed box, its damper's, and 1000 steps of a box released
+// from a shear.
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "core/gl/gl_backend.h"
 #include "core/sim/cpu_backend.h"
@@ -50,6 +53,44 @@ TEST(GlShearElement, CrushedForceMatchesTheReference) {
     const double error = gl_test::one_substep_force_error(model, state, kDt);
     std::cout << "shear element crushed to " << s << ": max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
     EXPECT_LT(error, 1e-5) << "stretch " << s;
+  }
+}
+
+// The element's damper (tau = 10 ms) against the reference where it carries
+// most of the force: the moving state with velocities ~0.2 m/s, and the
+// same velocities on the box crushed to 0.3 of its height (J < J_min, the
+// clamped 1 / J_d). The increments d = x_t - x_{t-1} (~2e-5 m) are
+// differences of float positions, exact in float, so the tolerance is that
+// of the force above.
+TEST(GlShearElement, DamperForceMatchesTheReference) {
+  const Model model = gl_test::poisson_box(0.0, Vec3::Zero(), 0.01);
+  ASSERT_GT(model.shear_damping_time, 0);
+  gl_test::MovingState moving = gl_test::moving_state(model, kDt);
+  gl_test::MovingState crushed = moving;
+  for (Vec3& p : crushed.x) p.z() *= 0.3;
+  crushed.x = gl_test::round_to_float(crushed.x);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 0.2 * kDt);
+  for (gl_test::MovingState* s : {&moving, &crushed}) {
+    for (size_t i = 0; i < s->x.size(); ++i) s->x_prev[i] = s->x[i] - Vec3(noise(rng), noise(rng), noise(rng));
+    s->x_prev = gl_test::round_to_float(s->x_prev);
+    for (size_t i = 0; i < s->x.size(); ++i) s->v[i] = (s->x[i] - s->x_prev[i]) / kDt;
+    // The damper's share of the reference force: most of it.
+    std::vector<Vec3> with, without, zero(s->x.size(), Vec3::Zero());
+    reference_internal_forces(model, s->x, s->v, with);
+    reference_internal_forces(model, s->x, zero, without);
+    double damper = 0, total = 0;
+    for (size_t i = 0; i < with.size(); ++i) {
+      damper = std::max(damper, (with[i] - without[i]).norm());
+      total = std::max(total, with[i].norm());
+    }
+    EXPECT_GT(damper, 0.5 * total);
+    for (const int32_t threads_per_point : {1, 3}) {
+      const double error = gl_test::one_substep_force_error(model, *s, kDt, threads_per_point);
+      std::cout << "shear element damper" << (s == &crushed ? " (crushed)" : "") << ", damper share "
+                << damper / total << ": max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
+      EXPECT_LT(error, 1e-5) << threads_per_point << " per point";
+    }
   }
 }
 
