@@ -78,6 +78,31 @@ inline std::vector<Vec3> one_step(const Model& model, const CpuBackendOptions& o
   return after;
 }
 
+// One step of dt = 1e-4 s from a deformed, moving state (moving_state) on
+// the reference (the generic double kernel) and on `options`, for each
+// volume term, seeds 1-3 and boxes of 3, 6 and 12 cells (12 cells, about
+// 10k tets, open more tet batches at once than the packing keeps open, so
+// its closing path runs too): calls check(model, x, x_prev, dt, ref, got)
+// with the positions after the step.
+template <class Check>
+inline void for_each_one_step_against_the_reference(const CpuBackendOptions& options, Check check) {
+  const double dt = 1e-4;
+  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+    for (unsigned seed : {1u, 2u, 3u}) {
+      for (int cells : {3, 6, 12}) {
+        SCOPED_TRACE(std::string(volume_term_name(volume)) + ", seed " + std::to_string(seed) + ", " +
+                     std::to_string(cells) + " cells");
+        const Model model = random_model(seed, cells, volume, true);
+        std::vector<Vec3> x, x_prev;
+        moving_state(model, seed, dt, x, x_prev);
+        const auto ref = one_step(model, {Precision::Double, 1, CpuKernel::Generic}, x, x_prev, dt);
+        const auto got = one_step(model, options, x, x_prev, dt);
+        check(model, x, x_prev, dt, ref, got);
+      }
+    }
+  }
+}
+
 enum class Scene { Lean, Full, Push, Pull };
 
 // 1000 steps (50 ticks of 20) of a scene; returns the positions and the last reaction.
