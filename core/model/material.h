@@ -16,6 +16,14 @@ namespace organsim {
 // small strain.
 enum class VolumeFormulation { PerTet, Nodal };
 
+// Form of the shear element below nu = 1/4 (docs/physics.md): per tet on each
+// tet's deformation gradient (a linear tet: too stiff in bending with few
+// cells through a part's thickness), or smoothed, half on the per-tet
+// gradients and half on gradients averaged over each point's tets (node-based
+// smoothed FEM, which alone is too soft; the even blend lands within a few
+// per cent of beam theory at 2-3 cells through the thickness).
+enum class ShearFormulation { PerTet, Smoothed };
+
 struct Material {
   double density = 1060.0;  // kg/m^3 (soft tissue ~1000-1100)
   // Spring stiffness: from Young's modulus (default) or an explicit constant.
@@ -37,6 +45,7 @@ struct Material {
   // Unset: nodal with poisson_ratio, per tet without (existing scenarios keep
   // their forces); see volume_formulation() in core/model/stiffness.h.
   std::optional<VolumeFormulation> volume_formulation;
+  ShearFormulation shear_formulation = ShearFormulation::Smoothed;  // used only below nu = 1/4
 };
 
 // One fixed-point selector; a point is fixed when any selector matches it.

@@ -199,6 +199,13 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   model.tet_shear_k = tet_shear_stiffness(material, model.tet_rest_volume);
   model.tet_shape_gradient.clear();
   model.shear_damping_time = model.has_shear_element() ? material.spring_damping_time : 0;
+  model.shear_smoothed_share = shear_smoothed_share(material);
+  model.point_shear_k.clear();
+  if (model.has_smoothed_shear()) {
+    model.point_shear_k.assign(npoint, 0.0);
+    for (int32_t t = 0; t < model.ntet(); ++t)
+      for (int32_t p : model.tet_points[t]) model.point_shear_k[p] += model.tet_shear_k[t];
+  }
   if (model.has_shear_element()) {
     if (model.has_volume())
       throw Error(ErrorKind::Scenario, "material: the shear element (poisson_ratio < 0.25) and a volume term together");

@@ -62,6 +62,12 @@ struct Model {
   // tet_points order).
   std::vector<double> tet_shear_k;                   // mu_e V_t^r, J (ntet); empty unless the element is on
   std::vector<std::array<Vec3, 4>> tet_shape_gradient;  // g_i, 1/m (ntet x 4); empty unless the element is on
+  // The element's node-smoothed share s (Material::shear_formulation): the
+  // energy is (1 - s) on each tet's F and s on F averaged over each point's
+  // tets, weighted by k_t; point_shear_k holds K_a = sum of k_t over the tets
+  // of a, J (npoint). 0 and empty unless the element is on and smoothed.
+  double shear_smoothed_share = 0;
+  std::vector<double> point_shear_k;
   // Its damper's time constant tau, s (material.spring_damping_time, as the
   // springs' d = tau k): viscous stress 2 mu_e tau D, D the rate of
   // deformation; at rest its damping matrix is tau times the element's
@@ -90,6 +96,7 @@ struct Model {
   bool has_volume() const { return !tet_k.empty() || !point_volume_k.empty(); }
   bool has_nodal_volume() const { return !point_volume_k.empty(); }
   bool has_shear_element() const { return !tet_shear_k.empty(); }
+  bool has_smoothed_shear() const { return shear_smoothed_share > 0; }
   bool has_gravity() const { return gravity.squaredNorm() > 0; }
   double tool_scale(int32_t i) const { return tool_k_scale.empty() ? 1.0 : tool_k_scale[i]; }
   double total_mass() const;

@@ -50,23 +50,58 @@ double barrier(double J) {
 
 }  // namespace
 
+double psi(const Eigen::Matrix3d& F) { return (F.squaredNorm() - 3) / 2 + barrier(F.determinant()); }
+
+// P(F) = F + phi'(J) cof F, the first Piola-Kirchhoff stress of psi.
+Eigen::Matrix3d stress(const Eigen::Matrix3d& F) {
+  const Eigen::Matrix3d cof = cofactor(F);
+  return F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
+}
+
+// Fbar_a of every point (npoint): I + sum over the tets of a of k_t (F_t - I) / K_a.
+std::vector<Eigen::Matrix3d> smoothed_gradients(const Model& model, const std::vector<Vec3>& x) {
+  std::vector<Eigen::Matrix3d> h(model.npoint(), Eigen::Matrix3d::Zero());
+  for (int32_t t = 0; t < model.ntet(); ++t) {
+    const Eigen::Matrix3d H = deformation_gradient(model, t, x) - Eigen::Matrix3d::Identity();
+    for (int32_t a : model.tet_points[t]) h[a] += model.tet_shear_k[t] * H;
+  }
+  for (int32_t a = 0; a < model.npoint(); ++a)
+    h[a] = Eigen::Matrix3d::Identity() + (model.point_shear_k[a] > 0 ? h[a] / model.point_shear_k[a] : h[a]);
+  return h;
+}
+
 double shear_element_energy(const Model& model, const std::vector<Vec3>& x) {
+  const double s = model.shear_smoothed_share;
   double e = 0;
-  for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
-    const Eigen::Matrix3d F = deformation_gradient(model, t, x);
-    e += model.tet_shear_k[t] * ((F.squaredNorm() - 3) / 2 + barrier(F.determinant()));
+  for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t)
+    e += (1 - s) * model.tet_shear_k[t] * psi(deformation_gradient(model, t, x));
+  if (model.has_smoothed_shear()) {
+    const std::vector<Eigen::Matrix3d> F = smoothed_gradients(model, x);
+    for (int32_t a = 0; a < model.npoint(); ++a)
+      if (model.point_shear_k[a] > 0) e += smoothed_shear_patch_k(model, a) * psi(F[a]);
   }
   return e;
 }
 
+std::vector<Eigen::Matrix3d> smoothed_shear_stress(const Model& model, const std::vector<Vec3>& x) {
+  std::vector<Eigen::Matrix3d> P(model.npoint(), Eigen::Matrix3d::Zero());
+  if (!model.has_smoothed_shear()) return P;
+  const std::vector<Eigen::Matrix3d> F = smoothed_gradients(model, x);
+  for (int32_t a = 0; a < model.npoint(); ++a)
+    if (model.point_shear_k[a] > 0) P[a] = stress(F[a]);
+  return P;
+}
+
 void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& force) {
-  for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
-    const Eigen::Matrix3d F = deformation_gradient(model, t, x);
-    const Eigen::Matrix3d cof = cofactor(F);
-    const double J = F.col(0).dot(cof.col(0));
-    // V times the first Piola-Kirchhoff stress.
-    const Eigen::Matrix3d P = model.tet_shear_k[t] * (F + shear_barrier_slope(J) * cof);
-    for (int i = 0; i < 4; ++i) force[model.tet_points[t][i]] -= P * model.tet_shape_gradient[t][i];
+  if (!model.has_shear_element()) return;
+  const double s = model.shear_smoothed_share;
+  const std::vector<Eigen::Matrix3d> Pa = smoothed_shear_stress(model, x);
+  for (int32_t t = 0; t < model.ntet(); ++t) {
+    const Tet& tet = model.tet_points[t];
+    const Eigen::Matrix3d Pbar = (Pa[tet[0]] + Pa[tet[1]] + Pa[tet[2]] + Pa[tet[3]]) / 4;
+    // V times the first Piola-Kirchhoff stress of the blend.
+    const Eigen::Matrix3d P = model.tet_shear_k[t] * ((1 - s) * stress(deformation_gradient(model, t, x)) + s * Pbar);
+    for (int i = 0; i < 4; ++i) force[tet[i]] -= P * model.tet_shape_gradient[t][i];
   }
 }
 
@@ -90,6 +125,26 @@ Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, i
   const Vec3& gi = model.tet_shape_gradient[t][i];
   const Vec3& gj = model.tet_shape_gradient[t][j];
   return model.tet_shear_k[t] * (gi.dot(gj) * Eigen::Matrix3d::Identity() + gj * gi.transpose());
+}
+
+std::vector<ShearPatchEntry> smoothed_shear_patch(const Model& model, int32_t a) {
+  std::vector<ShearPatchEntry> patch;
+  if (!model.has_smoothed_shear() || !(model.point_shear_k[a] > 0)) return patch;
+  const int32_t c = model.layout.chunk_size;
+  const int32_t first = model.layout.tets.chunk_offset[a / c] + a % c;
+  for (int32_t j = 0; j < model.layout.tets.count[a]; ++j) {
+    const int32_t t = model.layout.tets.item[first + j * c];
+    for (int i = 0; i < 4; ++i) {
+      const int32_t p = model.tet_points[t][i];
+      const Vec3 w = model.tet_shear_k[t] / model.point_shear_k[a] * model.tet_shape_gradient[t][i];
+      auto it = std::find_if(patch.begin(), patch.end(), [&](const ShearPatchEntry& e) { return e.point == p; });
+      if (it == patch.end())
+        patch.push_back({p, w});
+      else
+        it->w += w;
+    }
+  }
+  return patch;
 }
 
 }  // namespace organsim

@@ -33,6 +33,22 @@
 // damper's stiffness, like the barrier's, stays within a few times its rest
 // value and the damped dt_crit stays meaningful.
 //
+// Smoothed (Model::shear_smoothed_share s > 0, the default): a constant-strain
+// tet cannot bend, so with 2-3 cells through a part's thickness the element
+// above is 13-35 % too stiff in bending (docs/validation.md); gradients
+// averaged over node patches (node-based smoothed FEM, Liu et al.) are too
+// soft instead. The energy is split between the two:
+//   W = sum_t (1 - s) k_t psi(F_t) + sum_a s (K_a / 4) psi(Fbar_a),
+//   Fbar_a = I + sum over the tets t of a of k_t (F_t - I) / K_a,
+// psi(F) = (|F|^2 - 3) / 2 + phi(J), K_a = sum of k_t over the tets of a
+// (Model::point_shear_k; K_a / 4 = mu_e V_a, V_a the nodal volume). The
+// force on corner i of tet t is
+//   f_i = -k_t [(1 - s) P(F_t) + s Pbar_t] g_i,  P(F) = F + phi'(J) cof F,
+// Pbar_t the mean of P(Fbar_a) over t's four corners. Both parts are
+// functions of F^T F and J, so rotations stay force-free. The damper is the
+// per-tet one above with the full k_t (its rest matrix is tau times the
+// per-tet element's stiffness, not the blend's).
+//
 // This file evaluates it in double precision outside the kernels (reference
 // forces, energy, rest stiffness); the kernels evaluate the same formulas.
 #include <array>
@@ -77,8 +93,29 @@ void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, st
 void add_shear_element_damping_forces(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
                                       std::vector<Vec3>& force);
 
-// Block (i, j) of the element's stiffness at rest, N/m, for corners i, j of
-// tet t: k_t ((g_i . g_j) I + g_j g_i^T), the linear solid with lambda = 0.
+// P(Fbar_a) of every point at positions x (npoint; zero where K_a = 0 or
+// without the smoothed part).
+std::vector<Eigen::Matrix3d> smoothed_shear_stress(const Model& model, const std::vector<Vec3>& x);
+
+// Block (i, j) of the per-tet element's stiffness at rest, N/m, for corners
+// i, j of tet t: k_t ((g_i . g_j) I + g_j g_i^T), the linear solid with
+// lambda = 0. With a smoothed share s the elastic stiffness is (1 - s) times
+// these blocks plus the patches below; the damper's is tau times these.
 Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, int j);
+
+// The smoothed part's rest stiffness, node patch by node patch: for point a,
+// each point p of its tets with w_ap = sum over the tets t of a holding p of
+// k_t g_tp / K_a. Node a adds s (K_a / 4) ((w_ap . w_aq) I + w_aq w_ap^T) to
+// block (p, q). Empty where K_a = 0.
+struct ShearPatchEntry {
+  int32_t point = 0;
+  Vec3 w{0, 0, 0};  // 1/m
+};
+std::vector<ShearPatchEntry> smoothed_shear_patch(const Model& model, int32_t a);
+
+// The weight s K_a / 4 of node a's patch blocks, N/m^-1 (J).
+inline double smoothed_shear_patch_k(const Model& model, int32_t a) {
+  return model.shear_smoothed_share * model.point_shear_k[a] / 4;
+}
 
 }  // namespace organsim

@@ -36,6 +36,14 @@ double shear_element_modulus(const Material& m) {
   return lame_mu(m) - lame_lambda(m);
 }
 
+double shear_smoothed_share(const Material& m) {
+  return shear_element_modulus(m) > 0 && m.shear_formulation == ShearFormulation::Smoothed ? kShearSmoothedShare : 0.0;
+}
+
+const char* shear_formulation_name(ShearFormulation f) {
+  return f == ShearFormulation::Smoothed ? "smoothed" : "per_tet";
+}
+
 EffectiveElasticity effective_elasticity(const Material& m) {
   EffectiveElasticity e;
   e.shear_modulus = 0.4 * spring_modulus(m) + shear_element_modulus(m);
@@ -56,7 +64,8 @@ nlohmann::json elasticity_json(const Material& m) {
           {"poisson_ratio", e.poisson_ratio},
           {"spring_modulus", spring_modulus(m)},
           {"volume_term_modulus", volume_term_modulus(m)},
-          {"shear_element_modulus", shear_element_modulus(m)}};
+          {"shear_element_modulus", shear_element_modulus(m)},
+          {"shear_formulation", shear_element_modulus(m) > 0 ? shear_formulation_name(m.shear_formulation) : "none"}};
 }
 
 std::vector<double> spring_stiffness(const Material& material, const std::vector<Vec3>& points,

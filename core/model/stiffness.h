@@ -42,6 +42,13 @@ double volume_term_modulus(const Material& material);
 // else 0 (no element).
 double shear_element_modulus(const Material& material);
 
+// The share s of the shear element's stiffness carried on node-smoothed
+// deformation gradients (core/model/shear_element.h): kShearSmoothedShare
+// with the smoothed formulation, 0 per tet or without the element.
+inline constexpr double kShearSmoothedShare = 0.5;
+double shear_smoothed_share(const Material& material);
+const char* shear_formulation_name(ShearFormulation formulation);  // "per_tet" or "smoothed"
+
 // Lame constants of the linear solid the model approximates, Pa: with a
 // Poisson ratio the asked (E, nu); without one mu = 0.4 E_s and
 // lambda = 0.4 E_s + volume_modulus (what the old rule actually gives).

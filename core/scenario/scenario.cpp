@@ -90,6 +90,14 @@ Material parse_material(const nlohmann::json& j, const JsonPath& at) {
     else
       throw r.at("volume_formulation").error("expected " + one_of({"per_tet", "nodal"}) + " (got \"" + *f + "\")");
   }
+  if (auto f = r.string("shear_formulation")) {
+    if (*f == "per_tet")
+      m.shear_formulation = ShearFormulation::PerTet;
+    else if (*f == "smoothed")
+      m.shear_formulation = ShearFormulation::Smoothed;
+    else
+      throw r.at("shear_formulation").error("expected " + one_of({"smoothed", "per_tet"}) + " (got \"" + *f + "\")");
+  }
   if (auto v = r.number("poisson_ratio")) {
     if (!(*v >= kMinPoissonRatio && *v < 0.5))
       throw r.at("poisson_ratio").error("expected a number in [0, 0.5) (got " + std::to_string(*v) + ")");

@@ -62,7 +62,9 @@ RestStiffness rest_stiffness(const Model& model, const CriticalStepOptions& opti
 }
 
 // Which terms of K to apply (for the per-term shares of the top mode).
-enum Terms { kSprings = 1, kVolume = 2, kTool = 4, kShear = 8, kAll = 15 };
+// kShearDamper is the per-tet element at its full k_t, the damper's matrix
+// over tau (not part of kAll when the element is smoothed).
+enum Terms { kSprings = 1, kVolume = 2, kTool = 4, kShear = 8, kAll = 15, kShearDamper = 16 };
 
 // out = K x for displacements x (fixed points must be zero in x; their rows
 // of out are set to zero).
@@ -105,12 +107,25 @@ void apply_stiffness(const Model& model, const RestStiffness& k, const std::vect
       for (int i = 0; i < 4; ++i) out[p[i]] += s * g[i];
     }
   }
-  if (terms & kShear) {
-    // Shear element at rest: f_i = sum_j k_t ((g_i . g_j) I + g_j g_i^T) x_j.
+  if (terms & (kShear | kShearDamper)) {
+    // Shear element at rest: f_i = sum_j w k_t ((g_i . g_j) I + g_j g_i^T) x_j,
+    // w = 1 - s for the elastic part, 1 for the damper's.
+    const double w = (terms & kShear ? 1 - model.shear_smoothed_share : 0) + (terms & kShearDamper ? 1 : 0);
     for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
       const Tet& p = model.tet_points[t];
       for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) out[p[i]] += shear_element_rest_block(model, t, i, j) * x[p[j]];
+        for (int j = 0; j < 4; ++j) out[p[i]] += w * shear_element_rest_block(model, t, i, j) * x[p[j]];
+    }
+  }
+  if ((terms & kShear) && model.has_smoothed_shear()) {
+    // Node patches: block (p, q) = k_a ((w_p . w_q) I + w_q w_p^T), so
+    // f_p = k_a (H + H^T) w_p with H = sum_q x_q w_q^T.
+    for (int32_t a = 0; a < model.npoint(); ++a) {
+      const std::vector<ShearPatchEntry> patch = smoothed_shear_patch(model, a);
+      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+      for (const ShearPatchEntry& q : patch) H += x[q.point] * q.w.transpose();
+      const Eigen::Matrix3d S = smoothed_shear_patch_k(model, a) * (H + H.transpose());
+      for (const ShearPatchEntry& p : patch) out[p.point] += S * p.w;
     }
   }
   if (terms & kTool)
@@ -280,6 +295,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
     apply_stiffness(model, k, x, kx, terms);
     return dot(x, kx);
   };
+  double damper_share = 0;  // y^T K_damper y / y^T K y of the shear element's damper
   if (r.lambda_max > 0) {
     const double s = rayleigh(y, kSprings), v = rayleigh(y, kVolume), t = rayleigh(y, kTool),
                  e = rayleigh(y, kShear), total = s + v + t + e;
@@ -288,6 +304,9 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
       r.share_volume = v / total;
       r.share_tool = t / total;
       r.share_shear = e / total;
+      // The damper acts on the per-tet element at full k_t, whose energy in
+      // this mode differs from the smoothed blend's.
+      damper_share = model.has_smoothed_shear() ? rayleigh(y, kShearDamper) / total : r.share_shear;
     }
   }
   const double c = r.spring_damping_time, alpha = r.viscous_damping;
@@ -296,15 +315,18 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   // mode's damping rate is c_s s lambda + tau e lambda + alpha, with c_s the
   // springs' own damping time.
   const double c_springs = spring_damping_time(model), tau = model.shear_damping_time;
-  const double top_rate = (c_springs * r.share_springs + tau * r.share_shear) * r.lambda_max + alpha;
+  const double top_rate = (c_springs * r.share_springs + tau * damper_share) * r.lambda_max + alpha;
   r.damping_ratio = r.omega_max > 0 ? top_rate / (2 * r.omega_max) : 0;
   r.dt_crit_undamped = r.omega_max > 0 ? 2 / r.omega_max : std::numeric_limits<double>::infinity();
   r.dt_crit = critical_step_for_mode(r.lambda_max, top_rate);
   // Candidate 2: the top mode of the damped part (springs, and the shear
   // element with its damper): the most damped stiff mode, whose damping may
   // shrink the step more than candidate 1's.
-  const int damped = kSprings | (tau > 0 ? kShear : 0);
-  const double damped_share = r.share_springs + (tau > 0 ? r.share_shear : 0);
+  // With a smoothed element the damped part (springs + the full per-tet
+  // element) is not a part of K, so its top mode is always sought.
+  const int damped = kSprings | (tau > 0 ? (model.has_smoothed_shear() ? kShearDamper : kShear) : 0);
+  const double damped_share =
+      model.has_smoothed_shear() && tau > 0 ? 0 : r.share_springs + (tau > 0 ? r.share_shear : 0);
   r.lambda_damped = r.lambda_max;
   if (c > 0 && damped_share < 0.999) {
     const PowerResult sp = power_iteration(model, k, inv_sqrt_m, damped, options, r.lambda_gershgorin);

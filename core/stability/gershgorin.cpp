@@ -110,7 +110,8 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
           off += model.tet_k[t] * gi.norm() * volume_gradient(model, tet, k).norm() * weight(tet[k]);
     }
   }
-  // The shear element's blocks, also part of the damped rows with its damper.
+  // The per-tet shear element's blocks at full k_t: (1 - s) of them are
+  // elastic, all of them the damper's (over tau).
   Mat3 diag_shear = Mat3::Zero();
   double off_shear = 0;
   if (model.has_shear_element()) {
@@ -129,7 +130,28 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
       }
     }
   }
-  rows.all[i] = largest_eigenvalue_from_above(diag + diag_shear) + off + off_shear;
+  if (model.has_smoothed_shear()) {
+    // Node patches: block (i, j) from node a is k_a ((w_ai . w_aj) I +
+    // w_aj w_ai^T), ||.|| <= 2 k_a |w_ai| |w_aj|; the nodes a whose patch
+    // holds i are the points of i's tets.
+    std::vector<int32_t> nodes;
+    tets_of(i, [&](int32_t t) {
+      for (int32_t a : model.tet_points[t])
+        if (std::find(nodes.begin(), nodes.end(), a) == nodes.end()) nodes.push_back(a);
+    });
+    for (int32_t a : nodes) {
+      const double k = smoothed_shear_patch_k(model, a);
+      const std::vector<ShearPatchEntry> patch = smoothed_shear_patch(model, a);
+      const auto self = std::find_if(patch.begin(), patch.end(), [&](const ShearPatchEntry& e) { return e.point == i; });
+      if (self == patch.end()) continue;
+      const Vec3& wi = self->w;
+      diag += k * (wi.squaredNorm() * Mat3::Identity() + wi * wi.transpose());
+      for (const ShearPatchEntry& e : patch)
+        if (e.point != i && free(e.point)) off += 2 * k * wi.norm() * e.w.norm() * weight(e.point);
+    }
+  }
+  const double per_tet_share = 1 - model.shear_smoothed_share;
+  rows.all[i] = largest_eigenvalue_from_above(diag + per_tet_share * diag_shear) + off + per_tet_share * off_shear;
   rows.damped[i] = model.shear_damping_time > 0
                        ? largest_eigenvalue_from_above(diag_springs + diag_shear) + off_springs + off_shear
                        : largest_eigenvalue_from_above(diag_springs) + off_springs;

@@ -34,11 +34,22 @@ Triplets rest_stiffness(const Model& model) {
     add_block(t, a, b, -block);
     add_block(t, b, a, -block);
   }
-  // Shear element: k_t ((g_i . g_j) I + g_j g_i^T) (core/model/shear_element.h).
+  // Shear element: (1 - s) k_t ((g_i . g_j) I + g_j g_i^T) per tet and, with
+  // a smoothed share s, its node patches (core/model/shear_element.h).
+  const double per_tet_share = 1 - model.shear_smoothed_share;
   for (int32_t e = 0; e < static_cast<int32_t>(model.tet_shear_k.size()); ++e)
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j)
-        add_block(t, model.tet_points[e][i], model.tet_points[e][j], shear_element_rest_block(model, e, i, j));
+        add_block(t, model.tet_points[e][i], model.tet_points[e][j],
+                  per_tet_share * shear_element_rest_block(model, e, i, j));
+  if (model.has_smoothed_shear())
+    for (int32_t a = 0; a < model.npoint(); ++a) {
+      const double k = smoothed_shear_patch_k(model, a);
+      const std::vector<ShearPatchEntry> patch = smoothed_shear_patch(model, a);
+      for (const ShearPatchEntry& p : patch)
+        for (const ShearPatchEntry& q : patch)
+          add_block(t, p.point, q.point, k * (p.w.dot(q.w) * Eigen::Matrix3d::Identity() + q.w * p.w.transpose()));
+    }
   if (!model.has_volume()) return t;
   // Nodal: the energy k_a/2 (V_a - V_a^r)^2 gives G^T diag(k_a) G with
   // G = dV_a/dx (npoint x 3 npoint, row a = sum over the tets of a of their
