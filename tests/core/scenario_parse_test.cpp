@@ -318,5 +318,16 @@ TEST(ScenarioParse, VolumeFormulationIsReadAndChecked) {
   EXPECT_NE(error_of(j).find("material.volume_formulation: expected"), std::string::npos) << error_of(j);
 }
 
+TEST(ScenarioParse, ShearFormulationIsReadAndChecked) {
+  json j = minimal();
+  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::Smoothed);  // absent: smoothed
+  j["material"] = {{"poisson_ratio", 0.1}, {"shear_formulation", "per_tet"}};
+  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::PerTet);
+  j["material"]["shear_formulation"] = "smoothed";
+  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::Smoothed);
+  j["material"]["shear_formulation"] = "nodal";
+  EXPECT_NE(error_of(j).find("material.shear_formulation: expected"), std::string::npos) << error_of(j);
+}
+
 }  // namespace
 }  // namespace organsim
