@@ -32,8 +32,9 @@ std::string cpu_model_name() {
 
 enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 // The per-tet pass: a volume term, or the shear element (nu < 1/4), which
-// never comes with a volume term (core/model/stiffness.h).
-enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2, kShearElement = 3 };
+// never comes with a volume term (core/model/stiffness.h), per tet or
+// smoothed (a per-point stress pass first, core/model/shear_element.h).
+enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2, kShearElement = 3, kSmoothedShear = 4 };
 
 // Why the AVX-512 kernels cannot run `model` here ("" if they can).
 std::string avx512_refusal(const Model& model) {
@@ -158,6 +159,9 @@ class CpuBackend final : public Backend {
     if (m.has_volume())
       plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                            std::to_string(m.layout.tets.item.size()) + " slots)"});
+    if (m.has_smoothed_shear())
+      plan.passes.push_back({"shear-smoothing", "every point's stress on its node-averaged deformation gradient, "
+                                                "tets gathered per vertex, then a barrier"});
     if (m.has_shear_element())
       plan.passes.push_back({"shear-element", std::to_string(m.ntet()) +
                                                   " tets' shear element (neo-Hookean, no lambda" +
@@ -184,6 +188,7 @@ class CpuBackend final : public Backend {
     } else if (m.has_shear_element()) {
       plan.buffers.push_back({"tet slots (3 others, 3 rest shape gradients, k_t)",
                               m.layout.tets.item.size() * (3 * sizeof(int32_t) + 10 * real)});
+      if (m.has_smoothed_shear()) plan.buffers.push_back({"smoothed shear: 1/K_a and the stress per point", 10 * n * real});
     }
     if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
     plan.dispatches_per_step = 1;
@@ -413,6 +418,16 @@ class CpuBackend final : public Backend {
     } else {
       node_k_.clear(), node_rest_.clear(), node_q_.clear();
     }
+    // The smoothed shear element: 1/K_p per point (0 in no tet: its stress
+    // stays P(I) = 0) and the stresses, rewritten every step.
+    node_inv_k_.clear();
+    for (auto& a : node_stress_) a.assign(model.has_smoothed_shear() ? n : 0, 0);
+    if (model.has_smoothed_shear()) {
+      node_inv_k_.resize(n);
+      for (int32_t i = 0; i < n; ++i)
+        node_inv_k_[i] = model.point_shear_k[i] > 0 ? static_cast<Real>(1 / model.point_shear_k[i]) : Real(0);
+    }
+    smoothed_share_ = static_cast<Real>(model.shear_smoothed_share);
     pack_fast();
   }
 
@@ -559,6 +574,10 @@ class CpuBackend final : public Backend {
       if (gravity) return dispatch_tool<kTetVolume, true>(ctx, tool_kind);
       return dispatch_tool<kTetVolume, false>(ctx, tool_kind);
     }
+    if (model_->has_smoothed_shear()) {
+      if (gravity) return dispatch_tool<kSmoothedShear, true>(ctx, tool_kind);
+      return dispatch_tool<kSmoothedShear, false>(ctx, tool_kind);
+    }
     if (model_->has_shear_element()) {
       if (gravity) return dispatch_tool<kShearElement, true>(ctx, tool_kind);
       return dispatch_tool<kShearElement, false>(ctx, tool_kind);
@@ -593,6 +612,11 @@ class CpuBackend final : public Backend {
         // The nodal term's extra pass: every point's pressure before any force.
 #pragma omp for schedule(static)
         for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(c);
+      }
+      if constexpr (Volume == kSmoothedShear) {
+        // Every point's smoothed stress before any force reads it.
+#pragma omp for schedule(static)
+        for (int32_t c = 0; c < nchunk; ++c) shear_stress_chunk(c);
       }
 #pragma omp for schedule(static)
       for (int32_t c = 0; c < nchunk; ++c) chunk<Volume, Gravity, Tool>(ctx, c);
@@ -653,6 +677,67 @@ class CpuBackend final : public Backend {
     for (int32_t p = first; p < last; ++p) node_q_[p] = node_k_[p] * (node_q_[p] - node_rest_[p]);
   }
 
+  // The smoothed shear element's stress P(Fbar_p) = Fbar + phi'(J) cof Fbar
+  // of the points of chunk c into node_stress_ (row-major), with
+  // Fbar_p - I = sum over p's tet slots of k_t H_t / K_p and H_t = sum over
+  // the others q of (u_q - u_p) g_q^T, from displacements as in the force
+  // pass: at rest H = 0 exactly, Fbar = I and P = 0 in either precision.
+  void shear_stress_chunk(int32_t c) {
+    const auto& L = model_->layout;
+    const int32_t C = L.chunk_size;
+    const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
+    const Real* __restrict ux = u_.x.data();
+    const Real* __restrict uy = u_.y.data();
+    const Real* __restrict uz = u_.z.data();
+    const int32_t* __restrict ta = tet_a_.data();
+    const int32_t* __restrict tb = tet_b_.data();
+    const int32_t* __restrict tc = tet_c_.data();
+    const Real* __restrict kt = tet_k_.data();
+    const std::array<const Real*, 9> g = {shear_g_[0].data(), shear_g_[1].data(), shear_g_[2].data(),
+                                          shear_g_[3].data(), shear_g_[4].data(), shear_g_[5].data(),
+                                          shear_g_[6].data(), shear_g_[7].data(), shear_g_[8].data()};
+    for (int32_t g0 = first; g0 < last; g0 += kLanes) {
+      const int32_t lanes = std::min(kLanes, last - g0);
+      const int32_t lane0 = g0 - first;
+      const int32_t group = c * groups_per_chunk_ + lane0 / kLanes;
+      alignas(64) Real h[9][kLanes] = {};
+      for (int32_t j = 0; j < tet_width_[group]; ++j) {
+        const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
+#pragma omp simd
+        for (int32_t l = 0; l < lanes; ++l) {
+          const int32_t e = e0 + l, p = g0 + l, a = ta[e], b = tb[e], cc = tc[e];
+          const Real d[3][3] = {{ux[a] - ux[p], uy[a] - uy[p], uz[a] - uz[p]},
+                                {ux[b] - ux[p], uy[b] - uy[p], uz[b] - uz[p]},
+                                {ux[cc] - ux[p], uy[cc] - uy[p], uz[cc] - uz[p]}};
+          for (int r = 0; r < 3; ++r)
+            for (int k = 0; k < 3; ++k)
+              h[3 * r + k][l] += kt[e] * (d[0][r] * g[k][e] + d[1][r] * g[3 + k][e] + d[2][r] * g[6 + k][e]);
+        }
+      }
+#pragma omp simd
+      for (int32_t l = 0; l < lanes; ++l) {
+        const int32_t p = g0 + l;
+        const Real w = node_inv_k_[p];
+        const Real f00 = 1 + w * h[0][l], f01 = w * h[1][l], f02 = w * h[2][l];
+        const Real f10 = w * h[3][l], f11 = 1 + w * h[4][l], f12 = w * h[5][l];
+        const Real f20 = w * h[6][l], f21 = w * h[7][l], f22 = 1 + w * h[8][l];
+        const Real k00 = f11 * f22 - f12 * f21, k01 = f12 * f20 - f10 * f22, k02 = f10 * f21 - f11 * f20;
+        const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
+        const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
+        const Real slope = shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
+        node_stress_[0][p] = f00 + slope * k00;
+        node_stress_[1][p] = f01 + slope * k01;
+        node_stress_[2][p] = f02 + slope * k02;
+        node_stress_[3][p] = f10 + slope * k10;
+        node_stress_[4][p] = f11 + slope * k11;
+        node_stress_[5][p] = f12 + slope * k12;
+        node_stress_[6][p] = f20 + slope * k20;
+        node_stress_[7][p] = f21 + slope * k21;
+        node_stress_[8][p] = f22 + slope * k22;
+      }
+    }
+  }
+
   template <int Volume, bool Gravity, int Tool>
   void chunk(const StepContext<Real>& ctx, int32_t c) {
     const auto& L = model_->layout;
@@ -708,7 +793,7 @@ class CpuBackend final : public Backend {
         }
       }
 
-      if constexpr (Volume == kShearElement) {
+      if constexpr (Volume == kShearElement || Volume == kSmoothedShear) {
         // f_p = -k (F + phi'(J) cof F) g_p = k (F s + phi'(J) cof(F) s) with
         // F = I + H, H = sum over the others q of (u_q - u_p) g_q^T and
         // s = g_a + g_b + g_c = -g_p (core/model/shear_element.h). From
@@ -729,6 +814,13 @@ class CpuBackend final : public Backend {
         const Real* __restrict gcx = shear_g_[6].data();
         const Real* __restrict gcy = shear_g_[7].data();
         const Real* __restrict gcz = shear_g_[8].data();
+        // Smoothed: the per-tet stress weighs 1 - s, the mean of the four
+        // corners' smoothed stresses s (their sum times s / 4).
+        constexpr bool smoothed = Volume == kSmoothedShear;
+        const Real per_tet = smoothed ? 1 - smoothed_share_ : Real(1), corners = smoothed ? smoothed_share_ / 4 : Real(0);
+        const std::array<const Real*, 9> P = {node_stress_[0].data(), node_stress_[1].data(), node_stress_[2].data(),
+                                              node_stress_[3].data(), node_stress_[4].data(), node_stress_[5].data(),
+                                              node_stress_[6].data(), node_stress_[7].data(), node_stress_[8].data()};
         for (int32_t j = 0; j < tet_width_[group]; ++j) {
           const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
 #pragma omp simd
@@ -776,12 +868,19 @@ class CpuBackend final : public Backend {
             const Real h2 = g02 * cx0 + g12 * cx1 + g22 * cx2;
             const Real jm = static_cast<Real>(kShearElementMinJ);
             const Real damper = ctx.shear_damping / (J > jm ? J : jm);
-            fx[l] += kt[e] * (f00 * sx + f01 * sy + f02 * sz + slope * cx0 +
-                              damper * (g00 * w0 + g01 * w1 + g02 * w2 + k00 * h0 + k01 * h1 + k02 * h2));
-            fy[l] += kt[e] * (f10 * sx + f11 * sy + f12 * sz + slope * cx1 +
-                              damper * (g10 * w0 + g11 * w1 + g12 * w2 + k10 * h0 + k11 * h1 + k12 * h2));
-            fz[l] += kt[e] * (f20 * sx + f21 * sy + f22 * sz + slope * cx2 +
-                              damper * (g20 * w0 + g21 * w1 + g22 * w2 + k20 * h0 + k21 * h1 + k22 * h2));
+            Real ex = per_tet * (f00 * sx + f01 * sy + f02 * sz + slope * cx0);
+            Real ey = per_tet * (f10 * sx + f11 * sy + f12 * sz + slope * cx1);
+            Real ez = per_tet * (f20 * sx + f21 * sy + f22 * sz + slope * cx2);
+            if constexpr (smoothed) {
+              // The corners' summed smoothed stresses applied to s.
+              auto sum = [&](int i) { return P[i][p] + P[i][a] + P[i][b] + P[i][cc]; };
+              ex += corners * (sum(0) * sx + sum(1) * sy + sum(2) * sz);
+              ey += corners * (sum(3) * sx + sum(4) * sy + sum(5) * sz);
+              ez += corners * (sum(6) * sx + sum(7) * sy + sum(8) * sz);
+            }
+            fx[l] += kt[e] * (ex + damper * (g00 * w0 + g01 * w1 + g02 * w2 + k00 * h0 + k01 * h1 + k02 * h2));
+            fy[l] += kt[e] * (ey + damper * (g10 * w0 + g11 * w1 + g12 * w2 + k10 * h0 + k11 * h1 + k12 * h2));
+            fz[l] += kt[e] * (ez + damper * (g20 * w0 + g21 * w1 + g22 * w2 + k20 * h0 + k21 * h1 + k22 * h2));
           }
         }
       } else if constexpr (Volume != kNoVolume) {
@@ -894,6 +993,9 @@ class CpuBackend final : public Backend {
   std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term; k_t with the shear element
   std::array<std::vector<Real>, 9> shear_g_;    // shear element: g_a, g_b, g_c (x, y, z each) per slot (nentry); else empty
   std::vector<Real> node_k_, node_rest_, node_q_;  // nodal term: k_a, V_a^r, pressure (npoint); else empty
+  std::vector<Real> node_inv_k_;                     // smoothed shear element: 1/K_a (npoint); else empty
+  std::array<std::vector<Real>, 9> node_stress_;     // its P(Fbar_a), row-major (npoint each); else empty
+  Real smoothed_share_ = 0;                          // its s (Model::shear_smoothed_share)
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;

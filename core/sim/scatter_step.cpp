@@ -69,24 +69,47 @@ void ScatterStep<Real>::step(double dt_seconds) {
   // Shear element: f_i = -k_t (F + phi'(J) cof F) g_i with F = I + sum_i u_i g_i^T
   // (from the displacements, so the rest state is exactly force-free), and
   // its damper -(2 tau k_t / J_d) sym(Fdot cof^T) cof g_i, dt Fdot = sum_i d_i g_i^T.
+  // Smoothed: (1 - s) of the per-tet stress, s of the mean of the corners'
+  // P(Fbar_a), Fbar_a = I + sum over the tets of a of k_t (F_t - I) / K_a.
   const Real damping = static_cast<Real>(m.shear_damping_time) * inv_dt, jm = Real(kShearElementMinJ);
-  for (int32_t t = 0; t < static_cast<int32_t>(m.tet_shear_k.size()); ++t) {
+  const Real s = static_cast<Real>(m.shear_smoothed_share);
+  auto gradient = [&](int32_t t, const std::vector<V3>& w) {
     const Tet& tet = m.tet_points[t];
-    const auto& g = m.tet_shape_gradient[t];
-    M3 F = M3::Identity(), G = M3::Zero();
-    for (int i = 1; i < 4; ++i) {
-      F += (u_[tet[i]] - u_[tet[0]]) * g[i].cast<Real>().transpose();
-      G += (d_[tet[i]] - d_[tet[0]]) * g[i].cast<Real>().transpose();
-    }
+    M3 h = M3::Zero();
+    for (int i = 1; i < 4; ++i) h += (w[tet[i]] - w[tet[0]]) * m.tet_shape_gradient[t][i].cast<Real>().transpose();
+    return h;
+  };
+  auto cofactor = [](const M3& F) {
     M3 cof;
     cof.col(0) = F.col(1).cross(F.col(2));
     cof.col(1) = F.col(2).cross(F.col(0));
     cof.col(2) = F.col(0).cross(F.col(1));
+    return cof;
+  };
+  if (m.has_smoothed_shear()) {
+    stress_.assign(m.npoint(), M3::Zero());
+    for (int32_t t = 0; t < m.ntet(); ++t) {
+      const M3 h = Real(m.tet_shear_k[t]) * gradient(t, u_);
+      for (int32_t a : m.tet_points[t]) stress_[a] += h;
+    }
+    for (int32_t a = 0; a < m.npoint(); ++a) {
+      const Real k = static_cast<Real>(m.point_shear_k[a]);
+      const M3 F = M3::Identity() + (k > 0 ? M3(stress_[a] / k) : M3::Zero());
+      const M3 cof = cofactor(F);
+      stress_[a] = F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
+    }
+  }
+  for (int32_t t = 0; t < static_cast<int32_t>(m.tet_shear_k.size()); ++t) {
+    const Tet& tet = m.tet_points[t];
+    const M3 F = M3::Identity() + gradient(t, u_), G = gradient(t, d_);
+    const M3 cof = cofactor(F);
     const Real J = F.col(0).dot(cof.col(0));
     const M3 A = G * cof.transpose();
-    const M3 P = Real(m.tet_shear_k[t]) *
-                 (F + shear_barrier_slope(J) * cof + (damping / std::max(J, jm)) * (A + A.transpose()) * cof);
-    for (int i = 0; i < 4; ++i) force_[tet[i]] -= P * g[i].cast<Real>();
+    M3 stress = (1 - s) * (F + shear_barrier_slope(J) * cof) + (damping / std::max(J, jm)) * (A + A.transpose()) * cof;
+    if (m.has_smoothed_shear())
+      stress += (s / 4) * (stress_[tet[0]] + stress_[tet[1]] + stress_[tet[2]] + stress_[tet[3]]);
+    const M3 P = Real(m.tet_shear_k[t]) * stress;
+    for (int i = 0; i < 4; ++i) force_[tet[i]] -= P * m.tet_shape_gradient[t][i].cast<Real>();
   }
   // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m, u' = u + d'.
   for (int32_t i = 0; i < m.npoint(); ++i) {

@@ -29,6 +29,7 @@ class ScatterStep {
   const Model& model_;
   std::vector<V3> rest_, u_, d_, force_;
   std::vector<Real> nodal_;  // nodal pressures of the nodal volume term (npoint; empty without it)
+  std::vector<M3> stress_;   // smoothed shear element: sum of k_t H_t, then P(Fbar), per point (npoint; else empty)
 };
 
 extern template class ScatterStep<float>;

@@ -30,13 +30,19 @@
 namespace organsim {
 namespace {
 
-Material shear_material(double nu = 0.1) { return testing::soft_material(nu); }
+Material shear_material(double nu = 0.1, ShearFormulation form = ShearFormulation::Smoothed) {
+  Material m = testing::soft_material(nu);
+  m.shear_formulation = form;
+  return m;
+}
 
 Model shear_model(unsigned seed, int cells, double nu = 0.1, int32_t chunk = kDefaultChunkSize,
-                  const Vec3& gravity = Vec3::Zero()) {
-  return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), shear_material(nu),
+                  const Vec3& gravity = Vec3::Zero(), ShearFormulation form = ShearFormulation::Smoothed) {
+  return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), shear_material(nu, form),
                      testing::fixed_bottom_options(gravity, chunk));
 }
+
+constexpr ShearFormulation kBothForms[] = {ShearFormulation::Smoothed, ShearFormulation::PerTet};
 
 double largest_norm(const std::vector<Vec3>& v) {
   double s = 0;
@@ -217,15 +223,42 @@ TEST(ShearElement, RigidRotationHasNoForce) {
 // from a deformed, moving state, for several chunk sizes (padding, lane
 // groups), with gravity.
 TEST(ShearElement, GenericKernelMatchesTheReferenceOnRandomMeshes) {
-  testing::expect_generic_kernel_matches_reference(
-      [](unsigned seed, int32_t chunk) { return shear_model(seed, 5, 0.1, chunk, Vec3(0.3, -1, -9.81)); });
+  for (ShearFormulation form : kBothForms) {
+    SCOPED_TRACE(shear_formulation_name(form));
+    testing::expect_generic_kernel_matches_reference([form](unsigned seed, int32_t chunk) {
+      return shear_model(seed, 5, 0.1, chunk, Vec3(0.3, -1, -9.81), form);
+    });
+  }
+}
+
+// The smoothed stresses are a per-point pass with a barrier, no atomics:
+// 200 steps from a deformed, moving state under gravity on two threads are
+// bitwise those on one, in both precisions (chunk 8: many chunks per thread).
+TEST(ShearElement, TwoThreadsAreBitIdenticalToOne) {
+  for (ShearFormulation form : kBothForms) {
+    const Model model = shear_model(6, 5, 0.1, 8, Vec3(0, 0, -9.81), form);
+    std::vector<Vec3> x, x_prev;
+    testing::random_state(model, 3, 1e-4, x, x_prev);
+    for (Precision precision : {Precision::Double, Precision::Float}) {
+      std::vector<Vec3> end[2];
+      for (int threads : {1, 2}) {
+        auto backend = make_cpu_backend(model, {}, {precision, threads, CpuKernel::Generic});
+        backend->set_state(x, x_prev);
+        testing::run_ticks(*backend, 20, 1e-4, 10);
+        backend->positions(end[threads - 1]);
+      }
+      for (int32_t i = 0; i < model.npoint(); ++i)
+        ASSERT_EQ(end[0][i], end[1][i]) << shear_formulation_name(form) << " point " << i;
+    }
+  }
 }
 
 // The kernel's strain comes from displacements, so the rest state is
 // exactly force-free in either precision: 1000 steps without gravity must
 // not move a bit.
 TEST(ShearElement, RestStateIsExactlyForceFree) {
-  const Model model = shear_model(4, 5, 0.05);
+  for (ShearFormulation form : kBothForms) {
+  const Model model = shear_model(4, 5, 0.05, kDefaultChunkSize, Vec3::Zero(), form);
   for (Precision precision : {Precision::Double, Precision::Float}) {
     auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
     testing::run_ticks(*backend, 100, 1e-4, 10);
@@ -233,15 +266,18 @@ TEST(ShearElement, RestStateIsExactlyForceFree) {
     backend->positions(x);
     for (int32_t i = 0; i < model.npoint(); ++i) ASSERT_EQ(x[i], model.rest_position[i]) << i;
   }
+  }
 }
 
 // The scatter step that bench times runs the same physics: 200 steps of both
 // in double from rest under gravity agree to rounding.
 TEST(ShearElement, ScatterStepMatchesTheGenericKernel) {
-  const Model model = shear_model(5, 4, 0.1, kDefaultChunkSize, Vec3(0, 0, -9.81));
-  const testing::PathDifference d = testing::scatter_against_generic(model, 200, 1e-4);
-  ASSERT_GT(d.motion, 1e-6);
-  EXPECT_LT(d.worst, 1e-9 * d.motion);  // summation order over 200 steps: ~1e-12 of the motion
+  for (ShearFormulation form : kBothForms) {
+    const Model model = shear_model(5, 4, 0.1, kDefaultChunkSize, Vec3(0, 0, -9.81), form);
+    const testing::PathDifference d = testing::scatter_against_generic(model, 200, 1e-4);
+    ASSERT_GT(d.motion, 1e-6);
+    EXPECT_LT(d.worst, 1e-9 * d.motion) << shear_formulation_name(form);  // summation order over 200 steps: ~1e-12 of the motion
+  }
 }
 
 // A cut rewrites tets' vertices to copies of the same rest points: the
@@ -379,7 +415,8 @@ TEST(ShearElement, ModelsWithItRunOnTheGenericKernel) {
   }
   auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Auto});
   EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
-  EXPECT_EQ(backend->plan().passes[1].name, "shear-element");
+  EXPECT_EQ(backend->plan().passes[1].name, "shear-smoothing");  // the default form's extra pass
+  EXPECT_EQ(backend->plan().passes[2].name, "shear-element");
 }
 
 }  // namespace
