@@ -5,7 +5,8 @@
 // lanes read neighbouring entries. No atomics: every point writes only itself.
 // Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
 // nodal term, pressures from nodal_pressure.comp), SHEAR_ELEMENT (the per-tet
-// shear element of nu < 1/4), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// shear element of nu < 1/4; with SMOOTHED_SHARE s, its smoothed form, the
+// corners' stresses from shear_smoothing.comp), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
 // and RECORD_FORCE (tests: also store each point's total force).
 // THREADS_PER_POINT T (default 1): T invocations share a point's gathers, slot
 // j going to invocation j mod T, and invocation 0 adds the T partial sums in a
@@ -49,6 +50,10 @@ struct ShearEntry {
 };
 layout(std430, binding = ORGANSIM_GL_B_REST) readonly buffer Rest { vec4 rest[]; };
 layout(std430, binding = ORGANSIM_GL_B_SHEAR) readonly buffer Shear { ShearEntry shear[]; };
+#ifdef SMOOTHED_SHARE
+layout(std430, binding = ORGANSIM_GL_B_SHEAR_STRESS) readonly buffer ShearStress { vec4 stress[]; };
+mat3 smoothed_stress(int q) { return mat3(stress[3 * q].xyz, stress[3 * q + 1].xyz, stress[3 * q + 2].xyz); }
+#endif
 #endif
 #ifdef NODAL_VOLUME
 layout(std430, binding = ORGANSIM_GL_B_PRESSURE) readonly buffer Pressure { float pressure[]; };
@@ -162,7 +167,15 @@ void main() {
     const vec3 c = cof * s;
     const mat3 G = outerProduct(d_cur[e.a].xyz - di, g.ga.xyz) + outerProduct(d_cur[e.b].xyz - di, g.gb.xyz) +
                    outerProduct(d_cur[e.c].xyz - di, g.gc.xyz);
-    f += g.ga.w * (F * s + slope * c) +
+#ifdef SMOOTHED_SHARE
+    // Smoothed: (1 - s) of the per-tet stress, s of the corners' mean.
+    const vec3 elastic = (1.0 - SMOOTHED_SHARE) * (F * s + slope * c) +
+                         (0.25 * SMOOTHED_SHARE) * ((smoothed_stress(p) + smoothed_stress(e.a) + smoothed_stress(e.b) +
+                                                     smoothed_stress(e.c)) * s);
+#else
+    const vec3 elastic = F * s + slope * c;
+#endif
+    f += g.ga.w * elastic +
          (g.gb.w * inv_dt / max(J, jm)) * (G * (transpose(cof) * c) + cof * (transpose(G) * c));
   }
 #endif

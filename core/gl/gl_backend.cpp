@@ -28,6 +28,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   volume_ = model.has_volume();
   nodal_ = model.has_nodal_volume();
   shear_ = model.has_shear_element();
+  smoothed_ = model.has_smoothed_shear();
   gravity_ = model.has_gravity();
   push_ = tool.present && tool.mode == ToolMode::Push;
   pull_ = tool.present && tool.mode == ToolMode::Pull;
@@ -37,6 +38,8 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (volume_) defines.push_back("HAS_VOLUME");
   if (nodal_) defines.push_back("NODAL_VOLUME");
   if (shear_) defines.push_back("SHEAR_ELEMENT");
+  // The share as a literal, exact in float (1/2).
+  if (smoothed_) defines.push_back("SMOOTHED_SHARE " + std::to_string(model.shear_smoothed_share));
   if (gravity_) defines.push_back("HAS_GRAVITY");
   if (push_) defines.push_back("TOOL_PUSH");
   if (pull_) defines.push_back("TOOL_PULL");
@@ -52,6 +55,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
   if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
+  if (smoothed_) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
 
   // Buffers that do not depend on the model's size: the readback rings.
   const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
@@ -123,6 +127,12 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
     shear_params_ = create_buffer("shear element entries {g_a, k_t, g_b, g_c}",
                                   packed.shear.size() * sizeof(gl::ShearEntry), packed.shear.data(), 0);
   }
+  if (smoothed_) {
+    shear_inv_k_ = create_buffer("smoothed shear 1/K_a", packed.shear_inv_k.size() * sizeof(float),
+                                 packed.shear_inv_k.data(), 0);
+    shear_stress_ = create_buffer("smoothed shear stresses P(Fbar_a)", static_cast<size_t>(npad_) * 12 * sizeof(float),
+                                  nullptr, 0);
+  }
   if (nodal_) {
     nodal_params_ = create_buffer("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
     pressure_ = create_buffer("nodal pressures", static_cast<size_t>(npad_) * sizeof(float), nullptr, 0);
@@ -153,13 +163,15 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   if (pressure_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PRESSURE, pressure_);
   if (rest_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REST, rest_);
   if (shear_params_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR, shear_params_);
+  if (shear_inv_k_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR_NODE, shear_inv_k_);
+  if (shear_stress_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR_STRESS, shear_stress_);
   if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
 }
 
 void GlBackend::delete_model_buffers() {
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &attach_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_inv_k_, &shear_stress_, &attach_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -207,6 +219,7 @@ GlBackend::~GlBackend() {
   step_ = gl::ComputeProgram();
   reduce_ = gl::ComputeProgram();
   nodal_pressure_ = gl::ComputeProgram();
+  shear_smoothing_ = gl::ComputeProgram();
 }
 
 void GlBackend::make_current() const {
@@ -250,6 +263,12 @@ Plan GlBackend::plan() const {
                                                  " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + " points x " +
                                                  std::to_string(threads_per_point_) + " invocation(s) per point: " + fused +
                                                  ", position Verlet"});
+  if (smoothed_) {
+    plan.passes.insert(plan.passes.begin(),
+                       {"shear-smoothing (shear_smoothing.comp)",
+                        "one dispatch per substep before the step, then a storage barrier: node-averaged deformation "
+                        "gradients from " + std::to_string(m.ntet()) + " tets per vertex, stress per point"});
+  }
   if (nodal_) {
     plan.passes.insert(plan.passes.begin(),
                        {"nodal-pressure (nodal_pressure.comp)",
@@ -264,7 +283,7 @@ Plan GlBackend::plan() const {
   plan.passes.push_back({"readback", "fence per tick; the CPU reads tick n-1's reaction after submitting tick n "
                                      "(latency 1 tick, no wait unless the device is a full tick behind)"});
   for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
-  plan.dispatches_per_step = nodal_ ? 2 : 1;  // + 1 reduce per tick with a tool
+  plan.dispatches_per_step = 1 + (nodal_ ? 1 : 0) + (smoothed_ ? 1 : 0);  // + 1 reduce per tick with a tool
   plan.syncs_per_step = 0;
   return plan;
 }
@@ -360,6 +379,14 @@ Reaction GlBackend::tick(const TickRequest& request) {
     if (nodal_) {
       // Every nodal pressure before any force that reads it.
       glUseProgram(nodal_pressure_.id());
+      glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      glUseProgram(program);
+      ++dispatches_;
+    }
+    if (smoothed_) {
+      // Every smoothed stress before any force that reads it.
+      glUseProgram(shear_smoothing_.id());
       glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       glUseProgram(program);

@@ -100,6 +100,11 @@ PackedModel pack_model(const Model& model) {
       p.nodal[2 * i + 1] = static_cast<float>(model.point_rest_volume[i]);
     }
   }
+  if (model.has_smoothed_shear()) {
+    p.shear_inv_k.assign(static_cast<size_t>(p.npad), 0.0f);
+    for (int32_t i = 0; i < p.npoint; ++i)
+      if (model.point_shear_k[i] > 0) p.shear_inv_k[i] = static_cast<float>(1 / model.point_shear_k[i]);
+  }
   return p;
 }
 

@@ -49,6 +49,9 @@ struct PackedModel {
   // Nodal volume term: vec2 {k_a (N/m^5), V_a^r (m^3)} per point, zero for
   // padding (npad x 2); empty unless the model has it.
   std::vector<float> nodal;
+  // Smoothed shear element: 1/K_a per point, zero for padding and points in
+  // no tet (npad); empty unless the model has it.
+  std::vector<float> shear_inv_k;
 };
 
 // Padding entries point at the lane's own point with zero parameters: a

@@ -38,9 +38,11 @@ inline Model box_model(int nx, int ny, int nz, bool fixed_bottom, double volume_
 // The same box, 5 x 5 x 3 cubes, bottom fixed, with E = 3 kPa and a Poisson
 // ratio (its volume term from 1/4 up, its shear element below) and a
 // damping time (the default Material's unless given), s.
-inline Model poisson_box(double nu, const Vec3& gravity, double spring_damping_time = Material{}.spring_damping_time) {
+inline Model poisson_box(double nu, const Vec3& gravity, double spring_damping_time = Material{}.spring_damping_time,
+                         ShearFormulation shear_formulation = Material{}.shear_formulation) {
   const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.05), 5, 5, 3);
   Material material;
+  material.shear_formulation = shear_formulation;
   material.young_modulus = 3000;
   material.poisson_ratio = nu;
   material.spring_damping_time = spring_damping_time;

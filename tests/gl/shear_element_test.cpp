@@ -1,5 +1,6 @@
 // The GL backend with the shear element of nu < 1/4 (step.comp's
-// SHEAR_ELEMENT variant) against the double CPU reference: the force of one
+// SHEAR_ELEMENT variant, smoothed by default: shear_smoothing.comp and
+// SMOOTHED_SHARE) against the double CPU reference: the force of one
 // step on a deformed box, its damper's, and 1000 steps of a box released
 // from a shear.
 #include <gtest/gtest.h>
@@ -7,6 +8,7 @@
 #include <random>
 
 #include "core/gl/gl_backend.h"
+#include "core/model/stiffness.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/reference_forces.h"
 #include "gl_test_scenes.h"
@@ -16,24 +18,28 @@ namespace {
 
 constexpr double kDt = 1e-4;  // s
 
-// With 1 and 3 invocations per point (THREADS_PER_POINT, kernel_test.cpp).
+// Both forms (per tet; smoothed, with shear_smoothing.comp first), with 1, 3
+// and 8 invocations per point (THREADS_PER_POINT, kernel_test.cpp).
 TEST(GlShearElement, ForceMatchesTheReference) {
+  for (ShearFormulation form : {ShearFormulation::Smoothed, ShearFormulation::PerTet}) {
   for (double nu : {0.0, 0.15}) {
-   for (const int32_t threads_per_point : {1, 3}) {
+   for (const int32_t threads_per_point : {1, 3, 8}) {
     // The shared soft box: springs carry lambda, the element mu - lambda (all of it at nu = 0).
-    const Model model = gl_test::poisson_box(nu, Vec3(0, 0, -9.81));
+    const Model model = gl_test::poisson_box(nu, Vec3(0, 0, -9.81), Material{}.spring_damping_time, form);
     ASSERT_TRUE(model.has_shear_element());
+    ASSERT_EQ(model.has_smoothed_shear(), form == ShearFormulation::Smoothed);
     const double error =
         gl_test::one_substep_force_error(model, gl_test::moving_state(model, kDt), kDt, threads_per_point);
-    std::cout << "shear element nu " << nu << ", " << threads_per_point
+    std::cout << "shear element (" << shear_formulation_name(form) << ") nu " << nu << ", " << threads_per_point
               << " invocation(s) per point: max |f_gl - f_ref| / max |f_ref| = " << error << "\n";
     // Float: the displacements x - X (1 mm) carry the rounding of x (~4e-9
     // m near 0.1 m), a few 1e-6 of a displacement difference, and the
     // springs as in kernel_test.cpp (measured 7e-7 of the largest force); a
     // wrong index, sign, transpose or factor gives errors of order 1.
     // Tolerance 1e-5, as for the nodal term.
-    EXPECT_LT(error, 1e-5) << "nu " << nu << ", " << threads_per_point << " per point";
+    EXPECT_LT(error, 1e-5) << shear_formulation_name(form) << " nu " << nu << ", " << threads_per_point << " per point";
    }
+  }
   }
 }
 
