@@ -48,8 +48,6 @@ double barrier(double J) {
   return -std::log(jm) - (J - jm) / jm + (J - jm) * (J - jm) / (2 * jm * jm);
 }
 
-}  // namespace
-
 double psi(const Eigen::Matrix3d& F) { return (F.squaredNorm() - 3) / 2 + barrier(F.determinant()); }
 
 // P(F) = F + phi'(J) cof F, the first Piola-Kirchhoff stress of psi.
@@ -69,6 +67,8 @@ std::vector<Eigen::Matrix3d> smoothed_gradients(const Model& model, const std::v
     h[a] = Eigen::Matrix3d::Identity() + (model.point_shear_k[a] > 0 ? h[a] / model.point_shear_k[a] : h[a]);
   return h;
 }
+
+}  // namespace
 
 double shear_element_energy(const Model& model, const std::vector<Vec3>& x) {
   const double s = model.shear_smoothed_share;

@@ -113,7 +113,7 @@ struct ShearPatchEntry {
 };
 std::vector<ShearPatchEntry> smoothed_shear_patch(const Model& model, int32_t a);
 
-// The weight s K_a / 4 of node a's patch blocks, N/m^-1 (J).
+// The weight s K_a / 4 of node a's patch blocks, J (times w w^T in 1/m^2: N/m).
 inline double smoothed_shear_patch_k(const Model& model, int32_t a) {
   return model.shear_smoothed_share * model.point_shear_k[a] / 4;
 }
