@@ -32,9 +32,8 @@
 #define ORGANSIM_GL_B_NODAL 13    // vec2 {k_a (N/m^5), V_a^r (m^3)} of the nodal volume term (npad); 0 for padding
 #define ORGANSIM_GL_B_PRESSURE 14 // float nodal pressure q_a = k_a (V_a - V_a^r), Pa (npad); nodal_pressure.comp
 #define ORGANSIM_GL_B_REST 15     // vec4 rest positions X, m (npad); the shear element's displacements x - X
-#define ORGANSIM_GL_B_SHEAR 16    // {vec4 g_a k_t, g_b d_t, g_c 0} shear element per tet entry (ntet_entry); 0 for padding
-#define ORGANSIM_GL_B_SHEAR_NODE 17   // float 1/K_a of the smoothed shear element, 1/J (npad); 0 for padding
-#define ORGANSIM_GL_B_SHEAR_STRESS 18 // 3 vec4 per point: columns of P(Fbar_a) (npad); shear_smoothing.comp
+#define ORGANSIM_GL_B_SHEAR 16    // {vec4 g_a k_t, g_b d_t, g_c k_t/K_p} shear element per tet entry (ntet_entry)
+#define ORGANSIM_GL_B_SHEAR_STRESS 17  // vec4 x 3 per point: P(Fbar_p)'s columns (npad x 3); shear_smoothing.comp
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s

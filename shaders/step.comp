@@ -5,8 +5,8 @@
 // lanes read neighbouring entries. No atomics: every point writes only itself.
 // Variants (prepended #defines): HAS_VOLUME (with NODAL_VOLUME: the averaged
 // nodal term, pressures from nodal_pressure.comp), SHEAR_ELEMENT (the per-tet
-// shear element of nu < 1/4; with SMOOTHED_SHARE s, its smoothed form, the
-// corners' stresses from shear_smoothing.comp), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// shear element of nu < 1/4; with SMOOTHED_SHEAR s its node-smoothed share s,
+// stresses from shear_smoothing.comp), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
 // and RECORD_FORCE (tests: also store each point's total force).
 // THREADS_PER_POINT T (default 1): T invocations share a point's gathers, slot
 // j going to invocation j mod T, and invocation 0 adds the T partial sums in a
@@ -43,17 +43,16 @@ layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { Spring
 layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
 #endif
 #ifdef SHEAR_ELEMENT
-struct ShearEntry {
-  vec4 ga;  // rest gradient of a's barycentric coordinate (1/m), w = k_t = mu_e V_t^r (J)
-  vec4 gb;  // b's, w = d_t = tau k_t, the damper (J s)
-  vec4 gc;  // c's, w unused
-};
+#include "shear_element.glsl"
 layout(std430, binding = ORGANSIM_GL_B_REST) readonly buffer Rest { vec4 rest[]; };
 layout(std430, binding = ORGANSIM_GL_B_SHEAR) readonly buffer Shear { ShearEntry shear[]; };
-#ifdef SMOOTHED_SHARE
-layout(std430, binding = ORGANSIM_GL_B_SHEAR_STRESS) readonly buffer ShearStress { vec4 stress[]; };
-mat3 smoothed_stress(int q) { return mat3(stress[3 * q].xyz, stress[3 * q + 1].xyz, stress[3 * q + 2].xyz); }
 #endif
+#ifdef SMOOTHED_SHEAR
+layout(std430, binding = ORGANSIM_GL_B_SHEAR_STRESS) readonly buffer ShearStress { vec4 smoothed_stress_in[]; };
+// P(Fbar_q) of point q, written by shear_smoothing.comp.
+mat3 smoothed_stress(int q) {
+  return mat3(smoothed_stress_in[3 * q].xyz, smoothed_stress_in[3 * q + 1].xyz, smoothed_stress_in[3 * q + 2].xyz);
+}
 #endif
 #ifdef NODAL_VOLUME
 layout(std430, binding = ORGANSIM_GL_B_PRESSURE) readonly buffer Pressure { float pressure[]; };
@@ -144,39 +143,39 @@ void main() {
 #endif
 
 #ifdef SHEAR_ELEMENT
-  // f_p = k_t (F s + phi'(J) cof(F) s) with F = I + sum over the others q of
-  // (u_q - u_p) g_q^T from displacements u = x - X, s = g_a + g_b + g_c
-  // (core/model/shear_element.h). GLSL matrices are column-major:
-  // outerProduct(du, g) is du g^T, and cof F's columns are the cross
-  // products of F's other columns. The damper adds
+  // f_p = k_t P(F) s with P(F) = F + phi'(J) cof F, F = I + sum over the
+  // others q of (u_q - u_p) g_q^T from displacements u = x - X, s = g_a +
+  // g_b + g_c = -g_p (core/model/shear_element.h, shaders/shear_element.glsl).
+  // Smoothed: k_t [(1 - s_sm) P(F) + s_sm Pbar] s, Pbar the mean of the four
+  // vertices' P(Fbar) from shear_smoothing.comp. The damper (full d_t) adds
   // (d_t / (dt J_d)) (G (cof^T c) + cof (G^T c)), c = cof s, G = sum over the
   // others q of (d_q - d_p) g_q^T = dt Fdot, J_d = max(J, J_min).
   const vec3 ui = xi - rest[p].xyz;
-  const float jm = 0.5;  // kShearElementMinJ
+#ifdef SMOOTHED_SHEAR
+  const mat3 Pp = smoothed_stress(p);
+#endif
   for (int j = part; j < info.w; j += THREADS_PER_POINT) {
     const int slot = info.z + j * ORGANSIM_GL_CHUNK + int(lane);
     const TetEntry e = tets[slot];
     const ShearEntry g = shear[slot];
-    const mat3 F = mat3(1.0) + outerProduct(x_cur[e.a].xyz - rest[e.a].xyz - ui, g.ga.xyz) +
-                   outerProduct(x_cur[e.b].xyz - rest[e.b].xyz - ui, g.gb.xyz) +
-                   outerProduct(x_cur[e.c].xyz - rest[e.c].xyz - ui, g.gc.xyz);
-    const mat3 cof = mat3(cross(F[1], F[2]), cross(F[2], F[0]), cross(F[0], F[1]));
+    const mat3 F = mat3(1.0) + shear_displacement_gradient(x_cur[e.a].xyz - rest[e.a].xyz - ui,
+                                                           x_cur[e.b].xyz - rest[e.b].xyz - ui,
+                                                           x_cur[e.c].xyz - rest[e.c].xyz - ui, g);
+    const mat3 cof = shear_cofactor(F);
     const float J = dot(F[0], cof[0]);
-    const float slope = J >= jm ? -1.0 / J : (J - 2.0 * jm) / (jm * jm);
     const vec3 s = g.ga.xyz + g.gb.xyz + g.gc.xyz;
     const vec3 c = cof * s;
+    const vec3 per_tet = F * s + shear_barrier_slope(J) * c;  // P(F) s
+#ifdef SMOOTHED_SHEAR
+    const mat3 Pbar = 0.25 * (Pp + smoothed_stress(e.a) + smoothed_stress(e.b) + smoothed_stress(e.c));
+    const vec3 elastic = (1.0 - SMOOTHED_SHEAR) * per_tet + SMOOTHED_SHEAR * (Pbar * s);
+#else
+    const vec3 elastic = per_tet;
+#endif
     const mat3 G = outerProduct(d_cur[e.a].xyz - di, g.ga.xyz) + outerProduct(d_cur[e.b].xyz - di, g.gb.xyz) +
                    outerProduct(d_cur[e.c].xyz - di, g.gc.xyz);
-#ifdef SMOOTHED_SHARE
-    // Smoothed: (1 - s) of the per-tet stress, s of the corners' mean.
-    const vec3 elastic = (1.0 - SMOOTHED_SHARE) * (F * s + slope * c) +
-                         (0.25 * SMOOTHED_SHARE) * ((smoothed_stress(p) + smoothed_stress(e.a) + smoothed_stress(e.b) +
-                                                     smoothed_stress(e.c)) * s);
-#else
-    const vec3 elastic = F * s + slope * c;
-#endif
     f += g.ga.w * elastic +
-         (g.gb.w * inv_dt / max(J, jm)) * (G * (transpose(cof) * c) + cof * (transpose(G) * c));
+         (g.gb.w * inv_dt / max(J, kShearMinJ)) * (G * (transpose(cof) * c) + cof * (transpose(G) * c));
   }
 #endif
 

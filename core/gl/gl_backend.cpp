@@ -3,6 +3,7 @@
 #include <EGL/egl.h>
 
 #include <cstddef>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
@@ -16,6 +17,13 @@ namespace {
 constexpr int kSlots = ORGANSIM_GL_READBACK_SLOTS;
 constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // status slot value: every position finite
 constexpr GLuint64 kReadbackTimeoutNs = 10'000'000'000ull;  // a tick taking 10 s is a hung device
+
+// `value` as a GLSL float literal that rounds to the same float.
+std::string float_literal(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.9e", static_cast<double>(static_cast<float>(value)));
+  return text;
+}
 
 }  // namespace
 
@@ -38,8 +46,8 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (volume_) defines.push_back("HAS_VOLUME");
   if (nodal_) defines.push_back("NODAL_VOLUME");
   if (shear_) defines.push_back("SHEAR_ELEMENT");
-  // The share as a literal, exact in float (1/2).
-  if (smoothed_) defines.push_back("SMOOTHED_SHARE " + std::to_string(model.shear_smoothed_share));
+  // The share s as a float literal (max_digits10: the same float as the CPU's).
+  if (smoothed_) defines.push_back("SMOOTHED_SHEAR " + float_literal(model.shear_smoothed_share));
   if (gravity_) defines.push_back("HAS_GRAVITY");
   if (push_) defines.push_back("TOOL_PUSH");
   if (pull_) defines.push_back("TOOL_PULL");
@@ -124,18 +132,16 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   }
   if (shear_) {
     rest_ = create_buffer("rest positions", packed.rest.size() * sizeof(float), packed.rest.data(), 0);
-    shear_params_ = create_buffer("shear element entries {g_a, k_t, g_b, g_c}",
+    shear_params_ = create_buffer("shear element entries {g_a k_t, g_b d_t, g_c w}",
                                   packed.shear.size() * sizeof(gl::ShearEntry), packed.shear.data(), 0);
-  }
-  if (smoothed_) {
-    shear_inv_k_ = create_buffer("smoothed shear 1/K_a", packed.shear_inv_k.size() * sizeof(float),
-                                 packed.shear_inv_k.data(), 0);
-    shear_stress_ = create_buffer("smoothed shear stresses P(Fbar_a)", static_cast<size_t>(npad_) * 12 * sizeof(float),
-                                  nullptr, 0);
   }
   if (nodal_) {
     nodal_params_ = create_buffer("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
     pressure_ = create_buffer("nodal pressures", static_cast<size_t>(npad_) * sizeof(float), nullptr, 0);
+  }
+  if (smoothed_) {
+    shear_stress_ = create_buffer("smoothed shear stress P(Fbar) (3 vec4 per point)",
+                                  static_cast<size_t>(npad_) * 12 * sizeof(float), nullptr, 0);
   }
   if (pull_) {
     // Attachments survive a rebuild: the ids they name are kept.
@@ -163,7 +169,6 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   if (pressure_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PRESSURE, pressure_);
   if (rest_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_REST, rest_);
   if (shear_params_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR, shear_params_);
-  if (shear_inv_k_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR_NODE, shear_inv_k_);
   if (shear_stress_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR_STRESS, shear_stress_);
   if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
@@ -171,7 +176,7 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
 }
 
 void GlBackend::delete_model_buffers() {
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_inv_k_, &shear_stress_, &attach_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -254,8 +259,9 @@ Plan GlBackend::plan() const {
   if (m.nsuture() > 0) fused += " of which " + std::to_string(m.nsuture()) + " sutures (tension only, rest length per tick)";
   if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
   if (shear_)
-    fused += ", shear element" + std::string(m.shear_damping_time > 0 ? " and its damper" : "") + " of " +
-             std::to_string(m.ntet()) + " tets per vertex";
+    fused += std::string(smoothed_ ? ", smoothed shear element" : ", shear element") +
+             (m.shear_damping_time > 0 ? " and its damper" : "") + " of " + std::to_string(m.ntet()) +
+             " tets per vertex";
   if (gravity_) fused += ", gravity";
   if (push_) fused += ", sphere penalty contact";
   if (pull_) fused += ", grasp attachment springs";
@@ -263,17 +269,17 @@ Plan GlBackend::plan() const {
                                                  " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + " points x " +
                                                  std::to_string(threads_per_point_) + " invocation(s) per point: " + fused +
                                                  ", position Verlet"});
-  if (smoothed_) {
-    plan.passes.insert(plan.passes.begin(),
-                       {"shear-smoothing (shear_smoothing.comp)",
-                        "one dispatch per substep before the step, then a storage barrier: node-averaged deformation "
-                        "gradients from " + std::to_string(m.ntet()) + " tets per vertex, stress per point"});
-  }
   if (nodal_) {
     plan.passes.insert(plan.passes.begin(),
                        {"nodal-pressure (nodal_pressure.comp)",
                         "one dispatch per substep before the step, then a storage barrier: nodal volumes from " +
                             std::to_string(m.ntet()) + " tets per vertex, pressure per point"});
+  }
+  if (smoothed_) {
+    plan.passes.insert(plan.passes.begin(),
+                       {"shear-smoothing (shear_smoothing.comp)",
+                        "one dispatch per substep before the step, then a storage barrier: smoothed deformation "
+                        "gradients from " + std::to_string(m.ntet()) + " tets per vertex, P(Fbar) per point"});
   }
   if (tool_.present) {
     plan.passes.push_back({"reduce-reaction (reduce_reaction.comp)",
@@ -283,7 +289,9 @@ Plan GlBackend::plan() const {
   plan.passes.push_back({"readback", "fence per tick; the CPU reads tick n-1's reaction after submitting tick n "
                                      "(latency 1 tick, no wait unless the device is a full tick behind)"});
   for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
-  plan.dispatches_per_step = 1 + (nodal_ ? 1 : 0) + (smoothed_ ? 1 : 0);  // + 1 reduce per tick with a tool
+  // The step, plus a per-point pass before it for the nodal volume term or
+  // the smoothed shear element (never both); + 1 reduce per tick with a tool.
+  plan.dispatches_per_step = 1 + (nodal_ ? 1 : 0) + (smoothed_ ? 1 : 0);
   plan.syncs_per_step = 0;
   return plan;
 }
@@ -376,17 +384,10 @@ Reaction GlBackend::tick(const TickRequest& request) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_[cur_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[1 - cur_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[1 - cur_]);
-    if (nodal_) {
-      // Every nodal pressure before any force that reads it.
-      glUseProgram(nodal_pressure_.id());
-      glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
-      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-      glUseProgram(program);
-      ++dispatches_;
-    }
-    if (smoothed_) {
-      // Every smoothed stress before any force that reads it.
-      glUseProgram(shear_smoothing_.id());
+    // Every nodal pressure or smoothed stress before any force that reads it.
+    for (const gl::ComputeProgram* pass : {&nodal_pressure_, &shear_smoothing_}) {
+      if (!pass->id()) continue;
+      glUseProgram(pass->id());
       glDispatchCompute(static_cast<GLuint>(nchunk_), 1, 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       glUseProgram(program);

@@ -85,18 +85,19 @@ class GlBackend final : public Backend {
   GlBackendOptions options_;
   std::unique_ptr<gl::EglContext> context_;
   int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0;
-  bool volume_ = false, nodal_ = false, shear_ = false, smoothed_ = false, gravity_ = false, push_ = false, pull_ = false;
+  bool volume_ = false, nodal_ = false, shear_ = false, smoothed_ = false, gravity_ = false, push_ = false,
+       pull_ = false;
   int32_t threads_per_point_ = 1;
 
-  gl::ComputeProgram step_, reduce_, nodal_pressure_;  // the last with the nodal volume term only
-  gl::ComputeProgram shear_smoothing_;                 // with the smoothed shear element only
+  // nodal_pressure_ with the nodal volume term only, shear_smoothing_ with the
+  // smoothed shear element only (id 0 otherwise).
+  gl::ComputeProgram step_, reduce_, nodal_pressure_, shear_smoothing_;
   // Ping-pong pairs: x_[cur_], d_[cur_] hold x_t and d_t = x_t - x_{t-1};
   // the step writes x_[1 - cur_], d_[1 - cur_].
   std::array<GLuint, 2> x_{}, d_{};
   int cur_ = 0;
-  GLuint shear_inv_k_ = 0, shear_stress_ = 0;  // smoothed shear element: 1/K_a and P(Fbar_a) per point
   GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, nodal_params_ = 0, pressure_ = 0, rest_ = 0, shear_params_ = 0,
-         attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
+         shear_stress_ = 0, attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;

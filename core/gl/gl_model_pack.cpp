@@ -81,16 +81,21 @@ PackedModel pack_model(const Model& model) {
     }
   }
   if (model.has_shear_element()) {
-    p.shear.assign(L.tets.item.size(), ShearEntry{});  // padding: zero gradients and k_t, no force
-    for (size_t e = 0; e < L.tets.item.size(); ++e) {
-      const int32_t t = L.tets.item[e];
-      if (t < 0) continue;
-      float* g[3] = {p.shear[e].ga, p.shear[e].gb, p.shear[e].gc};
-      for (int k = 0; k < 3; ++k)
-        for (int axis = 0; axis < 3; ++axis)
-          g[k][axis] = static_cast<float>(shape_gradient_of(model, t, L.tet_others[e][k])[axis]);
-      p.shear[e].k = static_cast<float>(model.tet_shear_k[t]);
-      p.shear[e].d = static_cast<float>(model.shear_damping_time * model.tet_shear_k[t]);
+    p.shear.assign(L.tets.item.size(), ShearEntry{});  // padding: zero gradients, k_t and w, no force
+    for (int32_t c = 0; c < p.nchunk; ++c) {
+      for (int32_t e = L.tets.chunk_offset[c]; e < L.tets.chunk_offset[c + 1]; ++e) {
+        const int32_t t = L.tets.item[e];
+        if (t < 0) continue;
+        float* g[3] = {p.shear[e].ga, p.shear[e].gb, p.shear[e].gc};
+        for (int k = 0; k < 3; ++k)
+          for (int axis = 0; axis < 3; ++axis)
+            g[k][axis] = static_cast<float>(shape_gradient_of(model, t, L.tet_others[e][k])[axis]);
+        p.shear[e].k = static_cast<float>(model.tet_shear_k[t]);
+        p.shear[e].d = static_cast<float>(model.shear_damping_time * model.tet_shear_k[t]);
+        // The entry's point holds tet t, so its K_p > 0.
+        if (model.has_smoothed_shear())
+          p.shear[e].w = static_cast<float>(model.tet_shear_k[t] / model.point_shear_k[self(L.tets, c, e)]);
+      }
     }
   }
   if (model.has_nodal_volume()) {
@@ -99,11 +104,6 @@ PackedModel pack_model(const Model& model) {
       p.nodal[2 * i] = static_cast<float>(model.point_volume_k[i]);
       p.nodal[2 * i + 1] = static_cast<float>(model.point_rest_volume[i]);
     }
-  }
-  if (model.has_smoothed_shear()) {
-    p.shear_inv_k.assign(static_cast<size_t>(p.npad), 0.0f);
-    for (int32_t i = 0; i < p.npoint; ++i)
-      if (model.point_shear_k[i] > 0) p.shear_inv_k[i] = static_cast<float>(1 / model.point_shear_k[i]);
   }
   return p;
 }

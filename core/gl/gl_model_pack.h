@@ -28,12 +28,13 @@ static_assert(sizeof(TetEntry) == 20);  // std430: a struct of scalars has strid
 
 // The shear element's parameters of one gathered tet (p, a, b, c): the rest
 // gradients of a's, b's and c's barycentric coordinates (1/m), k_t =
-// mu_e V_t^r (J) and its damper d_t = tau k_t (J s); mirrors `ShearEntry` in
-// step.comp (three vec4).
+// mu_e V_t^r (J), its damper d_t = tau k_t (J s) and, smoothed, the tet's
+// weight w = k_t / K_p in p's averaged gradient Fbar_p (0 otherwise);
+// mirrors `ShearEntry` in shaders/shear_element.glsl (three vec4).
 struct ShearEntry {
   float ga[3], k;
   float gb[3], d;
-  float gc[3], pad_c;
+  float gc[3], w;
 };
 static_assert(sizeof(ShearEntry) == 48);
 
@@ -49,9 +50,6 @@ struct PackedModel {
   // Nodal volume term: vec2 {k_a (N/m^5), V_a^r (m^3)} per point, zero for
   // padding (npad x 2); empty unless the model has it.
   std::vector<float> nodal;
-  // Smoothed shear element: 1/K_a per point, zero for padding and points in
-  // no tet (npad); empty unless the model has it.
-  std::vector<float> shear_inv_k;
 };
 
 // Padding entries point at the lane's own point with zero parameters: a

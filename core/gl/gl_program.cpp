@@ -49,9 +49,9 @@ ComputeProgram::ComputeProgram(std::string_view shader_name, const std::vector<s
   if (!ok) {
     const std::string log = shader_log(shader);
     glDeleteShader(shader);
-    // Source string 2 is the kernel file, 1 the bindings header (see assemble_shader).
+    // Source string 2 is the kernel file, 1 the bindings header, 3 an included file (see assemble_shader).
     throw Error(ErrorKind::Backend, what + " failed to compile (in the log, 2(N) is line N of " + name_ +
-                                        ", 1(N) of bindings.glsl.h):\n" + log);
+                                        ", 1(N) of bindings.glsl.h, 3(N) of its #include):\n" + log);
   }
   id_ = glCreateProgram();
   glAttachShader(id_, shader);

@@ -36,16 +36,17 @@ inline Model box_model(int nx, int ny, int nz, bool fixed_bottom, double volume_
 }
 
 // The same box, 5 x 5 x 3 cubes, bottom fixed, with E = 3 kPa and a Poisson
-// ratio (its volume term from 1/4 up, its shear element below) and a
-// damping time (the default Material's unless given), s.
+// ratio (its volume term from 1/4 up, its shear element below), a damping
+// time (the default Material's unless given), s, and the shear element's
+// formulation (the default's unless given).
 inline Model poisson_box(double nu, const Vec3& gravity, double spring_damping_time = Material{}.spring_damping_time,
                          ShearFormulation shear_formulation = Material{}.shear_formulation) {
   const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.1, 0.1, 0.05), 5, 5, 3);
   Material material;
-  material.shear_formulation = shear_formulation;
   material.young_modulus = 3000;
   material.poisson_ratio = nu;
   material.spring_damping_time = spring_damping_time;
+  material.shear_formulation = shear_formulation;
   return build_model(mesh, material, testing::fixed_bottom_options(gravity), "test box");
 }
 
@@ -106,14 +107,9 @@ inline std::vector<Vec3> forces_of_one_substep(GlBackend& gl, const MovingState&
   return f;
 }
 
-// One GL substep of dt from state `s` (with `threads_per_point` invocations
-// per point) against the double reference force: max |f_gl - f_ref| / max |f_ref|.
-inline double one_substep_force_error(const Model& model, const MovingState& s, double dt,
-                                      int32_t threads_per_point = 1) {
-  GlBackendOptions options;
-  options.record_forces = true;
-  options.threads_per_point = threads_per_point;
-  GlBackend gl(model, BackendTool{}, options);
+// forces_of_one_substep on `gl` (running `model`) against the double
+// reference force: max |f_gl - f_ref| / max |f_ref|.
+inline double substep_force_error(GlBackend& gl, const Model& model, const MovingState& s, double dt) {
   const std::vector<Vec3> got = forces_of_one_substep(gl, s, dt);
   std::vector<Vec3> want;
   reference_internal_forces(model, s.x, s.v, want);
@@ -125,16 +121,28 @@ inline double one_substep_force_error(const Model& model, const MovingState& s, 
   return worst / largest;
 }
 
-// `ticks` ticks of 10 substeps of dt from `start` (at rest) on the double
-// CPU backend and on GL, compared after every tick: the largest position
-// difference and the CPU's largest motion from start, m.
+// One GL substep of dt from state `s` (with `threads_per_point` invocations
+// per point) against the double reference force: max |f_gl - f_ref| / max |f_ref|.
+inline double one_substep_force_error(const Model& model, const MovingState& s, double dt,
+                                      int32_t threads_per_point = 1) {
+  GlBackendOptions options;
+  options.record_forces = true;
+  options.threads_per_point = threads_per_point;
+  GlBackend gl(model, BackendTool{}, options);
+  return substep_force_error(gl, model, s, dt);
+}
+
+// `ticks` ticks of 10 substeps of dt from `start` (at rest) on a double
+// reference and on GL, compared after every tick: the largest position
+// difference and the reference's largest motion from start, m. The
+// reference is `reference_tick(request, x)`: one tick, then its positions in x.
 struct TrajectoryDifference {
   double worst = 0, motion = 0;
 };
-inline TrajectoryDifference cpu_and_gl_from(const Model& model, const std::vector<Vec3>& start, double dt, int ticks) {
-  auto cpu = make_cpu_backend(model, {}, {Precision::Double, 1});
+template <class ReferenceTick>
+inline TrajectoryDifference reference_and_gl_from(const Model& model, const std::vector<Vec3>& start, double dt,
+                                                  int ticks, ReferenceTick&& reference_tick) {
   GlBackend gl(model, BackendTool{}, {});
-  cpu->set_state(start, start);
   gl.set_state(start, start);
   TickRequest request;
   request.dt = dt;
@@ -142,9 +150,8 @@ inline TrajectoryDifference cpu_and_gl_from(const Model& model, const std::vecto
   TrajectoryDifference d;
   std::vector<Vec3> xc, xg;
   for (int n = 0; n < ticks; ++n) {
-    cpu->tick(request);
+    reference_tick(request, xc);
     gl.tick(request);
-    cpu->positions(xc);
     gl.positions(xg);
     for (size_t i = 0; i < xc.size(); ++i) {
       d.worst = std::max(d.worst, (xg[i] - xc[i]).norm());
@@ -152,6 +159,16 @@ inline TrajectoryDifference cpu_and_gl_from(const Model& model, const std::vecto
     }
   }
   return d;
+}
+
+// reference_and_gl_from with the double CPU backend as the reference.
+inline TrajectoryDifference cpu_and_gl_from(const Model& model, const std::vector<Vec3>& start, double dt, int ticks) {
+  auto cpu = make_cpu_backend(model, {}, {Precision::Double, 1});
+  cpu->set_state(start, start);
+  return reference_and_gl_from(model, start, dt, ticks, [&](const TickRequest& request, std::vector<Vec3>& x) {
+    cpu->tick(request);
+    cpu->positions(x);
+  });
 }
 
 // Counts a run's topology changes and keeps its final positions.

@@ -55,6 +55,33 @@ TEST(GlModelPack, EveryEntryOnceAtEachEndAndPaddingInert) {
   }
 }
 
+// The smoothed shear element's weights w = k_t / K_p in the entries' 4th
+// slot: each point's sum to 1 (so Fbar - I is a weighted mean of its tets'
+// F - I), padding entries and points without tets have none, and the
+// per-tet formulation packs none at all.
+TEST(GlModelPack, SmoothedShearWeightsOfEachPointSumToOne) {
+  for (const ShearFormulation formulation : {ShearFormulation::Smoothed, ShearFormulation::PerTet}) {
+    const Model model = gl_test::poisson_box(0.0, Vec3::Zero(), Material{}.spring_damping_time, formulation);
+    const PackedModel p = pack_model(model);
+    const bool smoothed = formulation == ShearFormulation::Smoothed;
+    for (int32_t c = 0; c < p.nchunk; ++c) {
+      const int32_t offset = p.chunks[4 * c + 2], slots = p.chunks[4 * c + 3];
+      for (int32_t lane = 0; lane < ORGANSIM_GL_CHUNK; ++lane) {
+        double sum = 0;
+        for (int32_t j = 0; j < slots; ++j) {
+          const ShearEntry& e = p.shear[offset + j * ORGANSIM_GL_CHUNK + lane];
+          if (e.k == 0.0f) {
+            EXPECT_EQ(e.w, 0.0f);  // padding
+          }
+          sum += e.w;
+        }
+        const int32_t point = c * ORGANSIM_GL_CHUNK + lane;
+        EXPECT_NEAR(sum, smoothed && point < model.npoint() ? 1.0 : 0.0, 1e-6) << "point " << point;
+      }
+    }
+  }
+}
+
 TEST(GlModelPack, LeanModelHasNoTetEntriesAndWrongChunkSizeIsAnError) {
   const Model lean = gl_test::box_model(2, 2, 2, true, 0, Vec3(0, 0, 0));
   EXPECT_TRUE(pack_model(lean).tets.empty());
