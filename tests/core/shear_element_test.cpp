@@ -30,19 +30,21 @@
 namespace organsim {
 namespace {
 
-Material shear_material(double nu = 0.1, ShearFormulation form = ShearFormulation::Smoothed) {
+Material shear_material(double nu = 0.1, ShearFormulation formulation = ShearFormulation::Smoothed) {
   Material m = testing::soft_material(nu);
-  m.shear_formulation = form;
+  m.shear_formulation = formulation;
   return m;
 }
 
 Model shear_model(unsigned seed, int cells, double nu = 0.1, int32_t chunk = kDefaultChunkSize,
-                  const Vec3& gravity = Vec3::Zero(), ShearFormulation form = ShearFormulation::Smoothed) {
-  return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), shear_material(nu, form),
+                  const Vec3& gravity = Vec3::Zero(), ShearFormulation formulation = ShearFormulation::Smoothed) {
+  return build_model(testing::jittered_box(cells, 0.05, 0.25, seed), shear_material(nu, formulation),
                      testing::fixed_bottom_options(gravity, chunk));
 }
 
-constexpr ShearFormulation kBothForms[] = {ShearFormulation::Smoothed, ShearFormulation::PerTet};
+// Both formulations of the element, for the kernel tests to loop over: the
+// smoothed one (default, with the kernels' per-point pass) and per tet.
+constexpr ShearFormulation kFormulations[] = {ShearFormulation::Smoothed, ShearFormulation::PerTet};
 
 double largest_norm(const std::vector<Vec3>& v) {
   double s = 0;
@@ -184,99 +186,131 @@ TEST(ShearElement, ResistsCompressionUpToAndThroughInversion) {
 // is the force of a 1 % stretch; the rotation's must be below 1e-9 of it in
 // double and 1e-4 in float (rotated positions rounded to ~6e-8 relative).
 TEST(ShearElement, RigidRotationHasNoForce) {
-  const Model model = shear_model(4, 3, 0.0);
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(50 * M_PI / 180, Vec3(1, 2, 3).normalized()).toRotationMatrix();
-  std::vector<Vec3> rotated(model.npoint()), stretched(model.npoint()), zero(model.npoint(), Vec3::Zero());
-  for (int32_t i = 0; i < model.npoint(); ++i) {
-    rotated[i] = R * model.rest_position[i] + Vec3(0.01, 0.02, -0.03);
-    stretched[i] = Vec3(1.01, 1, 1).cwiseProduct(model.rest_position[i]);
-  }
-  std::vector<Vec3> force;
-  reference_internal_forces(model, stretched, zero, force);
-  const double scale = largest_norm(force);
-  ASSERT_GT(scale, 0);
-  reference_internal_forces(model, rotated, zero, force);
-  EXPECT_LT(largest_norm(force), 1e-9 * scale);
-  // The kernel: one step at zero velocity; every point stays where the
-  // rotation put it, to the force tolerance times dt^2 / m.
-  const double dt = 1e-4;
-  double min_mass = 1e300;
-  for (double mass : model.mass) min_mass = std::min(min_mass, mass);
-  const Model free_model = build_model(testing::jittered_box(3, 0.05, 0.25, 4), shear_material(0.0), {});
-  ASSERT_EQ(free_model.rest_position, model.rest_position);  // the same mesh, no fixed points
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    auto backend = make_cpu_backend(free_model, {}, {precision, 1, CpuKernel::Generic});
-    backend->set_state(rotated, rotated);
-    testing::run_ticks(*backend, 1, dt, 1);
-    std::vector<Vec3> after;
-    backend->positions(after);
-    double worst = 0;
-    for (int32_t i = 0; i < model.npoint(); ++i) worst = std::max(worst, (after[i] - rotated[i]).norm());
-    // Drag acts on the zero velocity: nothing. The motion is dt^2 f / m.
-    const bool dbl = precision == Precision::Double;
-    EXPECT_LT(worst, (dbl ? 1e-9 : 1e-4) * scale * dt * dt / min_mass + (dbl ? 1e-15 : 1e-8))
-        << (dbl ? "double" : "float");
+  for (ShearFormulation formulation : kFormulations) {
+    SCOPED_TRACE(shear_formulation_name(formulation));
+    const Model model = shear_model(4, 3, 0.0, kDefaultChunkSize, Vec3::Zero(), formulation);
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(50 * M_PI / 180, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+    std::vector<Vec3> rotated(model.npoint()), stretched(model.npoint()), zero(model.npoint(), Vec3::Zero());
+    for (int32_t i = 0; i < model.npoint(); ++i) {
+      rotated[i] = R * model.rest_position[i] + Vec3(0.01, 0.02, -0.03);
+      stretched[i] = Vec3(1.01, 1, 1).cwiseProduct(model.rest_position[i]);
+    }
+    std::vector<Vec3> force;
+    reference_internal_forces(model, stretched, zero, force);
+    const double scale = largest_norm(force);
+    ASSERT_GT(scale, 0);
+    reference_internal_forces(model, rotated, zero, force);
+    EXPECT_LT(largest_norm(force), 1e-9 * scale);
+    // The kernel: one step at zero velocity; every point stays where the
+    // rotation put it, to the force tolerance times dt^2 / m.
+    const double dt = 1e-4;
+    double min_mass = 1e300;
+    for (double mass : model.mass) min_mass = std::min(min_mass, mass);
+    const Model free_model = build_model(testing::jittered_box(3, 0.05, 0.25, 4), shear_material(0.0, formulation), {});
+    ASSERT_EQ(free_model.rest_position, model.rest_position);  // the same mesh, no fixed points
+    for (Precision precision : {Precision::Double, Precision::Float}) {
+      auto backend = make_cpu_backend(free_model, {}, {precision, 1, CpuKernel::Generic});
+      backend->set_state(rotated, rotated);
+      testing::run_ticks(*backend, 1, dt, 1);
+      std::vector<Vec3> after;
+      backend->positions(after);
+      double worst = 0;
+      for (int32_t i = 0; i < model.npoint(); ++i) worst = std::max(worst, (after[i] - rotated[i]).norm());
+      // Drag acts on the zero velocity: nothing. The motion is dt^2 f / m.
+      const bool dbl = precision == Precision::Double;
+      EXPECT_LT(worst, (dbl ? 1e-9 : 1e-4) * scale * dt * dt / min_mass + (dbl ? 1e-15 : 1e-8))
+          << (dbl ? "double" : "float");
+    }
   }
 }
 
 // The generic kernel (double and float) against the reference: one step
 // from a deformed, moving state, for several chunk sizes (padding, lane
-// groups), with gravity.
+// groups), with gravity, in both formulations. Tolerances as in
+// force_law_checks.h (double: summation order, 1e-12 of the force
+// increment; float: rounding of positions, 1e-4 of it plus 1e-8 m); the
+// smoothed part's extra sums (P(Fbar) over ~20 tets per point, then 4
+// corners) are of the same order as the per-tet ones and need no more.
 TEST(ShearElement, GenericKernelMatchesTheReferenceOnRandomMeshes) {
-  for (ShearFormulation form : kBothForms) {
-    SCOPED_TRACE(shear_formulation_name(form));
-    testing::expect_generic_kernel_matches_reference([form](unsigned seed, int32_t chunk) {
-      return shear_model(seed, 5, 0.1, chunk, Vec3(0.3, -1, -9.81), form);
+  for (ShearFormulation formulation : kFormulations) {
+    SCOPED_TRACE(shear_formulation_name(formulation));
+    testing::expect_generic_kernel_matches_reference([formulation](unsigned seed, int32_t chunk) {
+      return shear_model(seed, 5, 0.1, chunk, Vec3(0.3, -1, -9.81), formulation);
     });
   }
 }
 
-// The smoothed stresses are a per-point pass with a barrier, no atomics:
-// 200 steps from a deformed, moving state under gravity on two threads are
-// bitwise those on one, in both precisions (chunk 8: many chunks per thread).
-TEST(ShearElement, TwoThreadsAreBitIdenticalToOne) {
-  for (ShearFormulation form : kBothForms) {
-    const Model model = shear_model(6, 5, 0.1, 8, Vec3(0, 0, -9.81), form);
-    std::vector<Vec3> x, x_prev;
-    testing::random_state(model, 3, 1e-4, x, x_prev);
+// The smoothed part is what the generic kernel's comparison above is about:
+// on its random states it moves the force by much more than the tolerance
+// (the two formulations' forces differ by over 1 % of the largest force).
+TEST(ShearElement, SmoothedAndPerTetForcesDifferOnTheTestStates) {
+  const Model smoothed = shear_model(1, 5, 0.1), per_tet = shear_model(1, 5, 0.1, kDefaultChunkSize, Vec3::Zero(),
+                                                                        ShearFormulation::PerTet);
+  ASSERT_TRUE(smoothed.has_smoothed_shear());
+  ASSERT_FALSE(per_tet.has_smoothed_shear());
+  std::vector<Vec3> x, x_prev, a, b, zero(smoothed.npoint(), Vec3::Zero());
+  testing::random_state(smoothed, 1, 1e-4, x, x_prev);
+  reference_internal_forces(smoothed, x, zero, a);
+  reference_internal_forces(per_tet, x, zero, b);
+  double worst = 0;
+  for (int32_t i = 0; i < smoothed.npoint(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  EXPECT_GT(worst, 1e-2 * largest_norm(a));
+}
+
+// The kernel's strain comes from displacements, so the rest state is
+// exactly force-free in either precision and formulation (the smoothed
+// part's Fbar - I is a sum of exact zeros, and P(I) = I - I = 0): 1000
+// steps without gravity must not move a bit.
+TEST(ShearElement, RestStateIsExactlyForceFree) {
+  for (ShearFormulation formulation : kFormulations) {
+    const Model model = shear_model(4, 5, 0.05, kDefaultChunkSize, Vec3::Zero(), formulation);
     for (Precision precision : {Precision::Double, Precision::Float}) {
-      std::vector<Vec3> end[2];
-      for (int threads : {1, 2}) {
-        auto backend = make_cpu_backend(model, {}, {precision, threads, CpuKernel::Generic});
-        backend->set_state(x, x_prev);
-        testing::run_ticks(*backend, 20, 1e-4, 10);
-        backend->positions(end[threads - 1]);
-      }
+      auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+      testing::run_ticks(*backend, 100, 1e-4, 10);
+      std::vector<Vec3> x;
+      backend->positions(x);
       for (int32_t i = 0; i < model.npoint(); ++i)
-        ASSERT_EQ(end[0][i], end[1][i]) << shear_formulation_name(form) << " point " << i;
+        ASSERT_EQ(x[i], model.rest_position[i]) << shear_formulation_name(formulation) << ", point " << i;
     }
   }
 }
 
-// The kernel's strain comes from displacements, so the rest state is
-// exactly force-free in either precision: 1000 steps without gravity must
-// not move a bit.
-TEST(ShearElement, RestStateIsExactlyForceFree) {
-  for (ShearFormulation form : kBothForms) {
-  const Model model = shear_model(4, 5, 0.05, kDefaultChunkSize, Vec3::Zero(), form);
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
-    testing::run_ticks(*backend, 100, 1e-4, 10);
-    std::vector<Vec3> x;
-    backend->positions(x);
-    for (int32_t i = 0; i < model.npoint(); ++i) ASSERT_EQ(x[i], model.rest_position[i]) << i;
-  }
+// Two threads give bitwise the same trajectory as one: the smoothing pass
+// sums each point's tet slots in a fixed order and the force pass only reads
+// its output after the barrier. 200 steps from a deformed, moving state
+// under gravity, chunks of 16 points so that both threads have many chunks,
+// in both precisions and formulations.
+TEST(ShearElement, TwoThreadsAreBitIdenticalToOne) {
+  const double dt = 1e-4;
+  for (ShearFormulation formulation : kFormulations) {
+    const Model model = shear_model(2, 5, 0.1, 16, Vec3(0, 0, -9.81), formulation);
+    ASSERT_GT(model.layout.nchunk, 4);
+    std::vector<Vec3> x, x_prev;
+    testing::random_state(model, 2, dt, x, x_prev);
+    for (Precision precision : {Precision::Double, Precision::Float}) {
+      std::vector<Vec3> out[2];
+      for (int threads : {1, 2}) {
+        auto backend = make_cpu_backend(model, {}, {precision, threads, CpuKernel::Generic});
+        backend->set_state(x, x_prev);
+        testing::run_ticks(*backend, 20, dt, 10);
+        backend->positions(out[threads - 1]);
+      }
+      for (int32_t i = 0; i < model.npoint(); ++i)
+        ASSERT_EQ(out[0][i], out[1][i]) << shear_formulation_name(formulation)
+                                        << (precision == Precision::Double ? ", double" : ", float") << ", point " << i;
+    }
   }
 }
 
 // The scatter step that bench times runs the same physics: 200 steps of both
-// in double from rest under gravity agree to rounding.
+// in double from rest under gravity agree to rounding, in both formulations.
 TEST(ShearElement, ScatterStepMatchesTheGenericKernel) {
-  for (ShearFormulation form : kBothForms) {
-    const Model model = shear_model(5, 4, 0.1, kDefaultChunkSize, Vec3(0, 0, -9.81), form);
+  for (ShearFormulation formulation : kFormulations) {
+    const Model model = shear_model(5, 4, 0.1, kDefaultChunkSize, Vec3(0, 0, -9.81), formulation);
     const testing::PathDifference d = testing::scatter_against_generic(model, 200, 1e-4);
     ASSERT_GT(d.motion, 1e-6);
-    EXPECT_LT(d.worst, 1e-9 * d.motion) << shear_formulation_name(form);  // summation order over 200 steps: ~1e-12 of the motion
+    // Summation order over 200 steps: ~1e-12 of the motion.
+    EXPECT_LT(d.worst, 1e-9 * d.motion) << shear_formulation_name(formulation);
   }
 }
 
@@ -285,32 +319,64 @@ TEST(ShearElement, ScatterStepMatchesTheGenericKernel) {
 // (same rest geometry), the kernel rebuilt from it is still exactly at rest,
 // and its forces match the reference on a deformed state.
 TEST(ShearElement, RebuildAfterACutKeepsTheElement) {
-  const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 4, 4, 4), shear_material(), {});
-  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.02));
-  ASSERT_GT(cut.npoint(), model.npoint());
-  ASSERT_TRUE(cut.has_shear_element());
-  ASSERT_EQ(cut.tet_shape_gradient.size(), model.tet_shape_gradient.size());
-  for (int32_t t = 0; t < cut.ntet(); ++t) {
-    EXPECT_DOUBLE_EQ(cut.tet_shear_k[t], model.tet_shear_k[t]) << t;
-    for (int i = 0; i < 4; ++i) EXPECT_LT((cut.tet_shape_gradient[t][i] - model.tet_shape_gradient[t][i]).norm(), 1e-9) << t;
-  }
-  for (Precision precision : {Precision::Double, Precision::Float}) {
-    auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
-    backend->rebuild(cut);
-    testing::run_ticks(*backend, 20, 1e-4, 5);
-    std::vector<Vec3> x;
-    backend->positions(x);
-    for (int32_t i = 0; i < cut.npoint(); ++i) ASSERT_EQ(x[i], cut.rest_position[i]) << i;
-  }
-  // The two halves move apart freely: pull the copies 1 mm along +x, the
-  // force on the cut face's originals must not see it (no tet joins them).
-  std::vector<Vec3> x = cut.rest_position, zero(x.size(), Vec3::Zero()), moved, still;
-  reference_internal_forces(cut, x, zero, still);
-  for (int32_t p = model.npoint(); p < cut.npoint(); ++p) x[p].x() += 1e-3;
-  reference_internal_forces(cut, x, zero, moved);
-  for (int32_t p = model.npoint(); p < cut.npoint(); ++p) {
-    const int32_t o = cut.origin[p];
-    EXPECT_LT((moved[o] - still[o]).norm(), 1e-12) << o;
+  for (ShearFormulation formulation : kFormulations) {
+    SCOPED_TRACE(shear_formulation_name(formulation));
+    const Model model =
+        build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 4, 4, 4), shear_material(0.1, formulation), {});
+    const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.02));
+    ASSERT_GT(cut.npoint(), model.npoint());
+    ASSERT_TRUE(cut.has_shear_element());
+    ASSERT_EQ(cut.tet_shape_gradient.size(), model.tet_shape_gradient.size());
+    for (int32_t t = 0; t < cut.ntet(); ++t) {
+      EXPECT_DOUBLE_EQ(cut.tet_shear_k[t], model.tet_shear_k[t]) << t;
+      for (int i = 0; i < 4; ++i) EXPECT_LT((cut.tet_shape_gradient[t][i] - model.tet_shape_gradient[t][i]).norm(), 1e-9) << t;
+    }
+    for (Precision precision : {Precision::Double, Precision::Float}) {
+      auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+      backend->rebuild(cut);
+      testing::run_ticks(*backend, 20, 1e-4, 5);
+      std::vector<Vec3> x;
+      backend->positions(x);
+      for (int32_t i = 0; i < cut.npoint(); ++i) ASSERT_EQ(x[i], cut.rest_position[i]) << i;
+    }
+    // The cut model's K_a (smoothed) are those of its own tets: the kernel
+    // rebuilt from it matches the reference on a deformed, moving state
+    // (tolerances as in GenericKernelMatchesTheReferenceOnRandomMeshes).
+    EXPECT_EQ(cut.has_smoothed_shear(), formulation == ShearFormulation::Smoothed);
+    {
+      const double dt = 1e-4;
+      std::vector<Vec3> x, x_prev;
+      testing::random_state(cut, 3, dt, x, x_prev);
+      for (Precision precision : {Precision::Double, Precision::Float}) {
+        auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+        backend->rebuild(cut);
+        backend->set_state(x, x_prev);
+        testing::run_ticks(*backend, 1, dt, 1);
+        std::vector<Vec3> after, v(x.size()), force;
+        backend->positions(after);
+        for (size_t i = 0; i < x.size(); ++i) v[i] = (x[i] - x_prev[i]) / dt;
+        reference_internal_forces(cut, x, v, force);
+        double worst = 0, largest = 0;
+        for (int32_t i = 0; i < cut.npoint(); ++i) {
+          const double w = dt * dt * cut.inv_mass[i];
+          const Vec3 expected = x[i] + (1 - cut.viscous_damping * dt) * (x[i] - x_prev[i]) + w * force[i];
+          worst = std::max(worst, (after[i] - expected).norm());
+          largest = std::max(largest, w * force[i].norm());
+        }
+        const bool dbl = precision == Precision::Double;
+        EXPECT_LT(worst, dbl ? 1e-15 + 1e-12 * largest : 1e-8 + 1e-4 * largest) << (dbl ? "double" : "float");
+      }
+    }
+    // The two halves move apart freely: pull the copies 1 mm along +x, the
+    // force on the cut face's originals must not see it (no tet joins them).
+    std::vector<Vec3> x = cut.rest_position, zero(x.size(), Vec3::Zero()), moved, still;
+    reference_internal_forces(cut, x, zero, still);
+    for (int32_t p = model.npoint(); p < cut.npoint(); ++p) x[p].x() += 1e-3;
+    reference_internal_forces(cut, x, zero, moved);
+    for (int32_t p = model.npoint(); p < cut.npoint(); ++p) {
+      const int32_t o = cut.origin[p];
+      EXPECT_LT((moved[o] - still[o]).norm(), 1e-12) << o;
+    }
   }
 }
 
@@ -404,19 +470,27 @@ TEST(ShearElement, CriticalStepIsTheIntegratorsThreshold) {
   EXPECT_TRUE(testing::perturbation_grows(model, 1.02 * r.dt_crit));
 }
 
+// Both formulations; the plan names the smoothing pass (before the force
+// pass, like the nodal volume term's) only for the smoothed one.
 TEST(ShearElement, ModelsWithItRunOnTheGenericKernel) {
-  const Model model = shear_model(1, 3);
-  EXPECT_NE(avx512_kernel_unsupported(model).find("shear element"), std::string::npos);
-  try {
-    make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Avx512});
-    FAIL() << "the avx512 kernel accepted a model with the shear element";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::Backend);
+  for (ShearFormulation formulation : kFormulations) {
+    SCOPED_TRACE(shear_formulation_name(formulation));
+    const Model model = shear_model(1, 3, 0.1, kDefaultChunkSize, Vec3::Zero(), formulation);
+    EXPECT_NE(avx512_kernel_unsupported(model).find("shear element"), std::string::npos);
+    try {
+      make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Avx512});
+      FAIL() << "the avx512 kernel accepted a model with the shear element";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Backend);
+    }
+    auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Auto});
+    EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
+    const Plan plan = backend->plan();
+    const bool smoothed = formulation == ShearFormulation::Smoothed;
+    ASSERT_EQ(plan.passes.size(), smoothed ? 4u : 3u);  // springs, [shear-smoothing], shear-element, integrate
+    EXPECT_EQ(plan.passes[1].name, smoothed ? "shear-smoothing" : "shear-element");
+    EXPECT_EQ(plan.passes[smoothed ? 2 : 1].name, "shear-element");
   }
-  auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Auto});
-  EXPECT_NE(backend->device().find("generic kernel"), std::string::npos) << backend->device();
-  EXPECT_EQ(backend->plan().passes[1].name, "shear-smoothing");  // the default form's extra pass
-  EXPECT_EQ(backend->plan().passes[2].name, "shear-element");
 }
 
 }  // namespace
