@@ -33,15 +33,6 @@ Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::v
 
 namespace {
 
-// cof F = J F^-T, column by column: the cross products of F's other columns.
-Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
-  Eigen::Matrix3d c;
-  c.col(0) = F.col(1).cross(F.col(2));
-  c.col(1) = F.col(2).cross(F.col(0));
-  c.col(2) = F.col(0).cross(F.col(1));
-  return c;
-}
-
 double barrier(double J) {
   const double jm = kShearElementMinJ;
   if (J >= jm) return -std::log(J);
@@ -49,12 +40,6 @@ double barrier(double J) {
 }
 
 double psi(const Eigen::Matrix3d& F) { return (F.squaredNorm() - 3) / 2 + barrier(F.determinant()); }
-
-// P(F) = F + phi'(J) cof F, the first Piola-Kirchhoff stress of psi.
-Eigen::Matrix3d stress(const Eigen::Matrix3d& F) {
-  const Eigen::Matrix3d cof = cofactor(F);
-  return F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
-}
 
 // Fbar_a of every point (npoint): I + sum over the tets of a of k_t (F_t - I) / K_a.
 std::vector<Eigen::Matrix3d> smoothed_gradients(const Model& model, const std::vector<Vec3>& x) {
@@ -88,7 +73,7 @@ std::vector<Eigen::Matrix3d> smoothed_shear_stress(const Model& model, const std
   if (!model.has_smoothed_shear()) return P;
   const std::vector<Eigen::Matrix3d> F = smoothed_gradients(model, x);
   for (int32_t a = 0; a < model.npoint(); ++a)
-    if (model.point_shear_k[a] > 0) P[a] = stress(F[a]);
+    if (model.point_shear_k[a] > 0) P[a] = shear_stress(F[a]);
   return P;
 }
 
@@ -100,7 +85,7 @@ void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, st
     const Tet& tet = model.tet_points[t];
     const Eigen::Matrix3d Pbar = (Pa[tet[0]] + Pa[tet[1]] + Pa[tet[2]] + Pa[tet[3]]) / 4;
     // V times the first Piola-Kirchhoff stress of the blend.
-    const Eigen::Matrix3d P = model.tet_shear_k[t] * ((1 - s) * stress(deformation_gradient(model, t, x)) + s * Pbar);
+    const Eigen::Matrix3d P = model.tet_shear_k[t] * ((1 - s) * shear_stress(deformation_gradient(model, t, x)) + s * Pbar);
     for (int i = 0; i < 4; ++i) force[tet[i]] -= P * model.tet_shape_gradient[t][i];
   }
 }
@@ -111,7 +96,7 @@ void add_shear_element_damping_forces(const Model& model, const std::vector<Vec3
   for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
     const Eigen::Matrix3d F = deformation_gradient(model, t, x);
     const Eigen::Matrix3d Fdot = deformation_gradient(model, t, v);  // sum_i v_i g_i^T
-    const Eigen::Matrix3d cof = cofactor(F);
+    const Eigen::Matrix3d cof = shear_cofactor(F);
     const double J = F.col(0).dot(cof.col(0));
     const Eigen::Matrix3d A = Fdot * cof.transpose();  // J times the velocity gradient Fdot F^-1
     // V times the viscous first Piola-Kirchhoff stress J sigma F^-T = 2 mu_e tau D cof.

@@ -69,6 +69,25 @@ inline Real shear_barrier_slope(Real J) {
   return J >= jm ? Real(-1) / J : (J - 2 * jm) / (jm * jm);
 }
 
+// cof F = J F^-T, column by column: the cross products of F's other columns
+// (any scalar: the reference in double, the scatter step in its precision).
+template <class Matrix3>
+inline Matrix3 shear_cofactor(const Matrix3& F) {
+  Matrix3 c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
+
+// P(F) = F + phi'(J) cof F, the first Piola-Kirchhoff stress per unit k of
+// the element's energy.
+template <class Matrix3>
+inline Matrix3 shear_stress(const Matrix3& F) {
+  const Matrix3 cof = shear_cofactor(F);
+  return F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
+}
+
 // Rest gradients g_i of the barycentric coordinates of the tet (x0..x3),
 // 1/m: g_i = (dV/dx_i) / V. They sum to zero.
 std::array<Vec3, 4> shape_gradients(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);

@@ -79,13 +79,6 @@ void ScatterStep<Real>::step(double dt_seconds) {
     for (int i = 1; i < 4; ++i) h += (w[tet[i]] - w[tet[0]]) * m.tet_shape_gradient[t][i].cast<Real>().transpose();
     return h;
   };
-  auto cofactor = [](const M3& F) {
-    M3 cof;
-    cof.col(0) = F.col(1).cross(F.col(2));
-    cof.col(1) = F.col(2).cross(F.col(0));
-    cof.col(2) = F.col(0).cross(F.col(1));
-    return cof;
-  };
   if (m.has_smoothed_shear()) {
     stress_.assign(m.npoint(), M3::Zero());
     for (int32_t t = 0; t < m.ntet(); ++t) {
@@ -94,15 +87,13 @@ void ScatterStep<Real>::step(double dt_seconds) {
     }
     for (int32_t a = 0; a < m.npoint(); ++a) {
       const Real k = static_cast<Real>(m.point_shear_k[a]);
-      const M3 F = M3::Identity() + (k > 0 ? M3(stress_[a] / k) : M3::Zero());
-      const M3 cof = cofactor(F);
-      stress_[a] = F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
+      stress_[a] = shear_stress<M3>(M3::Identity() + (k > 0 ? M3(stress_[a] / k) : M3::Zero()));
     }
   }
   for (int32_t t = 0; t < static_cast<int32_t>(m.tet_shear_k.size()); ++t) {
     const Tet& tet = m.tet_points[t];
     const M3 F = M3::Identity() + gradient(t, u_), G = gradient(t, d_);
-    const M3 cof = cofactor(F);
+    const M3 cof = shear_cofactor(F);
     const Real J = F.col(0).dot(cof.col(0));
     const M3 A = G * cof.transpose();
     M3 stress = (1 - s) * (F + shear_barrier_slope(J) * cof) + (damping / std::max(J, jm)) * (A + A.transpose()) * cof;

@@ -19,6 +19,9 @@ struct RestStiffness {
   std::vector<Vec3> spring_dir;               // unit rest direction of each spring (nspring)
   std::vector<std::array<Vec3, 4>> tet_grad;  // dV/dx_i at rest (ntet x 4)
   std::vector<double> tool_k;                 // k_c on the points the tool may touch, else 0 (npoint)
+  // The smoothed shear element's node patches (npoint; empty without it),
+  // built once for the power iterations' many products.
+  std::vector<std::vector<ShearPatchEntry>> shear_patch;
 };
 
 // Gradient of the signed volume V = (x1-x0).((x2-x0)x(x3-x0))/6.
@@ -48,6 +51,10 @@ RestStiffness rest_stiffness(const Model& model, const CriticalStepOptions& opti
       const Tet& p = model.tet_points[t];
       k.tet_grad[t] = volume_gradient(X[p[0]], X[p[1]], X[p[2]], X[p[3]]);
     }
+  }
+  if (model.has_smoothed_shear()) {
+    k.shear_patch.resize(model.npoint());
+    for (int32_t a = 0; a < model.npoint(); ++a) k.shear_patch[a] = smoothed_shear_patch(model, a);
   }
   k.tool_k.assign(model.npoint(), 0.0);
   if (options.tool_contact_stiffness > 0) {
@@ -121,7 +128,7 @@ void apply_stiffness(const Model& model, const RestStiffness& k, const std::vect
     // Node patches: block (p, q) = k_a ((w_p . w_q) I + w_q w_p^T), so
     // f_p = k_a (H + H^T) w_p with H = sum_q x_q w_q^T.
     for (int32_t a = 0; a < model.npoint(); ++a) {
-      const std::vector<ShearPatchEntry> patch = smoothed_shear_patch(model, a);
+      const std::vector<ShearPatchEntry>& patch = k.shear_patch[a];
       Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
       for (const ShearPatchEntry& q : patch) H += x[q.point] * q.w.transpose();
       const Eigen::Matrix3d S = smoothed_shear_patch_k(model, a) * (H + H.transpose());
