@@ -21,9 +21,9 @@
 #include "core/fit/measured_curve.h"
 #include "core/model/stiffness.h"
 #include "core/render/xy_plot.h"
+#include "core/run/prepare_run.h"
+#include "core/run/run.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/run.h"
-#include "core/stability/critical_step.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
 
@@ -71,22 +71,28 @@ const ParameterSlot& slot_named(const std::string& name) {
   throw Error(ErrorKind::Usage, "--param: unknown parameter '" + name + "' (expected one of " + known + ")");
 }
 
-// One simulation with the given material: CPU double precision, at the
-// scenario's dt unless the material makes it unstable, then at a stable dt
-// that keeps the haptic tick (so the force samples stay at the same times).
-RunResult simulate(Scenario s, const TetMesh& mesh, const Material& material, const RunOptions& options) {
+// One simulation with the given material, set up as `organsim run` sets up
+// a run (core/run/prepare_run.h): CPU double precision, from the scenario's
+// start at rest (time.settle, settled again for this material), watched by
+// the blow-up monitor; at the scenario's dt unless the material makes it
+// unstable, then at a stable dt that keeps the haptic tick (so the force
+// samples stay at the same times).
+RunResult simulate(Scenario s, const TetMesh& mesh, const Material& material, RunOptions options) {
   s.material = material;
-  const Model model = build_model(mesh, material, model_options(s), s.mesh.path.string());
-  const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
-  const StabilityReport stability = estimate_critical_step(model, critical_step_options(model, tool));
-  if (s.time.dt > stability.dt_crit) {
-    const StepSuggestion step = suggest_step(stability, s.time.tick());
+  const Model model = build_scenario_model(s, mesh);
+  const PreparedRun prepared = prepare_run(s, model);
+  if (s.time.dt > prepared.stability.dt_crit) {
+    const StepSuggestion step = suggest_step(prepared.stability, s.time.tick());
     s.time.dt = step.dt;
     s.time.substeps = step.substeps;
   }
   CpuBackendOptions cpu;
   cpu.precision = Precision::Double;
   auto backend = make_cpu_backend(model, backend_tool(s), cpu);
+  prepared.start(*backend);
+  BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks());
+  options.observers.insert(options.observers.begin(), &monitor);
+  options.meta_extra.update(prepared.meta());
   return run_scenario(s, model, *backend, options);
 }
 

@@ -13,8 +13,8 @@
 #include "app/progress_line.h"
 #include "app/run_observers.h"
 #include "app/scenario_mesh.h"
-#include "core/sim/run.h"
-#include "core/sim/settle.h"
+#include "core/run/prepare_run.h"
+#include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
@@ -55,16 +55,6 @@ std::string human_bytes(size_t bytes) {
 }
 
 
-// Errors from build_model name the JSON path (fixed[0].indices[3]) but not the file.
-Model build_scenario_model(const Scenario& s, const TetMesh& mesh) {
-  try {
-    return build_model(mesh, s.material, model_options(s), s.mesh.path.string());
-  } catch (const Error& e) {
-    if (e.kind() == ErrorKind::Scenario) throw Error(e.kind(), s.file.string() + ": " + e.what());
-    throw;
-  }
-}
-
 void print_plan(std::ostream& out, const Scenario& s, const Model& model, const Backend& backend,
                 const std::vector<std::string>& observers) {
   const Plan plan = backend.plan();
@@ -79,6 +69,10 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
       << "), reaction latency " << backend.reaction_latency_ticks() << " ticks\n";
   out << "passes per step:\n";
   for (const PassInfo& p : plan.passes) out << "  - " << p.name << ": " << p.detail << "\n";
+  if (!plan.per_tick.empty()) {
+    out << "once per tick:\n";
+    for (const PassInfo& p : plan.per_tick) out << "  - " << p.name << ": " << p.detail << "\n";
+  }
   if (s.events.any()) {
     out << "between ticks:\n  - topology: " << s.events.cuts.size() << " cut" << (s.events.cuts.size() == 1 ? "" : "s");
     if (s.events.tear) out << ", tear past strain " << s.events.tear->strain;
@@ -189,9 +183,12 @@ void run_command(const RunArgs& args) {
   std::vector<std::string> observer_names;
   auto observers = make_observers(s, model, outdir, &observer_names);
 
-  // Stability before the run (issue 5): dt_crit at rest, refusal of dt > dt_crit.
-  const ToolSpec* tool_spec = s.tool ? &s.tool->spec : nullptr;
-  const StabilityReport stability = estimate_critical_step(model, critical_step_options(model, tool_spec));
+  // dt_crit at rest and the start at rest (core/run/prepare_run.h); --plan stops before settling.
+  PrepareRunOptions prepare_options;
+  prepare_options.settle = !args.plan;
+  prepare_options.threads = selection.threads;
+  const PreparedRun prepared = prepare_run(s, model, prepare_options);
+  const StabilityReport& stability = prepared.stability;
 
   if (args.plan) {
     print_plan(std::cout, s, model, *backend, observer_names);
@@ -200,29 +197,17 @@ void run_command(const RunArgs& args) {
   }
   const std::string step_warning = check_time_step(stability, s.time.dt, s.time.substeps, args.allow_unstable);
   if (!step_warning.empty()) std::cerr << "organsim: " << step_warning << "\n";
-  BlowupMonitorOptions monitor_options;
   // A check costs about one step on the CPU (organsim bench): every 10 ticks
   // keeps it near 2 % and still stops a blow-up within 10 ms. On the GPU it
   // drains the pipeline while non-finite positions are flagged on the device
   // every tick at no cost: every 50 ticks (Backend::default_check_interval_ticks).
   const int32_t check_interval =
       args.check_interval > 0 ? args.check_interval : backend->default_check_interval_ticks();
-  monitor_options.interval_ticks = check_interval;
-  BlowupContext monitor_context;
-  monitor_context.dt = s.time.dt;
-  monitor_context.tool_radius = tool_spec ? tool_spec->radius : 0;
-  monitor_context.tool_contact_stiffness = tool_spec ? tool_spec->contact_stiffness : 0;
-  monitor_context.stability = stability;
-  BlowupMonitor monitor(monitor_options, monitor_context);
+  BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, check_interval);
 
   // Start at rest under gravity (time.settle): the run begins from equilibrium.
-  nlohmann::json settle_meta = nullptr;
-  if (s.time.settle > 0) {
-    const SettleResult settled = settle(model, {s.time.settle, s.time.dt, s.time.substeps, selection.threads});
-    backend->set_state(settled.positions, settled.positions);
-    std::cout << "settle:   " << describe(settled) << "\n";
-    settle_meta = to_json(settled);
-  }
+  prepared.start(*backend);
+  if (prepared.settled) std::cout << "settle:   " << describe(*prepared.settled) << "\n";
 
   RunOptions options;
   options.outdir = outdir;
@@ -239,10 +224,8 @@ void run_command(const RunArgs& args) {
       {"model_seconds", model_seconds},
       {"tool", s.tool ? (s.tool->spec.mode == ToolMode::Push ? "push" : "pull") : "none"},
   };
-  options.meta_extra["settle"] = settle_meta;
+  options.meta_extra.update(prepared.meta());
   if (!backend_choice.empty()) options.meta_extra["backend_choice"] = backend_choice;
-  options.meta_extra["dt_crit"] = stability.dt_crit;
-  options.meta_extra["stability"] = to_json(stability);
   options.meta_extra["stability"]["check_interval_ticks"] = check_interval;
   std::cout << "run:      " << s.time.ticks() << " ticks of " << s.time.tick() << " s on " << backend->name()
             << " (" << backend->precision() << ", " << backend->device() << ")\n";

@@ -19,8 +19,8 @@
 #include "app/backend_factory.h"
 #include "app/command.h"
 #include "app/scenario_mesh.h"
-#include "core/sim/run.h"
-#include "core/sim/settle.h"
+#include "core/run/prepare_run.h"
+#include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/stability/study.h"
@@ -72,7 +72,7 @@ std::string fmt(double v, const char* spec = "%.4g") {
 
 Outcome run_configuration(const Scenario& base, const Model& model, const std::string& backend_name,
                           const std::string& precision, int32_t substeps, int32_t threads, int64_t sample_every,
-                          const StabilityReport& stability, const std::vector<Vec3>& start_positions) {
+                          const PreparedRun& prepared) {
   Outcome o;
   o.backend = backend_name;
   o.precision = precision;
@@ -94,16 +94,12 @@ Outcome run_configuration(const Scenario& base, const Model& model, const std::s
     o.reason = e.what();
     return o;
   }
-  if (!start_positions.empty()) backend->set_state(start_positions, start_positions);  // the settled start
+  prepared.start(*backend);  // the settled start
   o.ran = true;
   o.device = backend->device();
   o.trajectory.latency_ticks = backend->reaction_latency_ticks();
-  BlowupContext context;
-  context.dt = s.time.dt;
-  context.tool_radius = s.tool ? s.tool->spec.radius : 0;
-  context.tool_contact_stiffness = s.tool ? s.tool->spec.contact_stiffness : 0;
-  context.stability = stability;
-  BlowupMonitor monitor({}, context);
+  // Every tick: when a configuration goes unstable is what the study reports.
+  BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, 1);
   PositionSampler sampler(sample_every, o.trajectory);
   RunOptions options;
   options.observers = {&monitor, &sampler};
@@ -231,9 +227,11 @@ void study_command(const StudyArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (args.duration > 0) s.time.duration = args.duration;
   const TetMesh mesh = load_scenario_mesh(s.mesh);
-  const Model model = build_model(mesh, s.material, model_options(s), s.mesh.path.string());
-  const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
-  const StabilityReport stability = estimate_critical_step(model, critical_step_options(model, tool));
+  const Model model = build_scenario_model(s, mesh);
+  // Every configuration, the reference included, starts from the scenario's
+  // start at rest (time.settle), so the study compares only what the tool does.
+  const PreparedRun prepared = prepare_run(s, model, {true, args.threads});
+  const StabilityReport& stability = prepared.stability;
   const double tick = s.time.tick();
   Vec3 lo = model.rest_position[0], hi = lo;
   for (const Vec3& p : model.rest_position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -247,18 +245,14 @@ void study_command(const StudyArgs& args) {
   }
   const int32_t finest = *std::max_element(substeps.begin(), substeps.end());
   const int32_t ref_substeps = finest * args.ref_factor;
-  // Every configuration, the reference included, starts from the scenario's
-  // start at rest (time.settle), so the study compares only what the tool does.
-  std::vector<Vec3> start;
-  if (s.time.settle > 0) start = settle(model, {s.time.settle, s.time.dt, s.time.substeps, args.threads}).positions;
   const int total = 2 + static_cast<int>(substeps.size() * args.backends.size() * args.precisions.size());
   int done = 0;
 
   // The converged reference: double CPU at dt_ref and dt_ref / 2.
   progress(done, total, "reference dt " + fmt(tick / ref_substeps));
-  Outcome ref = run_configuration(s, model, "cpu", "double", ref_substeps, args.threads, sample_every, stability, start);
+  Outcome ref = run_configuration(s, model, "cpu", "double", ref_substeps, args.threads, sample_every, prepared);
   progress(++done, total, "reference dt " + fmt(tick / (2 * ref_substeps)));
-  Outcome half = run_configuration(s, model, "cpu", "double", 2 * ref_substeps, args.threads, sample_every, stability, start);
+  Outcome half = run_configuration(s, model, "cpu", "double", 2 * ref_substeps, args.threads, sample_every, prepared);
   progress(++done, total, "reference done");
   if (!ref.stable || !half.stable)
     throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + fmt(half.dt) +
@@ -275,7 +269,7 @@ void study_command(const StudyArgs& args) {
     for (const std::string& p : args.precisions)
       for (int32_t n : substeps) {
         progress(done, total, b + " " + p + " dt " + fmt(tick / n));
-        Outcome o = run_configuration(s, model, b, p, n, args.threads, sample_every, stability, start);
+        Outcome o = run_configuration(s, model, b, p, n, args.threads, sample_every, prepared);
         if (o.stable) o.errors = compare_trajectories(o.trajectory, half.trajectory, diag);
         o.trajectory = Trajectory{};  // keep memory flat
         runs.push_back(std::move(o));

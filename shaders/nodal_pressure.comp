@@ -2,12 +2,13 @@
 // owns one point, gathers its tets from the same table as step.comp and
 // writes its nodal pressure q_p = k_p (V_p - V_p^r), V_p = sum of V_t / 4.
 // step.comp (variant NODAL_VOLUME) then reads the pressures of each tet's
-// four vertices, after a barrier. Same formulas as core/sim/cpu_backend.cpp.
+// four vertices, after a barrier. The pressure is force_law.glsl's.
 // THREADS_PER_POINT T: T invocations share a point's tets, as in step.comp.
 #ifndef THREADS_PER_POINT
 #define THREADS_PER_POINT 1
 #endif
 layout(local_size_x = ORGANSIM_GL_CHUNK * THREADS_PER_POINT) in;
+#include "force_law.glsl"
 
 struct TetEntry {
   int a, b, c;  // other vertices, (p, a, b, c) positively oriented; p itself for padding
@@ -45,5 +46,5 @@ void main() {
   for (int k = 1; k < THREADS_PER_POINT; ++k) v += s_partial[k * ORGANSIM_GL_CHUNK + lane];
 #endif
   const vec2 n = nodal[p];  // {k_p (N/m^5; 0 for padding), V_p^r (m^3)}
-  pressure[p] = n.x * (v - n.y);
+  pressure[p] = volume_pressure(n.x, v, n.y);
 }

@@ -12,6 +12,7 @@
 #endif
 layout(local_size_x = ORGANSIM_GL_CHUNK * THREADS_PER_POINT) in;
 
+#include "force_law.glsl"
 #include "shear_element.glsl"
 
 struct TetEntry {

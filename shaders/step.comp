@@ -14,7 +14,7 @@
 // dependent loads (entry, then neighbour), so the slowest chunk's slot count
 // times the memory latency bounds the step; T > 1 divides that chain by T and
 // gives each multiprocessor T times more warps to hide it (docs/gl.md).
-// Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
+// The force law is force_law.glsl, the twin of core/physics/force_law.h.
 #ifndef THREADS_PER_POINT
 #define THREADS_PER_POINT 1
 #endif
@@ -39,6 +39,7 @@ layout(std430, binding = ORGANSIM_GL_B_D_NEXT) writeonly buffer DNext { vec4 d_n
 layout(std430, binding = ORGANSIM_GL_B_MASS) readonly buffer Mass { vec4 mass[]; };
 layout(std430, binding = ORGANSIM_GL_B_CHUNKS) readonly buffer Chunks { ivec4 chunks[]; };
 layout(std430, binding = ORGANSIM_GL_B_SPRINGS) readonly buffer Springs { SpringEntry springs[]; };
+#include "force_law.glsl"
 #if defined(HAS_VOLUME) || defined(SHEAR_ELEMENT)
 layout(std430, binding = ORGANSIM_GL_B_TETS) readonly buffer Tets { TetEntry tets[]; };
 #endif
@@ -108,8 +109,8 @@ void main() {
   const vec3 vi = di * inv_dt;
   vec3 f = vec3(0.0);
 
-  // Springs + dampers: f = [k (L - r) + d ((v_q - v_p) . u)] u. A suture
-  // pulls only: no force while slack (L <= r), and its damper never pushes.
+  // Springs + dampers: f = T u with the tension T = k (L - r) + d ((v_q - v_p) . u).
+  // A suture (k < 0 in its entry) pulls only.
   for (int j = part; j < info.y; j += THREADS_PER_POINT) {
     const SpringEntry e = springs[info.x + j * ORGANSIM_GL_CHUNK + int(lane)];
     const vec3 xq = x_cur[e.other].xyz;
@@ -118,15 +119,15 @@ void main() {
     if (len > 0.0) {  // coincident points (and padding): no direction, no force
       const vec3 u = l / len;
       const vec3 dv = d_cur[e.other].xyz * inv_dt - vi;
-      const float pull = abs(e.k) * (len - e.rest) + e.d * dot(dv, u);
-      f += (e.k < 0.0 && !(len > e.rest && pull > 0.0) ? 0.0 : pull) * u;
+      const float tension = spring_tension(abs(e.k), e.d, len, e.rest, dot(dv, u));
+      f += (e.k < 0.0 ? suture_tension(tension, len, e.rest) : tension) * u;
     }
   }
 
 #ifdef HAS_VOLUME
-  // Volume per tet: f = k_v (V_r - V) dV/dx_p, with V = a.(b x c)/6 relative
-  // to p and dV/dx_p = (c - a) x (b - a) / 6. Nodal: f = -p_t dV/dx_p with p_t
-  // the mean of the tet's four nodal pressures.
+  // f = -p dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6, with the tet's pressure
+  // p = k_v (V - V_r), V = a.(b x c)/6 relative to p, or the mean of its
+  // four nodal pressures.
   for (int j = part; j < info.w; j += THREADS_PER_POINT) {
     const TetEntry e = tets[info.z + j * ORGANSIM_GL_CHUNK + int(lane)];
     const vec3 a = x_cur[e.a].xyz - xi;
@@ -134,10 +135,9 @@ void main() {
     const vec3 c = x_cur[e.c].xyz - xi;
     const vec3 grad = cross(c - a, b - a) * (1.0 / 6.0);
 #ifdef NODAL_VOLUME
-    f -= 0.25 * (pressure[p] + pressure[e.a] + pressure[e.b] + pressure[e.c]) * grad;
+    f -= tet_pressure_from_nodal(pressure[p], pressure[e.a], pressure[e.b], pressure[e.c]) * grad;
 #else
-    const float v = dot(a, cross(b, c)) * (1.0 / 6.0);
-    f += e.k_v * (e.v_r - v) * grad;
+    f -= volume_pressure(e.k_v, dot(a, cross(b, c)) * (1.0 / 6.0), e.v_r) * grad;
 #endif
   }
 #endif
@@ -145,7 +145,7 @@ void main() {
 #ifdef SHEAR_ELEMENT
   // f_p = k_t P(F) s with P(F) = F + phi'(J) cof F, F = I + sum over the
   // others q of (u_q - u_p) g_q^T from displacements u = x - X, s = g_a +
-  // g_b + g_c = -g_p (core/model/shear_element.h, shaders/shear_element.glsl).
+  // g_b + g_c = -g_p (core/model/shear_element.h, shaders/force_law.glsl).
   // Smoothed: k_t [(1 - s_sm) P(F) + s_sm Pbar] s, Pbar the mean of the four
   // vertices' P(Fbar) from shear_smoothing.comp. The damper (full d_t) adds
   // (d_t / (dt J_d)) (G (cof^T c) + cof (G^T c)), c = cof s, G = sum over the
@@ -204,11 +204,9 @@ void main() {
   if (owner && u_tool_active != 0 && m.y > 0.0) {
     const vec3 d = xi - u_tool_center;
 #ifdef TOOL_PUSH
-    // Penalty contact inside the sphere: f = k_c (R - |d|) d/|d| (+z at the centre).
-    const float dist = length(d);
-    if (dist < u_tool_radius) {
-      const vec3 n = dist > 0.0 ? d / dist : vec3(0.0, 0.0, 1.0);
-      const vec3 fc = u_tool_k * m.z * (u_tool_radius - dist) * n;
+    // Penalty contact inside the sphere, the point's share m.z of k_c.
+    vec3 fc;
+    if (push_penalty(d, u_tool_radius, u_tool_k * m.z, fc)) {
       f += fc;
       contact_force = vec4(-fc, 1.0);
       contact_torque = vec4(cross(d, -fc), 0.0);
@@ -217,7 +215,7 @@ void main() {
     // Grasped points follow centre + offset through springs of stiffness k_c.
     const vec4 at = attach[p];
     if (at.w > 0.0) {
-      const vec3 fc = u_tool_k * m.z * (u_tool_center + at.xyz - xi);
+      const vec3 fc = pull_attachment(u_tool_center + at.xyz, xi, u_tool_k * m.z);
       f += fc;
       contact_force = vec4(-fc, 1.0);
       contact_torque = vec4(cross(d, -fc), 0.0);

@@ -33,24 +33,20 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   context_options.debug = options.debug;
   context_ = std::make_unique<gl::EglContext>(context_options);
 
-  volume_ = model.has_volume();
-  nodal_ = model.has_nodal_volume();
-  shear_ = model.has_shear_element();
-  smoothed_ = model.has_smoothed_shear();
-  gravity_ = model.has_gravity();
-  push_ = tool.present && tool.mode == ToolMode::Push;
-  pull_ = tool.present && tool.mode == ToolMode::Pull;
+  plan_ = make_step_plan(model, tool);
+  const bool nodal = plan_.has(Pass::NodalPressure), smoothed = plan_.has(Pass::ShearSmoothing);
 
-  // Lean scenes: code for absent physics is compiled out (STYLE #12).
+  // Lean scenes: step.comp is compiled with the plan's passes only, so code
+  // for absent physics is not in the shader.
   std::vector<std::string> defines;
-  if (volume_) defines.push_back("HAS_VOLUME");
-  if (nodal_) defines.push_back("NODAL_VOLUME");
-  if (shear_) defines.push_back("SHEAR_ELEMENT");
+  if (plan_.has(Pass::Volume)) defines.push_back("HAS_VOLUME");
+  if (nodal) defines.push_back("NODAL_VOLUME");
+  if (plan_.has(Pass::ShearElement)) defines.push_back("SHEAR_ELEMENT");
   // The share s as a float literal (max_digits10: the same float as the CPU's).
-  if (smoothed_) defines.push_back("SMOOTHED_SHEAR " + float_literal(model.shear_smoothed_share));
-  if (gravity_) defines.push_back("HAS_GRAVITY");
-  if (push_) defines.push_back("TOOL_PUSH");
-  if (pull_) defines.push_back("TOOL_PULL");
+  if (smoothed) defines.push_back("SMOOTHED_SHEAR " + float_literal(model.shear_smoothed_share));
+  if (plan_.has(Pass::Gravity)) defines.push_back("HAS_GRAVITY");
+  if (plan_.tool == ToolTerm::Push) defines.push_back("TOOL_PUSH");
+  if (plan_.tool == ToolTerm::Pull) defines.push_back("TOOL_PULL");
   if (options.record_forces) defines.push_back("RECORD_FORCE");
   if (options.threads_per_point < 0 || options.threads_per_point > 16) {
     // 16 x 64 = 1024 invocations, the largest workgroup every GL 4.5 driver must run.
@@ -62,8 +58,8 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   defines.push_back(split);
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
-  if (nodal_) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
-  if (smoothed_) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
+  if (nodal) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
+  if (smoothed) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
 
   // Buffers that do not depend on the model's size: the readback rings.
   const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
@@ -96,7 +92,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   const gl::PackedModel packed = gl::pack_model(model);
   const std::vector<float> zero(packed.rest.size(), 0.0f);
   upload_model(packed, packed.rest, zero);
-  if (gravity_) {
+  if (plan_.gravity) {
     glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
                        static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
   }
@@ -126,24 +122,24 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   suture_rest_.assign(suture_entries_.size(), -1.0f);
   springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
                            packed.springs.data(), suture_entries_.empty() ? 0 : GL_DYNAMIC_STORAGE_BIT);
-  if (volume_ || shear_) {
+  if (plan_.volume() || plan_.shear()) {
     tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
                           packed.tets.data(), 0);
   }
-  if (shear_) {
+  if (plan_.shear()) {
     rest_ = create_buffer("rest positions", packed.rest.size() * sizeof(float), packed.rest.data(), 0);
     shear_params_ = create_buffer("shear element entries {g_a k_t, g_b d_t, g_c w}",
                                   packed.shear.size() * sizeof(gl::ShearEntry), packed.shear.data(), 0);
   }
-  if (nodal_) {
+  if (plan_.element == ElementTerm::NodalVolume) {
     nodal_params_ = create_buffer("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
     pressure_ = create_buffer("nodal pressures", static_cast<size_t>(npad_) * sizeof(float), nullptr, 0);
   }
-  if (smoothed_) {
+  if (plan_.element == ElementTerm::SmoothedShear) {
     shear_stress_ = create_buffer("smoothed shear stress P(Fbar) (3 vec4 per point)",
                                   static_cast<size_t>(npad_) * 12 * sizeof(float), nullptr, 0);
   }
-  if (pull_) {
+  if (plan_.tool == ToolTerm::Pull) {
     // Attachments survive a rebuild: the ids they name are kept.
     attach_upload_.resize(static_cast<size_t>(npad_) * 4, 0.0f);
     attach_ = create_buffer("attachments {offset, attached}", attach_upload_.size() * sizeof(float),
@@ -205,6 +201,13 @@ void GlBackend::rebuild(const Model& next) {
     }
   }
   delete_model_buffers();
+  // The shader variants were compiled for the first version's plan; a
+  // topology change adds sutures at most, which step.comp reads from the
+  // spring entries, so the same programs run the next version.
+  const StepPlan next_plan = make_step_plan(next, tool_);
+  if (next_plan.element != plan_.element || next_plan.gravity != plan_.gravity || next_plan.tool != plan_.tool)
+    throw Error(ErrorKind::Backend, "GL backend: a rebuild changed the step's passes beyond sutures");
+  plan_ = next_plan;
   model_ = &next;
   upload_model(packed, x, d);
   context_->check_errors("GL backend rebuild");
@@ -254,44 +257,55 @@ std::string GlBackend::device() const {
 Plan GlBackend::plan() const {
   Plan plan;
   const auto& m = *model_;
-  std::string fused = std::to_string(m.nspring()) + " springs gathered from both ends (" +
-                      std::to_string(m.layout.springs.item.size()) + " slots)";
-  if (m.nsuture() > 0) fused += " of which " + std::to_string(m.nsuture()) + " sutures (tension only, rest length per tick)";
-  if (volume_) fused += ", " + std::to_string(m.ntet()) + " tets per vertex";
-  if (shear_)
-    fused += std::string(smoothed_ ? ", smoothed shear element" : ", shear element") +
-             (m.shear_damping_time > 0 ? " and its damper" : "") + " of " + std::to_string(m.ntet()) +
-             " tets per vertex";
-  if (gravity_) fused += ", gravity";
-  if (push_) fused += ", sphere penalty contact";
-  if (pull_) fused += ", grasp attachment springs";
-  plan.passes.push_back({"step (step.comp)", "one fused dispatch per substep, " + std::to_string(nchunk_) +
-                                                 " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) + " points x " +
-                                                 std::to_string(threads_per_point_) + " invocation(s) per point: " + fused +
-                                                 ", position Verlet"});
-  if (nodal_) {
-    plan.passes.insert(plan.passes.begin(),
-                       {"nodal-pressure (nodal_pressure.comp)",
-                        "one dispatch per substep before the step, then a storage barrier: nodal volumes from " +
-                            std::to_string(m.ntet()) + " tets per vertex, pressure per point"});
+  const std::string grid = std::to_string(nchunk_) + " workgroups x " + std::to_string(ORGANSIM_GL_CHUNK) +
+                           " points x " + std::to_string(threads_per_point_) + " invocation(s) per point";
+  const std::string in_step = " (in step.comp's one fused dispatch per substep)";
+  const std::string tets = std::to_string(m.ntet()) + " tets per vertex";
+  for (Pass pass : plan_.passes) {
+    std::string detail;
+    switch (pass) {
+      case Pass::NodalPressure:
+        detail = "nodal_pressure.comp, one dispatch per substep before the step, then a storage barrier: nodal "
+                 "volumes from " + tets + ", pressure per point";
+        break;
+      case Pass::ShearSmoothing:
+        detail = "shear_smoothing.comp, one dispatch per substep before the step, then a storage barrier: smoothed "
+                 "deformation gradients from " + tets + ", P(Fbar) per point";
+        break;
+      case Pass::Springs:
+        detail = std::to_string(m.nspring()) + " springs gathered from both ends (" +
+                 std::to_string(m.layout.springs.item.size()) + " slots)" +
+                 (plan_.sutures > 0 ? ", " + std::to_string(plan_.sutures) + " of them sutures (tension only)" : "") +
+                 in_step;
+        break;
+      case Pass::Volume: detail = tets + in_step; break;
+      case Pass::ShearElement:
+        detail = std::string(plan_.element == ElementTerm::SmoothedShear ? "smoothed " : "") + "shear element" +
+                 (m.shear_damping_time > 0 ? " and its damper" : "") + " of " + tets + in_step;
+        break;
+      case Pass::Gravity: detail = "m g on every free point" + in_step; break;
+      case Pass::ToolContact:
+        detail = (plan_.tool == ToolTerm::Push ? "sphere penalty contact on the points" : "grasp attachment springs") +
+                 in_step + ", partial reaction per workgroup";
+        break;
+      case Pass::Integrate: detail = "position Verlet with drag, step.comp: " + grid; break;
+    }
+    plan.passes.push_back({pass_name(pass), detail});
   }
-  if (smoothed_) {
-    plan.passes.insert(plan.passes.begin(),
-                       {"shear-smoothing (shear_smoothing.comp)",
-                        "one dispatch per substep before the step, then a storage barrier: smoothed deformation "
-                        "gradients from " + std::to_string(m.ntet()) + " tets per vertex, P(Fbar) per point"});
-  }
+  if (plan_.sutures > 0)
+    plan.per_tick.push_back({"suture-rest", std::to_string(plan_.sutures) + " sutures' rest lengths from their schedule, "
+                                            "uploaded where they changed"});
   if (tool_.present) {
-    plan.passes.push_back({"reduce-reaction (reduce_reaction.comp)",
-                           "once per tick while the tool acts: " + std::to_string(nchunk_) +
-                               " workgroup partials -> 6 floats + contacts into a persistently mapped ring"});
+    plan.per_tick.push_back({"reduce-reaction", "reduce_reaction.comp while the tool acts: " + std::to_string(nchunk_) +
+                                                    " workgroup partials -> 6 floats + contacts into a persistently "
+                                                    "mapped ring"});
   }
-  plan.passes.push_back({"readback", "fence per tick; the CPU reads tick n-1's reaction after submitting tick n "
-                                     "(latency 1 tick, no wait unless the device is a full tick behind)"});
+  plan.per_tick.push_back({"readback", "fence per tick; the CPU reads tick n-1's reaction after submitting tick n "
+                                       "(latency 1 tick, no wait unless the device is a full tick behind)"});
   for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
-  // The step, plus a per-point pass before it for the nodal volume term or
-  // the smoothed shear element (never both); + 1 reduce per tick with a tool.
-  plan.dispatches_per_step = 1 + (nodal_ ? 1 : 0) + (smoothed_ ? 1 : 0);
+  // The step, plus one dispatch per per-point pass before it (nodal volume
+  // term or smoothed shear element, never both); + 1 reduce per tick with a tool.
+  plan.dispatches_per_step = 1 + (plan_.has(Pass::NodalPressure) ? 1 : 0) + (plan_.has(Pass::ShearSmoothing) ? 1 : 0);
   plan.syncs_per_step = 0;
   return plan;
 }
@@ -316,7 +330,7 @@ void GlBackend::set_state(const std::vector<Vec3>& x_t, const std::vector<Vec3>&
 }
 
 void GlBackend::attach(const Attachment& attachment) {
-  if (!pull_) return;  // only a pulling tool grasps
+  if (plan_.tool != ToolTerm::Pull) return;  // only a pulling tool grasps
   make_current();
   std::fill(attach_upload_.begin(), attach_upload_.end(), 0.0f);
   for (size_t k = 0; k < attachment.points.size(); ++k) {
@@ -333,7 +347,7 @@ void GlBackend::attach(const Attachment& attachment) {
 }
 
 void GlBackend::release() {
-  if (!pull_) return;
+  if (plan_.tool != ToolTerm::Pull) return;
   make_current();
   std::fill(attach_upload_.begin(), attach_upload_.end(), 0.0f);
   glNamedBufferSubData(attach_, 0, static_cast<GLsizeiptr>(attach_upload_.size() * sizeof(float)),

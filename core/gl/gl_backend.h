@@ -41,6 +41,7 @@ class GlBackend final : public Backend {
   std::string device() const override;
   std::string precision() const override { return "float"; }
   Plan plan() const override;
+  const StepPlan& step_plan() const override { return plan_; }
   int32_t reaction_latency_ticks() const override { return 1; }
   // Non-finite positions are flagged on the GPU every tick (status ring).
   int32_t default_check_interval_ticks() const override { return 50; }
@@ -85,8 +86,7 @@ class GlBackend final : public Backend {
   GlBackendOptions options_;
   std::unique_ptr<gl::EglContext> context_;
   int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0;
-  bool volume_ = false, nodal_ = false, shear_ = false, smoothed_ = false, gravity_ = false, push_ = false,
-       pull_ = false;
+  StepPlan plan_;  // the passes of the current version's step (the shader variants follow it)
   int32_t threads_per_point_ = 1;
 
   // nodal_pressure_ with the nodal volume term only, shear_smoothing_ with the

@@ -6,6 +6,7 @@
 
 #include "core/mesh/boundary.h"
 #include "core/mesh/vtk_xml.h"
+#include "core/sim/reference_forces.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
 
@@ -100,12 +101,9 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   for (int32_t i : order) fixed.values.push_back(model.fixed[static_cast<size_t>(i)]);
   attributes.point_data.push_back(std::move(fixed));
   if (tool_ && tool_->mode == ToolMode::Push) {
-    // The penalty contact of DESIGN.md section 4, as the backends apply it.
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3 d = positions_[i] - tool_center;
-      const double r = d.norm();
-      if (r < tool_->radius && r > 0) force[i] = tool_->contact_stiffness * (tool_->radius - r) * d / r;
-    }
+    // The push contact as the backends apply it (the reference's evaluation
+    // of force_law::push_penalty, each point's stiffness share included).
+    reference_push_forces(positions_, tool_center, tool_->radius, tool_->contact_stiffness, force, model.tool_k_scale);
     attributes.point_data.push_back(point_array("tool_force", order, force));
   }
 

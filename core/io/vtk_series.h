@@ -20,7 +20,7 @@
 
 #include "core/scenario/outputs.h"
 #include "core/sim/run_observer.h"
-#include "core/sim/tool.h"
+#include "core/scenario/tool_spec.h"
 
 namespace organsim {
 

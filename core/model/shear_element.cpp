@@ -33,14 +33,6 @@ Eigen::Matrix3d deformation_gradient(const Model& model, int32_t t, const std::v
 
 namespace {
 
-double barrier(double J) {
-  const double jm = kShearElementMinJ;
-  if (J >= jm) return -std::log(J);
-  return -std::log(jm) - (J - jm) / jm + (J - jm) * (J - jm) / (2 * jm * jm);
-}
-
-double psi(const Eigen::Matrix3d& F) { return (F.squaredNorm() - 3) / 2 + barrier(F.determinant()); }
-
 // Fbar_a of every point (npoint): I + sum over the tets of a of k_t (F_t - I) / K_a.
 std::vector<Eigen::Matrix3d> smoothed_gradients(const Model& model, const std::vector<Vec3>& x) {
   std::vector<Eigen::Matrix3d> h(model.npoint(), Eigen::Matrix3d::Zero());
@@ -59,11 +51,11 @@ double shear_element_energy(const Model& model, const std::vector<Vec3>& x) {
   const double s = model.shear_smoothed_share;
   double e = 0;
   for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t)
-    e += (1 - s) * model.tet_shear_k[t] * psi(deformation_gradient(model, t, x));
+    e += (1 - s) * model.tet_shear_k[t] * force_law::shear_energy_density(deformation_gradient(model, t, x));
   if (model.has_smoothed_shear()) {
     const std::vector<Eigen::Matrix3d> F = smoothed_gradients(model, x);
     for (int32_t a = 0; a < model.npoint(); ++a)
-      if (model.point_shear_k[a] > 0) e += smoothed_shear_patch_k(model, a) * psi(F[a]);
+      if (model.point_shear_k[a] > 0) e += smoothed_shear_patch_k(model, a) * force_law::shear_energy_density(F[a]);
   }
   return e;
 }
@@ -73,7 +65,7 @@ std::vector<Eigen::Matrix3d> smoothed_shear_stress(const Model& model, const std
   if (!model.has_smoothed_shear()) return P;
   const std::vector<Eigen::Matrix3d> F = smoothed_gradients(model, x);
   for (int32_t a = 0; a < model.npoint(); ++a)
-    if (model.point_shear_k[a] > 0) P[a] = shear_stress(F[a]);
+    if (model.point_shear_k[a] > 0) P[a] = force_law::shear_stress(F[a]);
   return P;
 }
 
@@ -85,7 +77,7 @@ void add_shear_element_forces(const Model& model, const std::vector<Vec3>& x, st
     const Tet& tet = model.tet_points[t];
     const Eigen::Matrix3d Pbar = (Pa[tet[0]] + Pa[tet[1]] + Pa[tet[2]] + Pa[tet[3]]) / 4;
     // V times the first Piola-Kirchhoff stress of the blend.
-    const Eigen::Matrix3d P = model.tet_shear_k[t] * ((1 - s) * shear_stress(deformation_gradient(model, t, x)) + s * Pbar);
+    const Eigen::Matrix3d P = model.tet_shear_k[t] * ((1 - s) * force_law::shear_stress(deformation_gradient(model, t, x)) + s * Pbar);
     for (int i = 0; i < 4; ++i) force[tet[i]] -= P * model.tet_shape_gradient[t][i];
   }
 }
@@ -96,12 +88,10 @@ void add_shear_element_damping_forces(const Model& model, const std::vector<Vec3
   for (int32_t t = 0; t < static_cast<int32_t>(model.tet_shear_k.size()); ++t) {
     const Eigen::Matrix3d F = deformation_gradient(model, t, x);
     const Eigen::Matrix3d Fdot = deformation_gradient(model, t, v);  // sum_i v_i g_i^T
-    const Eigen::Matrix3d cof = shear_cofactor(F);
-    const double J = F.col(0).dot(cof.col(0));
-    const Eigen::Matrix3d A = Fdot * cof.transpose();  // J times the velocity gradient Fdot F^-1
+    const Eigen::Matrix3d cof = force_law::shear_cofactor(F);
     // V times the viscous first Piola-Kirchhoff stress J sigma F^-T = 2 mu_e tau D cof.
-    const Eigen::Matrix3d P = (model.shear_damping_time * model.tet_shear_k[t] /
-                               std::max(J, kShearElementMinJ)) * (A + A.transpose()) * cof;
+    const Eigen::Matrix3d P = model.tet_shear_k[t] * force_law::shear_damping_stress(
+                                                         Fdot, cof, F.col(0).dot(cof.col(0)), model.shear_damping_time);
     for (int i = 0; i < 4; ++i) force[model.tet_points[t][i]] -= P * model.tet_shape_gradient[t][i];
   }
 }

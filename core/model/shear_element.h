@@ -49,44 +49,16 @@
 // per-tet one above with the full k_t (its rest matrix is tau times the
 // per-tet element's stiffness, not the blend's).
 //
-// This file evaluates it in double precision outside the kernels (reference
-// forces, energy, rest stiffness); the kernels evaluate the same formulas.
+// The element's stress, barrier and damper are core/physics/force_law.h;
+// this file evaluates them over a Model in double precision outside the
+// kernels (reference forces, energy, rest stiffness).
 #include <array>
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/physics/force_law.h"
 
 namespace organsim {
-
-// Where the barrier -ln J hands over to its quadratic extension.
-inline constexpr double kShearElementMinJ = 0.5;
-
-// phi'(J): -1/J from kShearElementMinJ up, (J - 2 J_min) / J_min^2 below (the
-// extension's slope, continuous with its first two derivatives at J_min).
-template <class Real>
-inline Real shear_barrier_slope(Real J) {
-  const Real jm = static_cast<Real>(kShearElementMinJ);
-  return J >= jm ? Real(-1) / J : (J - 2 * jm) / (jm * jm);
-}
-
-// cof F = J F^-T, column by column: the cross products of F's other columns
-// (any scalar: the reference in double, the scatter step in its precision).
-template <class Matrix3>
-inline Matrix3 shear_cofactor(const Matrix3& F) {
-  Matrix3 c;
-  c.col(0) = F.col(1).cross(F.col(2));
-  c.col(1) = F.col(2).cross(F.col(0));
-  c.col(2) = F.col(0).cross(F.col(1));
-  return c;
-}
-
-// P(F) = F + phi'(J) cof F, the first Piola-Kirchhoff stress per unit k of
-// the element's energy.
-template <class Matrix3>
-inline Matrix3 shear_stress(const Matrix3& F) {
-  const Matrix3 cof = shear_cofactor(F);
-  return F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
-}
 
 // Rest gradients g_i of the barycentric coordinates of the tet (x0..x3),
 // 1/m: g_i = (dV/dx_i) / V. They sum to zero.

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/render/frame_options.h"
-#include "core/sim/tool.h"
+#include "core/scenario/tool_spec.h"
 
 namespace organsim {
 

@@ -12,7 +12,7 @@
 #include "core/render/frame_options.h"
 #include "core/scenario/scenario.h"
 #include "core/sim/run_observer.h"
-#include "core/sim/tool.h"
+#include "core/scenario/tool_spec.h"
 
 namespace organsim {
 

@@ -15,7 +15,7 @@
 #include "core/model/material.h"
 #include "core/scenario/events.h"
 #include "core/scenario/outputs.h"
-#include "core/sim/tool.h"
+#include "core/scenario/tool_spec.h"
 #include "core/util/vec.h"
 
 namespace organsim {

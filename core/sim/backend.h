@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/sim/step_plan.h"
 #include "core/sim/tool.h"
 
 namespace organsim {
@@ -20,17 +21,21 @@ struct TickRequest {
   Vec3 tool_from{0, 0, 0}, tool_to{0, 0, 0};  // m
 };
 
-// The step is assembled from the passes the scene needs; `--plan` prints them.
+// What a backend does for a scene, for `organsim run --plan`: the step
+// plan's passes in order (core/sim/step_plan.h: the same names on every
+// backend), each with this backend's detail, the work it does once per tick
+// outside the step, and its buffers.
 struct PassInfo {
-  std::string name;    // e.g. "springs", "volume", "gravity", "tool-contact", "integrate"
-  std::string detail;  // what it touches, sizes
+  std::string name;    // pass_name() for a step pass, e.g. "springs", "volume", "tool-contact", "integrate"
+  std::string detail;  // how this backend runs it, sizes
 };
 struct BufferInfo {
   std::string name;
   size_t bytes = 0;
 };
 struct Plan {
-  std::vector<PassInfo> passes;
+  std::vector<PassInfo> passes;      // the step plan's passes, in order
+  std::vector<PassInfo> per_tick;    // once per tick, outside the step (GL: reaction reduction, readback)
   std::vector<BufferInfo> buffers;
   int32_t dispatches_per_step = 0;   // GL: compute dispatches; CPU: fused loops
   int32_t syncs_per_step = 0;        // CPU-GPU synchronisations per step
@@ -43,6 +48,8 @@ class Backend {
   virtual std::string device() const = 0;  // CPU model or GL_RENDERER
   virtual std::string precision() const = 0;  // "double" or "float"
   virtual Plan plan() const = 0;
+  // The passes of the current Model's step (recomputed at every rebuild).
+  virtual const StepPlan& step_plan() const = 0;
 
   // Ticks between a tick and the tick() call that returns its reaction:
   // 0 on the CPU, 1 for the GL backend's non-blocking readback.
@@ -77,14 +84,6 @@ class Backend {
   virtual void rebuild(const Model& next) = 0;
   // Simulated time at the end of the last tick, s.
   virtual double time() const = 0;
-};
-
-// The tool parameters a backend needs besides its per-tick pose.
-struct BackendTool {
-  bool present = false;
-  ToolMode mode = ToolMode::Push;
-  double radius = 0;             // m
-  double contact_stiffness = 0;  // N/m
 };
 
 }  // namespace organsim

@@ -13,8 +13,11 @@
 #include <utility>
 
 #include "core/model/shear_element.h"
+#include "core/physics/force_law.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/cpu_kernel_avx512_double.h"
+#include "core/sim/kernel_inputs.h"
+#include "core/sim/step_plan.h"
 #include "core/sim/thread_choice.h"
 #include "core/util/error.h"
 
@@ -30,16 +33,10 @@ std::string cpu_model_name() {
   return "unknown CPU";
 }
 
-enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
-// The per-tet pass: a volume term, or the shear element (nu < 1/4), which
-// never comes with a volume term (core/model/stiffness.h), per tet or
-// smoothed (a per-point stress pass first, core/model/shear_element.h).
-enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2, kShearElement = 3, kSmoothedShear = 4 };
-
-// Why the AVX-512 kernels cannot run `model` here ("" if they can).
-std::string avx512_refusal(const Model& model) {
+// Why the AVX-512 kernels cannot run this step plan here ("" if they can).
+std::string avx512_refusal(const StepPlan& plan, const Model& model) {
   if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
-  return avx512_kernel_unsupported(model);
+  return avx512_kernel_unsupported(plan, model.layout.chunk_size);
 }
 
 // What the springs pass does with sutures, if the model has any.
@@ -47,15 +44,6 @@ std::string sutures_detail(const Model& m) {
   if (m.nsuture() == 0) return "";
   return ", " + std::to_string(m.nsuture()) + " of them sutures (tension only, rest length refreshed per tick)";
 }
-
-// Step-invariant inputs of one substep.
-template <class Real>
-struct StepContext {
-  Real dt, inv_dt, dt2, drag;  // drag = 1 - alpha dt
-  Real shear_damping;          // tau / dt: the shear element's damper on the increments d = dt v
-  Real gravity[3], tool_center[3];
-  Real tool_radius, tool_k;
-};
 
 // Three coordinate arrays (structure of arrays), so that one slot of a
 // group of lanes is a contiguous load and the compiler vectorises over lanes.
@@ -147,81 +135,92 @@ class CpuBackend final : public Backend {
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
 
+  const StepPlan& step_plan() const override { return plan_; }
+
   Plan plan() const override {
     Plan plan;
+    for (Pass pass : plan_.passes) plan.passes.push_back({pass_name(pass), pass_detail(pass)});
+    if (plan_.sutures > 0)
+      plan.per_tick.push_back({"suture-rest", std::to_string(plan_.sutures) + " sutures' rest lengths from their schedule"});
     const auto& m = *model_;
-    const size_t real = sizeof(Real);
-    plan.passes.push_back({"springs", std::to_string(m.nspring()) + " springs gathered from both ends (" +
-                                          std::to_string(m.layout.springs.item.size()) + " slots)" +
-                                          sutures_detail(m)});
-    if (m.has_nodal_volume())
-      plan.passes.push_back({"nodal-volume", "nodal volumes and pressures, tets gathered per vertex, then a barrier"});
-    if (m.has_volume())
-      plan.passes.push_back({"volume", std::to_string(m.ntet()) + " tets gathered per vertex (" +
-                                           std::to_string(m.layout.tets.item.size()) + " slots)"});
-    if (m.has_smoothed_shear())
-      plan.passes.push_back({"shear-smoothing", "every point's stress on its node-averaged deformation gradient, "
-                                                "tets gathered per vertex, then a barrier"});
-    if (m.has_shear_element())
-      plan.passes.push_back({"shear-element", std::to_string(m.ntet()) +
-                                                  " tets' shear element (neo-Hookean, no lambda" +
-                                                  (m.shear_damping_time > 0 ? ", with its damper" : "") +
-                                                  "), gathered per vertex (" +
-                                                  std::to_string(m.layout.tets.item.size()) + " slots)"});
-    if (m.has_gravity()) plan.passes.push_back({"gravity", "m g on every free point"});
-    if (tool_.present)
-      plan.passes.push_back({"tool-contact", tool_.mode == ToolMode::Push ? "sphere penalty contact"
-                                                                          : "grasp attachment springs"});
-    plan.passes.push_back({"integrate", "position Verlet, fused with the passes above (" +
-                                            std::to_string(kLanes) + " lanes per SIMD group)"});
-    const size_t n = static_cast<size_t>(m.npoint());
-    plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
-    plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
-    plan.buffers.push_back({"spring slots (other, rest, k, d)",
-                            m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
-    if (m.has_nodal_volume()) {
-      plan.buffers.push_back({"tet slots (3 others)", m.layout.tets.item.size() * 3 * sizeof(int32_t)});
-      plan.buffers.push_back({"nodal k, rest volume, pressure", 3 * n * real});
-    } else if (m.has_volume()) {
-      plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)",
-                              m.layout.tets.item.size() * (3 * sizeof(int32_t) + 2 * real)});
-    } else if (m.has_shear_element()) {
-      plan.buffers.push_back({"tet slots (3 others, 3 rest shape gradients, k_t)",
-                              m.layout.tets.item.size() * (3 * sizeof(int32_t) + 10 * real)});
-      if (m.has_smoothed_shear()) plan.buffers.push_back({"smoothed shear: 1/K_a and the stress per point", 10 * n * real});
-    }
-    if (tool_.present) plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(Partial)});
-    plan.dispatches_per_step = 1;
+    const size_t real = sizeof(Real), n = static_cast<size_t>(m.npoint());
     if (fast_) {
-      // The avx512 kernel's own packing replaces the generic streams above.
-      plan.buffers.clear();
       plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
                               fast_->bytes()});
-      const std::string lanes = std::to_string(kLanes);
-      const std::string batches = std::to_string(m.ntet()) + " tets evaluated once, " + lanes + " per batch, ";
-      if (m.has_nodal_volume())
-        plan.passes[1].detail = batches + "6 V_t into their vertices' nodal volumes (2 fixed slices), a barrier, "
-                                          "the pressures per point, a barrier (avx512 kernel)";
-      if (m.has_volume())
-        plan.passes[m.has_nodal_volume() ? 2 : 1].detail = batches + "into 2 fixed force slices (avx512 kernel)";
-      plan.passes.back().detail = "position Verlet, fused with springs and the tet forces (" + lanes + " " +
-                                  precision() + " lanes, avx512 kernel)";
+    } else {
+      plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
+      plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
+      plan.buffers.push_back({"spring slots (other, rest, k, d)",
+                              m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
+      const size_t tet_slots = m.layout.tets.item.size();
+      switch (plan_.element) {
+        case ElementTerm::NodalVolume:
+          plan.buffers.push_back({"tet slots (3 others)", tet_slots * 3 * sizeof(int32_t)});
+          plan.buffers.push_back({"nodal k, rest volume, pressure", 3 * n * real});
+          break;
+        case ElementTerm::TetVolume:
+          plan.buffers.push_back({"tet slots (3 others, rest volume, k_v)", tet_slots * (3 * sizeof(int32_t) + 2 * real)});
+          break;
+        case ElementTerm::SmoothedShear:
+          plan.buffers.push_back({"smoothed shear: 1/K_a and the stress per point", 10 * n * real});
+          [[fallthrough]];
+        case ElementTerm::ShearElement:
+          plan.buffers.push_back({"tet slots (3 others, 3 rest shape gradients, k_t)",
+                                  tet_slots * (3 * sizeof(int32_t) + 10 * real)});
+          break;
+        case ElementTerm::None: break;
+      }
     }
+    if (plan_.tool != ToolTerm::None)
+      plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(ChunkReaction)});
+    plan.dispatches_per_step = 1;
     plan.syncs_per_step = 0;
     return plan;
   }
 
+  // What this backend's kernel does for one pass of the step plan.
+  std::string pass_detail(Pass pass) const {
+    const auto& m = *model_;
+    const std::string lanes = std::to_string(kLanes) + " " + precision() + " lanes";
+    const std::string tets_per_vertex = std::to_string(m.ntet()) + " tets gathered per vertex (" +
+                                        std::to_string(m.layout.tets.item.size()) + " slots)";
+    const std::string tet_batches = std::to_string(m.ntet()) + " tets evaluated once, " + std::to_string(kLanes) +
+                                    " per batch, ";
+    switch (pass) {
+      case Pass::NodalPressure:
+        return fast_ ? tet_batches + "6 V_t into their vertices' nodal volumes (2 fixed slices), a barrier, "
+                                     "the pressures per point, a barrier (avx512 kernel)"
+                     : "nodal volumes and pressures, " + tets_per_vertex + ", then a barrier";
+      case Pass::ShearSmoothing:
+        return "every point's stress on its node-averaged deformation gradient, " + tets_per_vertex +
+               ", then a barrier";
+      case Pass::Springs:
+        return std::to_string(m.nspring()) + " springs gathered from both ends (" +
+               std::to_string(m.layout.springs.item.size()) + " slots)" + sutures_detail(m);
+      case Pass::Volume:
+        return fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex;
+      case Pass::ShearElement:
+        return std::string(plan_.element == ElementTerm::SmoothedShear ? "smoothed " : "") +
+               "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") +
+               "), " + tets_per_vertex;
+      case Pass::Gravity: return "m g on every free point";
+      case Pass::ToolContact:
+        return plan_.tool == ToolTerm::Push ? "sphere penalty contact on the points" : "grasp attachment springs";
+      case Pass::Integrate:
+        return "position Verlet with drag, fused with the force passes (" + lanes +
+               (fast_ ? ", avx512 kernel)" : ", generic kernel)");
+    }
+    return "";
+  }
+
   void attach(const Attachment& attachment) override {
     release();
-    attach_offset_.assign(attachment.points.size(), Eigen::Matrix<Real, 3, 1>::Zero());
+    attach_offset_.clear();
     for (size_t k = 0; k < attachment.points.size(); ++k) {
       attached_[attachment.points[k]] = static_cast<int32_t>(k);
-      attach_offset_[k] = attachment.offsets[k].cast<Real>();
+      for (int j = 0; j < 3; ++j) attach_offset_.push_back(static_cast<Real>(attachment.offsets[k][j]));
     }
     attached_points_ = attachment.points;
-    attach_offset_flat_.clear();
-    for (const Vec3& o : attachment.offsets)
-      for (int k = 0; k < 3; ++k) attach_offset_flat_.push_back(static_cast<Real>(o[k]));
   }
 
   void release() override {
@@ -258,7 +257,7 @@ class CpuBackend final : public Backend {
   }
 
   Reaction tick(const TickRequest& request) override {
-    StepContext<Real> ctx;
+    KernelStepInputs<Real> ctx;
     ctx.dt = static_cast<Real>(request.dt);
     ctx.inv_dt = static_cast<Real>(1.0 / request.dt);
     ctx.dt2 = static_cast<Real>(request.dt * request.dt);
@@ -267,9 +266,10 @@ class CpuBackend final : public Backend {
     for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(model_->gravity[k]);
     ctx.tool_radius = static_cast<Real>(tool_.radius);
     ctx.tool_k = static_cast<Real>(tool_.contact_stiffness);
-    const int tool_kind = !(tool_.present && request.tool_active) ? kNoTool
-                          : tool_.mode == ToolMode::Push         ? kPush
-                                                                 : kPull;
+    ctx.tool = request.tool_active ? plan_.tool : ToolTerm::None;
+    ctx.attached = attached_.data();
+    ctx.attach_offset = attach_offset_.data();
+    ctx.tool_scale = tool_scale_.data();
     refresh_suture_rest();
     Reaction reaction;
     auto substep = [&](int32_t s) {
@@ -277,7 +277,7 @@ class CpuBackend final : public Backend {
       const double f = static_cast<double>(s) / request.substeps;
       const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
       for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
-      reaction = fast_ ? fast_step(ctx, tool_kind) : step(ctx, tool_kind);
+      reaction = fast_ ? fast_step(ctx) : step(ctx);
       time_ += request.dt;
     };
     if (!choice_) {
@@ -298,11 +298,6 @@ class CpuBackend final : public Backend {
   }
 
  private:
-  struct Partial {
-    Vec3 force, torque;
-    int32_t contacts;
-  };
-
   // Calls f(entry, p) for every slot of `table`, padding included, with the
   // point p whose lane holds it (chunk by chunk, no search per entry).
   template <class F>
@@ -318,6 +313,7 @@ class CpuBackend final : public Backend {
   // no code of its own here.
   void pack() {
     const Model& model = *model_;
+    plan_ = make_step_plan(model, tool_);
     const int32_t n = model.npoint();
     const auto& layout = model.layout;
     rest_.assign(n, 0);
@@ -440,7 +436,7 @@ class CpuBackend final : public Backend {
   // The AVX-512 kernel packs its own streams from the same Model; while it
   // runs, it holds the state (u_, d_ are filled from it only for a rebuild).
   void pack_fast() {
-    const std::string refusal = avx512_refusal(*model_);
+    const std::string refusal = avx512_refusal(plan_, *model_);
     if (kernel_choice_ == CpuKernel::Avx512 && !refusal.empty())
       throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
     if (kernel_choice_ == CpuKernel::Generic || !refusal.empty()) {
@@ -448,14 +444,13 @@ class CpuBackend final : public Backend {
       return;
     }
     if (!fast_) fast_ = std::make_unique<FastKernel>();
-    fast_->pack(*model_);
+    fast_->pack(*model_, plan_);
     fast_partial_.resize(fast_->nchunk());
     // The kernel reads attachment indices a register of points at a time, padding included.
     const size_t npad = static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size;
     attached_.resize(std::max(attached_.size(), npad), -1);
     // Padding lanes (at the origin, no mass) may fall inside a push tool: scale 0.
-    tool_scale_padded_.assign(tool_scale_.begin(), tool_scale_.end());
-    tool_scale_padded_.resize(npad, 0);
+    tool_scale_.resize(std::max(tool_scale_.size(), npad), 0);
     push_fast_state();
   }
   void push_fast_state() {
@@ -473,25 +468,10 @@ class CpuBackend final : public Backend {
     }
   }
 
-  Reaction fast_step(const StepContext<Real>& ctx, int tool_kind) {
-    using Inputs = KernelStepInputs<Real>;
-    Inputs in;
-    in.dt2 = ctx.dt2;
-    in.inv_dt = ctx.inv_dt;
-    in.drag = ctx.drag;
-    for (int k = 0; k < 3; ++k) {
-      in.gravity[k] = ctx.gravity[k];
-      in.tool_center[k] = ctx.tool_center[k];
-    }
-    in.tool_radius = ctx.tool_radius;
-    in.tool_k = ctx.tool_k;
-    in.tool = tool_kind == kPush ? Inputs::Push : tool_kind == kPull ? Inputs::Pull : Inputs::None;
-    in.attached = attached_.data();
-    in.attach_offset = attach_offset_flat_.data();
-    in.tool_scale = tool_scale_padded_.data();
+  Reaction fast_step(const KernelStepInputs<Real>& in) {
     fast_->step(in, threads_, fast_partial_);
     Reaction reaction;
-    if (tool_kind != kNoTool) {
+    if (in.tool != ToolTerm::None) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
       for (const ChunkReaction& p : fast_partial_) {
         reaction.force += p.force;
@@ -510,13 +490,13 @@ class CpuBackend final : public Backend {
   // it measured, for device().
   std::string choose_threads_by_timing() {
     const int all = omp_get_max_threads();
-    StepContext<Real> ctx{};
+    KernelStepInputs<Real> ctx{};
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
     ctx.shear_damping = static_cast<Real>(model_->shear_damping_time * 1e6);
     auto time_steps = [&](int threads, int32_t steps) {
       threads_ = threads;
       return 1e3 * timed(steps, [&] {
-               for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx, kNoTool) : step(ctx, kNoTool);
+               for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx) : step(ctx);
              }) / steps;
     };
     // Warm-up: the first parallel step also starts the thread pool.
@@ -562,41 +542,36 @@ class CpuBackend final : public Backend {
     return (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
   }
 
-  Reaction step(const StepContext<Real>& ctx, int tool_kind) {
-    const bool gravity = model_->has_gravity();
-    // Lean scenes: each combination of passes is its own compiled loop, so a
-    // scene without volume or tool never touches that code or data.
-    if (model_->has_nodal_volume()) {
-      if (gravity) return dispatch_tool<kNodalVolume, true>(ctx, tool_kind);
-      return dispatch_tool<kNodalVolume, false>(ctx, tool_kind);
+  // Each combination of the plan's passes is its own compiled loop, so a
+  // lean scene never touches the code or data of a pass it lacks.
+  Reaction step(const KernelStepInputs<Real>& ctx) {
+    switch (plan_.element) {
+      case ElementTerm::NodalVolume: return dispatch_gravity<ElementTerm::NodalVolume>(ctx);
+      case ElementTerm::TetVolume: return dispatch_gravity<ElementTerm::TetVolume>(ctx);
+      case ElementTerm::SmoothedShear: return dispatch_gravity<ElementTerm::SmoothedShear>(ctx);
+      case ElementTerm::ShearElement: return dispatch_gravity<ElementTerm::ShearElement>(ctx);
+      case ElementTerm::None: break;
     }
-    if (model_->has_volume()) {
-      if (gravity) return dispatch_tool<kTetVolume, true>(ctx, tool_kind);
-      return dispatch_tool<kTetVolume, false>(ctx, tool_kind);
-    }
-    if (model_->has_smoothed_shear()) {
-      if (gravity) return dispatch_tool<kSmoothedShear, true>(ctx, tool_kind);
-      return dispatch_tool<kSmoothedShear, false>(ctx, tool_kind);
-    }
-    if (model_->has_shear_element()) {
-      if (gravity) return dispatch_tool<kShearElement, true>(ctx, tool_kind);
-      return dispatch_tool<kShearElement, false>(ctx, tool_kind);
-    }
-    if (gravity) return dispatch_tool<kNoVolume, true>(ctx, tool_kind);
-    return dispatch_tool<kNoVolume, false>(ctx, tool_kind);
+    return dispatch_gravity<ElementTerm::None>(ctx);
   }
 
-  template <int Volume, bool Gravity>
-  Reaction dispatch_tool(const StepContext<Real>& ctx, int tool_kind) {
-    switch (tool_kind) {
-      case kPush: return run<Volume, Gravity, kPush>(ctx);
-      case kPull: return run<Volume, Gravity, kPull>(ctx);
-      default: return run<Volume, Gravity, kNoTool>(ctx);
-    }
+  template <ElementTerm Volume>
+  Reaction dispatch_gravity(const KernelStepInputs<Real>& ctx) {
+    return plan_.gravity ? dispatch_tool<Volume, true>(ctx) : dispatch_tool<Volume, false>(ctx);
   }
 
-  template <int Volume, bool Gravity, int Tool>
-  Reaction run(const StepContext<Real>& ctx) {
+  template <ElementTerm Volume, bool Gravity>
+  Reaction dispatch_tool(const KernelStepInputs<Real>& ctx) {
+    switch (ctx.tool) {
+      case ToolTerm::Push: return run<Volume, Gravity, ToolTerm::Push>(ctx);
+      case ToolTerm::Pull: return run<Volume, Gravity, ToolTerm::Pull>(ctx);
+      case ToolTerm::None: break;
+    }
+    return run<Volume, Gravity, ToolTerm::None>(ctx);
+  }
+
+  template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
+  Reaction run(const KernelStepInputs<Real>& ctx) {
     const int32_t nchunk = model_->layout.nchunk, npoint = model_->npoint();
 #pragma omp parallel num_threads(threads_)
     {
@@ -608,12 +583,12 @@ class CpuBackend final : public Backend {
         pos_.y[p] = rest_.y[p] + u_.y[p];
         pos_.z[p] = rest_.z[p] + u_.z[p];
       }
-      if constexpr (Volume == kNodalVolume) {
+      if constexpr (Volume == ElementTerm::NodalVolume) {
         // The nodal term's extra pass: every point's pressure before any force.
 #pragma omp for schedule(static)
         for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(c);
       }
-      if constexpr (Volume == kSmoothedShear) {
+      if constexpr (Volume == ElementTerm::SmoothedShear) {
         // Every point's smoothed stress before any force reads it.
 #pragma omp for schedule(static)
         for (int32_t c = 0; c < nchunk; ++c) shear_stress_chunk(c);
@@ -624,9 +599,9 @@ class CpuBackend final : public Backend {
     u_.swap(u_next_);  // u_t <- u_{t+1}
     d_.swap(d_next_);  // d_t <- d_{t+1}
     Reaction reaction;
-    if constexpr (Tool != kNoTool) {
+    if constexpr (Tool != ToolTerm::None) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
-      for (const Partial& p : partial_) {
+      for (const ChunkReaction& p : partial_) {
         reaction.force += p.force;
         reaction.torque += p.torque;
         reaction.contacts += p.contacts;
@@ -674,7 +649,7 @@ class CpuBackend final : public Backend {
     const int32_t first = c * model_->layout.chunk_size;
     const int32_t last = std::min(model_->npoint(), first + model_->layout.chunk_size);
 #pragma omp simd
-    for (int32_t p = first; p < last; ++p) node_q_[p] = node_k_[p] * (node_q_[p] - node_rest_[p]);
+    for (int32_t p = first; p < last; ++p) node_q_[p] = force_law::volume_pressure(node_k_[p], node_q_[p], node_rest_[p]);
   }
 
   // The smoothed shear element's stress P(Fbar_p) = Fbar + phi'(J) cof Fbar
@@ -724,7 +699,7 @@ class CpuBackend final : public Backend {
         const Real k00 = f11 * f22 - f12 * f21, k01 = f12 * f20 - f10 * f22, k02 = f10 * f21 - f11 * f20;
         const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
         const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
-        const Real slope = shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
+        const Real slope = force_law::shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
         node_stress_[0][p] = f00 + slope * k00;
         node_stress_[1][p] = f01 + slope * k01;
         node_stress_[2][p] = f02 + slope * k02;
@@ -738,12 +713,12 @@ class CpuBackend final : public Backend {
     }
   }
 
-  template <int Volume, bool Gravity, int Tool>
-  void chunk(const StepContext<Real>& ctx, int32_t c) {
+  template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
+  void chunk(const KernelStepInputs<Real>& ctx, int32_t c) {
     const auto& L = model_->layout;
     const int32_t C = L.chunk_size;
     const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
-    Partial partial{Vec3::Zero(), Vec3::Zero(), 0};
+    ChunkReaction partial;
     const Real* __restrict X = pos_.x.data();
     const Real* __restrict Y = pos_.y.data();
     const Real* __restrict Z = pos_.z.data();
@@ -783,17 +758,17 @@ class CpuBackend final : public Backend {
           // Coincident ends (and padding slots) have no direction: no force.
           const Real inv = length > Real(0) ? Real(1) / length : Real(0);
           const Real dvx = dx[q] - dx[p], dvy = dy[q] - dy[p], dvz = dz[q] - dz[p];
-          const Real along = (dvx * lx + dvy * ly + dvz * lz) * inv * ctx.inv_dt;
+          const Real along = (dvx * lx + dvy * ly + dvz * lz) * inv * ctx.inv_dt;  // closing rate, m/s
           const Real ke = k[e];
-          const Real pull = (std::abs(ke) * (length - rest[e]) + d[e] * along) * inv;
-          const Real s = ke < Real(0) && !(length > rest[e] && pull > Real(0)) ? Real(0) : pull;
+          const Real tension = force_law::spring_tension(std::abs(ke), d[e], length, rest[e], along);
+          const Real s = (ke < Real(0) ? force_law::suture_tension(tension, length, rest[e]) : tension) * inv;
           fx[l] += s * lx;
           fy[l] += s * ly;
           fz[l] += s * lz;
         }
       }
 
-      if constexpr (Volume == kShearElement || Volume == kSmoothedShear) {
+      if constexpr (Volume == ElementTerm::ShearElement || Volume == ElementTerm::SmoothedShear) {
         // f_p = -k (F + phi'(J) cof F) g_p = k (F s + phi'(J) cof(F) s) with
         // F = I + H, H = sum over the others q of (u_q - u_p) g_q^T and
         // s = g_a + g_b + g_c = -g_p (core/model/shear_element.h). From
@@ -816,7 +791,7 @@ class CpuBackend final : public Backend {
         const Real* __restrict gcz = shear_g_[8].data();
         // Smoothed: the per-tet stress weighs 1 - s, the mean of the four
         // corners' smoothed stresses s (their sum times s / 4).
-        constexpr bool smoothed = Volume == kSmoothedShear;
+        constexpr bool smoothed = Volume == ElementTerm::SmoothedShear;
         const Real per_tet = smoothed ? 1 - smoothed_share_ : Real(1), corners = smoothed ? smoothed_share_ / 4 : Real(0);
         const std::array<const Real*, 9> P = {node_stress_[0].data(), node_stress_[1].data(), node_stress_[2].data(),
                                               node_stress_[3].data(), node_stress_[4].data(), node_stress_[5].data(),
@@ -843,7 +818,7 @@ class CpuBackend final : public Backend {
             const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
             const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
             const Real J = f00 * k00 + f01 * k01 + f02 * k02;
-            const Real slope = shear_barrier_slope(J);
+            const Real slope = force_law::shear_barrier_slope(J);
             const Real sx = gax[e] + gbx[e] + gcx[e], sy = gay[e] + gby[e] + gcy[e], sz = gaz[e] + gbz[e] + gcz[e];
             const Real cx0 = k00 * sx + k01 * sy + k02 * sz;  // c = cof s
             const Real cx1 = k10 * sx + k11 * sy + k12 * sz;
@@ -866,7 +841,7 @@ class CpuBackend final : public Backend {
             const Real h0 = g00 * cx0 + g10 * cx1 + g20 * cx2;  // G^T c
             const Real h1 = g01 * cx0 + g11 * cx1 + g21 * cx2;
             const Real h2 = g02 * cx0 + g12 * cx1 + g22 * cx2;
-            const Real jm = static_cast<Real>(kShearElementMinJ);
+            const Real jm = static_cast<Real>(force_law::kShearElementMinJ);
             const Real damper = ctx.shear_damping / (J > jm ? J : jm);
             Real ex = per_tet * (f00 * sx + f01 * sy + f02 * sz + slope * cx0);
             Real ey = per_tet * (f10 * sx + f11 * sy + f12 * sz + slope * cx1);
@@ -883,9 +858,9 @@ class CpuBackend final : public Backend {
             fz[l] += kt[e] * (ez + damper * (g20 * w0 + g21 * w1 + g22 * w2 + k20 * h0 + k21 * h1 + k22 * h2));
           }
         }
-      } else if constexpr (Volume != kNoVolume) {
-        // Per tet: f_p = k_v (V_r - V) dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6.
-        // Nodal: f_p = -p_t dV/dx_p, p_t the mean of the 4 nodal pressures.
+      } else if constexpr (Volume != ElementTerm::None) {
+        // f_p = -p dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6, with the tet's
+        // pressure p = k_v (V - V_r), or the mean of its 4 nodal pressures.
         const Real* __restrict q = node_q_.data();
         const int32_t* __restrict ta = tet_a_.data();
         const int32_t* __restrict tb = tet_b_.data();
@@ -900,14 +875,15 @@ class CpuBackend final : public Backend {
             const Real ax = X[a] - X[p], ay = Y[a] - Y[p], az = Z[a] - Z[p];
             const Real bx = X[b] - X[p], by = Y[b] - Y[p], bz = Z[b] - Z[p];
             const Real cx = X[cc] - X[p], cy = Y[cc] - Y[p], cz = Z[cc] - Z[p];
-            Real s;
-            if constexpr (Volume == kNodalVolume) {
-              s = -(q[p] + q[a] + q[b] + q[cc]) / Real(24);
+            Real pressure;
+            if constexpr (Volume == ElementTerm::NodalVolume) {
+              pressure = force_law::tet_pressure_from_nodal(q[p], q[a], q[b], q[cc]);
             } else {
               const Real volume =
                   (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
-              s = kv[e] * (vr[e] - volume) / Real(6);
+              pressure = force_law::volume_pressure(kv[e], volume, vr[e]);
             }
+            const Real s = -pressure / Real(6);
             const Real ex = cx - ax, ey = cy - ay, ez = cz - az;  // c - a
             const Real gx = bx - ax, gy = by - ay, gz = bz - az;  // b - a
             fx[l] += s * (ey * gz - ez * gy);
@@ -917,33 +893,13 @@ class CpuBackend final : public Backend {
         }
       }
 
-      if constexpr (Tool != kNoTool) {
+      if constexpr (Tool != ToolTerm::None) {
         // Few points touch the tool: a plain loop, reaction summed per lane in order.
-        const Vec3 center(ctx.tool_center[0], ctx.tool_center[1], ctx.tool_center[2]);
         for (int32_t l = 0; l < lanes; ++l) {
-          const int32_t p = g0 + l;
-          const Eigen::Matrix<Real, 3, 1> x(X[p], Y[p], Z[p]);
-          const Eigen::Matrix<Real, 3, 1> ctr(ctx.tool_center[0], ctx.tool_center[1], ctx.tool_center[2]);
-          Eigen::Matrix<Real, 3, 1> fc;
-          if constexpr (Tool == kPush) {
-            const Eigen::Matrix<Real, 3, 1> dvec = x - ctr;
-            const Real dist = dvec.norm();
-            if (dist >= ctx.tool_radius) continue;
-            const Eigen::Matrix<Real, 3, 1> n =
-                dist > Real(0) ? Eigen::Matrix<Real, 3, 1>(dvec / dist) : Eigen::Matrix<Real, 3, 1>(0, 0, 1);
-            fc = ctx.tool_k * tool_scale_[p] * (ctx.tool_radius - dist) * n;
-          } else {
-            const int32_t a = attached_[p];
-            if (a < 0) continue;
-            fc = ctx.tool_k * tool_scale_[p] * (ctr + attach_offset_[a] - x);
-          }
-          fx[l] += fc.x();
-          fy[l] += fc.y();
-          fz[l] += fc.z();
-          const Vec3 fd = fc.template cast<double>();
-          partial.force -= fd;
-          partial.torque += (x.template cast<double>() - center).cross(-fd);
-          ++partial.contacts;
+          const Real xl[3] = {X[g0 + l], Y[g0 + l], Z[g0 + l]};
+          Real fl[3] = {fx[l], fy[l], fz[l]};
+          if (!add_tool_force<Real, Tool>(ctx, g0 + l, xl, fl, partial)) continue;
+          fx[l] = fl[0], fy[l] = fl[1], fz[l] = fl[2];
         }
       }
 
@@ -968,10 +924,11 @@ class CpuBackend final : public Backend {
         nz[p] = uz[p] + ndz[p];
       }
     }
-    if constexpr (Tool != kNoTool) partial_[c] = partial;
+    if constexpr (Tool != ToolTerm::None) partial_[c] = partial;
   }
 
   const Model* model_;  // the current version (rebuild() moves it on)
+  StepPlan plan_;       // the passes of its step (pack() computes it for each version)
   BackendTool tool_;
   CpuKernel kernel_choice_;
   int threads_;
@@ -979,7 +936,6 @@ class CpuBackend final : public Backend {
   std::optional<ThreadChoice> choice_;    // set when the thread count is chosen by timing
   std::unique_ptr<FastKernel> fast_;         // set when the AVX-512 kernel runs this backend
   std::vector<ChunkReaction> fast_partial_;  // its tool reaction per chunk
-  std::vector<Real> attach_offset_flat_;     // pull offsets for it, 3 per attachment
   std::string device_;
   double time_ = 0;
   Soa3<Real> rest_;                   // X, rest positions (npoint)
@@ -999,12 +955,11 @@ class CpuBackend final : public Backend {
   std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk_ = 1;
   std::vector<Real> mass_, inv_mass_;
-  std::vector<Real> tool_scale_;   // tool stiffness multiplier per point (npoint), Model::tool_k_scale
-  std::vector<Real> tool_scale_padded_;  // the same for the AVX-512 kernel, 0 for padding (npad)
+  std::vector<Real> tool_scale_;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint; npad for the AVX-512 kernel, 0 for padding)
   std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint)
   std::vector<int32_t> attached_points_;
-  std::vector<Eigen::Matrix<Real, 3, 1>> attach_offset_;
-  std::vector<Partial> partial_;   // tool reaction per chunk (nchunk)
+  std::vector<Real> attach_offset_;  // pull: x_i - c at grasp time, 3 per attachment
+  std::vector<ChunkReaction> partial_;   // tool reaction per chunk (nchunk)
 };
 
 }  // namespace

@@ -26,26 +26,26 @@ constexpr int32_t kLanes = 16;  // floats per 512-bit register
 // array: the threads share the slices, and the per-point total adds the
 // slices in order, so results do not depend on the thread count.
 constexpr int kSlices = 2;
-// The tet pass: none, the per-tet volume term, or the averaged nodal term
-// (a volume pass and a pressure pass before the force pass).
-enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
 
 }  // namespace
 
-std::string avx512_kernel_unsupported(const Model& model) {
+std::string avx512_kernel_unsupported(const StepPlan& plan, int32_t chunk_size) {
   // Sutures are tension-only springs with a rest length on a schedule; this
   // kernel has neither, so the generic kernel runs a model that has them.
-  if (model.nsuture() > 0) return "the model has sutures (tension-only springs), which only the generic kernel runs";
-  if (model.layout.chunk_size % kLanes != 0)
-    return "layout chunk size " + std::to_string(model.layout.chunk_size) + " is not a multiple of " +
-           std::to_string(kLanes);
-  if (model.has_shear_element()) return "the shear element (poisson_ratio < 0.25) runs on the generic kernel only";
+  if (plan.sutures > 0) return "the model has sutures (tension-only springs), which only the generic kernel runs";
+  if (chunk_size % kLanes != 0)
+    return "layout chunk size " + std::to_string(chunk_size) + " is not a multiple of " + std::to_string(kLanes);
+  if (plan.shear()) return "the shear element (poisson_ratio < 0.25) runs on the generic kernel only";
   return "";
+}
+
+std::string avx512_kernel_unsupported(const Model& model) {
+  return avx512_kernel_unsupported(make_step_plan(model, BackendTool{}), model.layout.chunk_size);
 }
 
 struct Avx512FloatKernel::Data {
   int32_t npoint = 0, npad = 0, chunk = 0, nchunk = 0, groups = 0;  // groups of 16 per chunk
-  VolumeKind volume = kNoVolume;
+  ElementTerm volume = ElementTerm::None;
   bool gravity = false;
   AlignedVector<float> rest[3], mass, inv_mass;  // (npad)
   AlignedVector<float> u[2][3], d[2][3];         // state, double-buffered (npad)
@@ -243,9 +243,8 @@ inline V det6(V ax, V ay, V az, V bx, V by, V bz, V cx, V cy, V cz) {
   return _mm512_fmadd_ps(az, nz, _mm512_fmadd_ps(ay, ny, _mm512_mul_ps(ax, nx)));
 }
 
-enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 
-template <int Volume, bool Gravity, int Tool>
+template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
 void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c, ChunkReaction& partial) {
   const int cur = D.cur, nxt = 1 - cur;
   const float* rec = D.rec[cur].data();
@@ -289,18 +288,18 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
       fz = _mm512_fmadd_ps(s, lz, fz);
     }
 
-    if constexpr (Volume != kNoVolume) {
+    if constexpr (Volume != ElementTerm::None) {
       // Volume forces, summed per slice by tet_slice(); slices in order.
       for (int sl = 0; sl < kSlices; ++sl) take_forces(&D.tet_force[sl][4 * static_cast<size_t>(p0)], fx, fy, fz);
     }
 
-    if constexpr (Tool != kNoTool) {
-      // Few points touch the tool: find them with one compare, then a plain
-      // loop over those lanes, reaction summed per lane in order.
+    if constexpr (Tool != ToolTerm::None) {
+      // Few points touch the tool: find them with one compare, then
+      // add_tool_force() on those lanes, reaction summed per lane in order.
       __mmask16 touching;
-      const V cx = _mm512_set1_ps(in.tool_center[0]), cy = _mm512_set1_ps(in.tool_center[1]),
-              cz = _mm512_set1_ps(in.tool_center[2]);
-      if constexpr (Tool == kPush) {
+      if constexpr (Tool == ToolTerm::Push) {
+        const V cx = _mm512_set1_ps(in.tool_center[0]), cy = _mm512_set1_ps(in.tool_center[1]),
+                cz = _mm512_set1_ps(in.tool_center[2]);
         const V ox = _mm512_sub_ps(px, cx), oy = _mm512_sub_ps(py, cy), oz = _mm512_sub_ps(pz, cz);
         const V dist2 = _mm512_fmadd_ps(oz, oz, _mm512_fmadd_ps(oy, oy, _mm512_mul_ps(ox, ox)));
         // A margin so that no lane the exact test below accepts is missed.
@@ -314,27 +313,11 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
         alignas(64) float f[3][kLanes], x[3][kLanes];
         _mm512_store_ps(f[0], fx), _mm512_store_ps(f[1], fy), _mm512_store_ps(f[2], fz);
         _mm512_store_ps(x[0], px), _mm512_store_ps(x[1], py), _mm512_store_ps(x[2], pz);
-        const Vec3 center(in.tool_center[0], in.tool_center[1], in.tool_center[2]);
         for (int l = 0; l < kLanes; ++l) {
           if (!(touching >> l & 1)) continue;
-          const Eigen::Vector3f xl(x[0][l], x[1][l], x[2][l]);
-          const Eigen::Vector3f ctr(in.tool_center[0], in.tool_center[1], in.tool_center[2]);
-          Eigen::Vector3f fc;
-          if constexpr (Tool == kPush) {
-            const Eigen::Vector3f o = xl - ctr;
-            const float dist = o.norm();
-            if (dist >= in.tool_radius) continue;
-            const Eigen::Vector3f n = dist > 0 ? Eigen::Vector3f(o / dist) : Eigen::Vector3f(0, 0, 1);
-            fc = in.tool_k * in.tool_scale[p0 + l] * (in.tool_radius - dist) * n;
-          } else {
-            const float* off = in.attach_offset + 3 * in.attached[p0 + l];
-            fc = in.tool_k * in.tool_scale[p0 + l] * (ctr + Eigen::Vector3f(off[0], off[1], off[2]) - xl);
-          }
-          for (int k = 0; k < 3; ++k) f[k][l] += fc[k];
-          const Vec3 fd = fc.cast<double>();
-          partial.force -= fd;
-          partial.torque += (xl.cast<double>() - center).cross(-fd);
-          ++partial.contacts;
+          float xl[3] = {x[0][l], x[1][l], x[2][l]}, fl[3] = {f[0][l], f[1][l], f[2][l]};
+          if (!add_tool_force<float, Tool>(in, p0 + l, xl, fl, partial)) continue;
+          for (int k = 0; k < 3; ++k) f[k][l] = fl[k];
         }
         fx = _mm512_load_ps(f[0]), fy = _mm512_load_ps(f[1]), fz = _mm512_load_ps(f[2]);
       }
@@ -407,7 +390,7 @@ void nodal_pressure_chunk(Avx512FloatKernel::Data& D, int32_t c) {
 // cyclically) and f_0 = -(f_1 + f_2 + f_3). Per tet f_i = k_v (V_r - V)
 // dV/dx_i; nodal f_i = -p_t dV/dx_i, p_t the mean of its vertices' pressures,
 // whose scaled q the records carry.
-template <int Volume>
+template <ElementTerm Volume>
 void tet_slice(Avx512FloatKernel::Data& D, int slice) {
   // Local pointers: the intrinsic stores may alias anything, so pointers
   // read through D would be reloaded after every store.
@@ -422,7 +405,7 @@ void tet_slice(Avx512FloatKernel::Data& D, int slice) {
     const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
     V x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3;
     V s;
-    if constexpr (Volume == kNodalVolume) {
+    if constexpr (Volume == ElementTerm::NodalVolume) {
       V q0, q1, q2, q3;
       gather4(rec, q[0], x0, y0, z0, q0);
       gather4(rec, q[1], x1, y1, z1, q1);
@@ -438,7 +421,7 @@ void tet_slice(Avx512FloatKernel::Data& D, int slice) {
     x1 = _mm512_sub_ps(x1, x0), y1 = _mm512_sub_ps(y1, y0), z1 = _mm512_sub_ps(z1, z0);
     x2 = _mm512_sub_ps(x2, x0), y2 = _mm512_sub_ps(y2, y0), z2 = _mm512_sub_ps(z2, z0);
     x3 = _mm512_sub_ps(x3, x0), y3 = _mm512_sub_ps(y3, y0), z3 = _mm512_sub_ps(z3, z0);
-    if constexpr (Volume != kNodalVolume) {
+    if constexpr (Volume != ElementTerm::NodalVolume) {
       const V det = det6(x1, y1, z1, x2, y2, z2, x3, y3, z3);
       s = _mm512_mul_ps(_mm512_load_ps(k36 + e), _mm512_sub_ps(_mm512_load_ps(det_rest + e), det));
     }
@@ -462,20 +445,20 @@ void tet_slice(Avx512FloatKernel::Data& D, int slice) {
   }
 }
 
-template <int Volume, bool Gravity, int Tool>
+template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
 void step_all(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
               std::vector<ChunkReaction>& partial) {
   const int32_t nchunk = D.nchunk;
 #pragma omp parallel num_threads(threads)
   {
-    if constexpr (Volume == kNodalVolume) {
+    if constexpr (Volume == ElementTerm::NodalVolume) {
       // Every nodal volume before any pressure, every pressure before any force.
 #pragma omp for schedule(static)
       for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, D.rec[D.cur].data(), sl);
 #pragma omp for schedule(static)
       for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(D, c);
     }
-    if constexpr (Volume != kNoVolume) {
+    if constexpr (Volume != ElementTerm::None) {
 #pragma omp for schedule(static)
       for (int sl = 0; sl < kSlices; ++sl) tet_slice<Volume>(D, sl);
     }
@@ -483,22 +466,22 @@ void step_all(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads
     for (int32_t c = 0; c < nchunk; ++c) {
       ChunkReaction r;
       chunk_step<Volume, Gravity, Tool>(D, in, c, r);
-      if constexpr (Tool != kNoTool) partial[c] = r;
+      if constexpr (Tool != ToolTerm::None) partial[c] = r;
     }
   }
 }
 
-template <int Volume, bool Gravity>
+template <ElementTerm Volume, bool Gravity>
 void step_tool(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
                std::vector<ChunkReaction>& partial) {
   switch (in.tool) {
-    case FloatStepInputs::Push: return step_all<Volume, Gravity, kPush>(D, in, threads, partial);
-    case FloatStepInputs::Pull: return step_all<Volume, Gravity, kPull>(D, in, threads, partial);
-    default: return step_all<Volume, Gravity, kNoTool>(D, in, threads, partial);
+    case ToolTerm::Push: return step_all<Volume, Gravity, ToolTerm::Push>(D, in, threads, partial);
+    case ToolTerm::Pull: return step_all<Volume, Gravity, ToolTerm::Pull>(D, in, threads, partial);
+    default: return step_all<Volume, Gravity, ToolTerm::None>(D, in, threads, partial);
   }
 }
 
-template <int Volume>
+template <ElementTerm Volume>
 void step_gravity(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int threads,
                   std::vector<ChunkReaction>& partial) {
   if (D.gravity) step_tool<Volume, true>(D, in, threads, partial);
@@ -529,13 +512,13 @@ void Avx512FloatKernel::set_point(int32_t p, const float u[3], const float d[3])
 void Avx512FloatKernel::step(const FloatStepInputs& in, int threads, std::vector<ChunkReaction>& partial) {
   Data& D = *data_;
   switch (D.volume) {
-    case kNodalVolume: step_gravity<kNodalVolume>(D, in, threads, partial); break;
-    case kTetVolume: step_gravity<kTetVolume>(D, in, threads, partial); break;
-    default: step_gravity<kNoVolume>(D, in, threads, partial); break;
+    case ElementTerm::NodalVolume: step_gravity<ElementTerm::NodalVolume>(D, in, threads, partial); break;
+    case ElementTerm::TetVolume: step_gravity<ElementTerm::TetVolume>(D, in, threads, partial); break;
+    default: step_gravity<ElementTerm::None>(D, in, threads, partial); break;
   }
   D.cur = 1 - D.cur;
 }
-void Avx512FloatKernel::pack(const Model& model) {
+void Avx512FloatKernel::pack(const Model& model, const StepPlan& plan) {
   Data& D = *data_;
   const GatherLayout& L = model.layout;
   const int32_t old_npoint = D.npoint;
@@ -544,8 +527,8 @@ void Avx512FloatKernel::pack(const Model& model) {
   D.nchunk = L.nchunk;
   D.groups = L.chunk_size / kLanes;
   D.npad = D.nchunk * D.chunk;
-  D.volume = model.has_nodal_volume() ? kNodalVolume : model.has_volume() ? kTetVolume : kNoVolume;
-  D.gravity = model.has_gravity();
+  D.volume = plan.element;
+  D.gravity = plan.gravity;
   const size_t n = static_cast<size_t>(D.npad);
 
   // Points: padding lanes past npoint have no mass and stay at the origin.
@@ -616,7 +599,7 @@ void Avx512FloatKernel::pack(const Model& model) {
   std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.slice_begin);
   const size_t lanes = lane_tet.size();
   for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
-  const size_t per_tet = D.volume == kTetVolume ? lanes : 0;
+  const size_t per_tet = D.volume == ElementTerm::TetVolume ? lanes : 0;
   D.tet_k36.assign(per_tet, 0.f);
   D.tet_det_rest.assign(per_tet, 0.f);
   for (size_t e = 0; e < lanes; ++e) {
@@ -637,9 +620,9 @@ void Avx512FloatKernel::pack(const Model& model) {
     _mm512_store_ps(&D.tet_det_rest[e0], det);
   }
   for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0.f);
-  D.node_k.assign(D.volume == kNodalVolume ? n : 0, 0.f);
+  D.node_k.assign(D.volume == ElementTerm::NodalVolume ? n : 0, 0.f);
   D.node_rest.assign(D.node_k.size(), 0.f);
-  if (D.volume == kNodalVolume) {
+  if (D.volume == ElementTerm::NodalVolume) {
     // S at rest by the step's own passes, so that q is exactly 0 there.
     for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, rec, sl);
     for (int32_t p = 0; p < D.npoint; ++p) {
@@ -656,7 +639,7 @@ void Avx512FloatKernel::pack(const Model& model) {
 bool avx512_kernel_compiled() { return false; }
 void Avx512FloatKernel::set_point(int32_t, const float*, const float*) {}
 void Avx512FloatKernel::step(const FloatStepInputs&, int, std::vector<ChunkReaction>&) {}
-void Avx512FloatKernel::pack(const Model&) {}
+void Avx512FloatKernel::pack(const Model&, const StepPlan&) {}
 
 #endif
 

@@ -17,6 +17,7 @@
 
 #include "core/model/model.h"
 #include "core/sim/kernel_inputs.h"
+#include "core/sim/step_plan.h"
 #include "core/sim/tool.h"
 
 namespace organsim {
@@ -24,9 +25,11 @@ namespace organsim {
 // True when this build contains the AVX-512 kernel.
 bool avx512_kernel_compiled();
 
-// Why `model` cannot run on the AVX-512 kernels, float and double ("" when
-// it can): the one routing point for both. They need the layout's chunks to
-// be whole groups of 16 points.
+// Why a step plan cannot run on the AVX-512 kernels, float and double (""
+// when it can): the one routing point for both. They need the layout's
+// chunks to be whole groups of 16 points.
+std::string avx512_kernel_unsupported(const StepPlan& plan, int32_t chunk_size);
+// The same for `model`'s plan (its tool does not matter).
 std::string avx512_kernel_unsupported(const Model& model);
 
 using FloatStepInputs = KernelStepInputs<float>;
@@ -42,7 +45,7 @@ class Avx512FloatKernel {
   // per-slot spring and tet streams). Called at construction and on every
   // rebuild; the state (u, d) is sized to the model with zeros for points
   // it did not hold before: the caller sets them (set_point).
-  void pack(const Model& model);
+  void pack(const Model& model, const StepPlan& plan);
 
   // State of point p: displacement u = x - X and step increment d = u_t - u_{t-1}.
   void get_point(int32_t p, float u[3], float d[3]) const;

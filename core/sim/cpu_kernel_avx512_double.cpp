@@ -30,15 +30,12 @@ constexpr int kSlices = 2;
 // index scaling and the record stores differ); split measured faster (the
 // tet pass reads positions only, and half the bytes; docs/bench.md).
 constexpr int32_t kRecord = 4;
-// The tet pass: none, the per-tet volume term, or the averaged nodal term
-// (a volume pass and a pressure pass before the force pass).
-enum VolumeKind { kNoVolume = 0, kTetVolume = 1, kNodalVolume = 2 };
 
 }  // namespace
 
 struct Avx512DoubleKernel::Data {
   int32_t npoint = 0, npad = 0, chunk = 0, nchunk = 0, groups = 0;  // groups of 8 per chunk
-  VolumeKind volume = kNoVolume;
+  ElementTerm volume = ElementTerm::None;
   bool gravity = false;
   AlignedVector<double> rest[3], mass, inv_mass;  // (npad)
   AlignedVector<double> u[2][3], d[2][3];         // state, double-buffered (npad)
@@ -247,9 +244,8 @@ template <bool Nodal>
   return det6(e[0][0], e[0][1], e[0][2], e[1][0], e[1][1], e[1][2], e[2][0], e[2][1], e[2][2]);
 }
 
-enum ToolKind { kNoTool = 0, kPush = 1, kPull = 2 };
 
-template <int Volume, bool Gravity, int Tool>
+template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
 void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t c, ChunkReaction& partial) {
   const int cur = D.cur, nxt = 1 - cur;
   const double* const rec = positions(D, cur);
@@ -301,16 +297,16 @@ void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t
       fz = _mm512_fmadd_pd(s, lz, fz);
     }
 
-    if constexpr (Volume != kNoVolume) {
+    if constexpr (Volume != ElementTerm::None) {
       // Volume forces, summed per slice by tet_slice(); slices in order.
       for (int sl = 0; sl < kSlices; ++sl) take_forces(&D.tet_force[sl][4 * static_cast<size_t>(p0)], fx, fy, fz);
     }
 
-    if constexpr (Tool != kNoTool) {
+    if constexpr (Tool != ToolTerm::None) {
       // Few points touch the tool: find them with one compare, then
       // add_tool_force() on those lanes, reaction summed per lane in order.
       __mmask8 touching;
-      if constexpr (Tool == kPush) {
+      if constexpr (Tool == ToolTerm::Push) {
         const V ox = _mm512_sub_pd(px, _mm512_set1_pd(in.tool_center[0]));
         const V oy = _mm512_sub_pd(py, _mm512_set1_pd(in.tool_center[1]));
         const V oz = _mm512_sub_pd(pz, _mm512_set1_pd(in.tool_center[2]));
@@ -329,7 +325,7 @@ void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t
         for (int l = 0; l < kLanes; ++l) {
           if (!(touching >> l & 1)) continue;
           double xl[3] = {x[0][l], x[1][l], x[2][l]}, fl[3] = {f[0][l], f[1][l], f[2][l]};
-          if (!add_tool_force<double, Tool == kPush>(in, p0 + l, xl, fl, partial)) continue;
+          if (!add_tool_force<double, Tool>(in, p0 + l, xl, fl, partial)) continue;
           for (int k = 0; k < 3; ++k) f[k][l] = fl[k];
         }
         fx = _mm512_load_pd(f[0]), fy = _mm512_load_pd(f[1]), fz = _mm512_load_pd(f[2]);
@@ -397,7 +393,7 @@ void nodal_pressure_chunk(Avx512DoubleKernel::Data& D, int32_t c) {
 // cyclically) and f_0 = -(f_1 + f_2 + f_3). Per tet f_i = k_v (V_r - V)
 // dV/dx_i; nodal f_i = -p_t dV/dx_i, p_t the mean of its vertices' pressures,
 // whose scaled q the records carry.
-template <int Volume>
+template <ElementTerm Volume>
 void tet_slice(Avx512DoubleKernel::Data& D, int slice) {
   // Local pointers: the intrinsic stores may alias anything, so pointers
   // read through D would be reloaded after every store.
@@ -411,7 +407,7 @@ void tet_slice(Avx512DoubleKernel::Data& D, int slice) {
     const size_t e = static_cast<size_t>(b) * kLanes;
     const int32_t* const q[4] = {tet_v[0] + e, tet_v[1] + e, tet_v[2] + e, tet_v[3] + e};
     V ev[3][3], s;
-    if constexpr (Volume == kNodalVolume) {
+    if constexpr (Volume == ElementTerm::NodalVolume) {
       tet_edges<true>(rec, q, ev, s);  // s = the sum of the four q = -p_t / 6
     } else {
       const V det = tet_det6(rec, q, ev);
@@ -437,20 +433,20 @@ void tet_slice(Avx512DoubleKernel::Data& D, int slice) {
   }
 }
 
-template <int Volume, bool Gravity, int Tool>
+template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
 void step_all(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threads,
               std::vector<ChunkReaction>& partial) {
   const int32_t nchunk = D.nchunk;
 #pragma omp parallel num_threads(threads)
   {
-    if constexpr (Volume == kNodalVolume) {
+    if constexpr (Volume == ElementTerm::NodalVolume) {
       // Every nodal volume before any pressure, every pressure before any force.
 #pragma omp for schedule(static)
       for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, positions(D, D.cur), sl);
 #pragma omp for schedule(static)
       for (int32_t c = 0; c < nchunk; ++c) nodal_pressure_chunk(D, c);
     }
-    if constexpr (Volume != kNoVolume) {
+    if constexpr (Volume != ElementTerm::None) {
 #pragma omp for schedule(static)
       for (int sl = 0; sl < kSlices; ++sl) tet_slice<Volume>(D, sl);
     }
@@ -458,22 +454,22 @@ void step_all(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threa
     for (int32_t c = 0; c < nchunk; ++c) {
       ChunkReaction r;
       chunk_step<Volume, Gravity, Tool>(D, in, c, r);
-      if constexpr (Tool != kNoTool) partial[c] = r;
+      if constexpr (Tool != ToolTerm::None) partial[c] = r;
     }
   }
 }
 
-template <int Volume, bool Gravity>
+template <ElementTerm Volume, bool Gravity>
 void step_tool(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threads,
                std::vector<ChunkReaction>& partial) {
   switch (in.tool) {
-    case DoubleStepInputs::Push: return step_all<Volume, Gravity, kPush>(D, in, threads, partial);
-    case DoubleStepInputs::Pull: return step_all<Volume, Gravity, kPull>(D, in, threads, partial);
-    default: return step_all<Volume, Gravity, kNoTool>(D, in, threads, partial);
+    case ToolTerm::Push: return step_all<Volume, Gravity, ToolTerm::Push>(D, in, threads, partial);
+    case ToolTerm::Pull: return step_all<Volume, Gravity, ToolTerm::Pull>(D, in, threads, partial);
+    default: return step_all<Volume, Gravity, ToolTerm::None>(D, in, threads, partial);
   }
 }
 
-template <int Volume>
+template <ElementTerm Volume>
 void step_gravity(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int threads,
                   std::vector<ChunkReaction>& partial) {
   if (D.gravity) step_tool<Volume, true>(D, in, threads, partial);
@@ -505,14 +501,14 @@ void Avx512DoubleKernel::set_point(int32_t p, const double u[3], const double d[
 void Avx512DoubleKernel::step(const DoubleStepInputs& in, int threads, std::vector<ChunkReaction>& partial) {
   Data& D = *data_;
   switch (D.volume) {
-    case kNodalVolume: step_gravity<kNodalVolume>(D, in, threads, partial); break;
-    case kTetVolume: step_gravity<kTetVolume>(D, in, threads, partial); break;
-    default: step_gravity<kNoVolume>(D, in, threads, partial); break;
+    case ElementTerm::NodalVolume: step_gravity<ElementTerm::NodalVolume>(D, in, threads, partial); break;
+    case ElementTerm::TetVolume: step_gravity<ElementTerm::TetVolume>(D, in, threads, partial); break;
+    default: step_gravity<ElementTerm::None>(D, in, threads, partial); break;
   }
   D.cur = 1 - D.cur;
 }
 
-void Avx512DoubleKernel::pack(const Model& model) {
+void Avx512DoubleKernel::pack(const Model& model, const StepPlan& plan) {
   Data& D = *data_;
   const GatherLayout& L = model.layout;
   const int32_t old_npoint = D.npoint;
@@ -521,8 +517,8 @@ void Avx512DoubleKernel::pack(const Model& model) {
   D.nchunk = L.nchunk;
   D.groups = L.chunk_size / kLanes;
   D.npad = D.nchunk * D.chunk;
-  D.volume = model.has_nodal_volume() ? kNodalVolume : model.has_volume() ? kTetVolume : kNoVolume;
-  D.gravity = model.has_gravity();
+  D.volume = plan.element;
+  D.gravity = plan.gravity;
   const size_t n = static_cast<size_t>(D.npad);
 
   // Points: padding lanes past npoint have no mass and stay at the origin.
@@ -592,7 +588,7 @@ void Avx512DoubleKernel::pack(const Model& model) {
   std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.slice_begin);
   const size_t lanes = batches.lane_tet.size();
   for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
-  const size_t per_tet = D.volume == kTetVolume ? lanes : 0;
+  const size_t per_tet = D.volume == ElementTerm::TetVolume ? lanes : 0;
   D.tet_k36.assign(per_tet, 0.0);
   D.tet_det_rest.assign(per_tet, 0.0);
   for (size_t e = 0; e < lanes; ++e) {
@@ -607,9 +603,9 @@ void Avx512DoubleKernel::pack(const Model& model) {
     _mm512_store_pd(&D.tet_det_rest[e0], tet_det6(rec, q, unused));
   }
   for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0.0);
-  D.node_k.assign(D.volume == kNodalVolume ? n : 0, 0.0);
+  D.node_k.assign(D.volume == ElementTerm::NodalVolume ? n : 0, 0.0);
   D.node_rest.assign(D.node_k.size(), 0.0);
-  if (D.volume == kNodalVolume) {
+  if (D.volume == ElementTerm::NodalVolume) {
     // S at rest by the step's own passes, so that q is exactly 0 there.
     for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, rec, sl);
     for (int32_t p = 0; p < D.npoint; ++p) {
@@ -625,7 +621,7 @@ void Avx512DoubleKernel::pack(const Model& model) {
 
 void Avx512DoubleKernel::set_point(int32_t, const double*, const double*) {}
 void Avx512DoubleKernel::step(const DoubleStepInputs&, int, std::vector<ChunkReaction>&) {}
-void Avx512DoubleKernel::pack(const Model&) {}
+void Avx512DoubleKernel::pack(const Model&, const StepPlan&) {}
 
 #endif
 

@@ -30,7 +30,7 @@ class Avx512DoubleKernel {
   // Packs everything the step reads from `model`; called at construction
   // and on every rebuild. The state is kept for the points it held, zero
   // for new ones: the caller sets them (set_point).
-  void pack(const Model& model);
+  void pack(const Model& model, const StepPlan& plan);
 
   // State of point p: displacement u = x - X and step increment d = u_t - u_{t-1}.
   void get_point(int32_t p, double u[3], double d[3]) const;

@@ -2,13 +2,14 @@
 
 #include "core/model/nodal_volume.h"
 #include "core/model/shear_element.h"
+#include "core/physics/force_law.h"
 
 namespace organsim {
 
 void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
                                std::vector<Vec3>& force, double t) {
   force.assign(model.npoint(), Vec3::Zero());
-  // Spring + damper: f_a = [k (L - r) + d ((v_b - v_a) . u)] u, f_b = -f_a.
+  // Springs and their dampers; sutures pull only (core/physics/force_law.h).
   for (int32_t s = 0; s < model.nspring(); ++s) {
     const auto [a, b] = model.spring_ends[s];
     const Vec3 l = x[b] - x[a];
@@ -16,27 +17,26 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
     if (length <= 0) continue;  // coincident ends: no defined direction, no force
     const Vec3 u = l / length;
     const double rest = model.spring_rest_at(s, t);
-    const double pull = model.spring_k[s] * (length - rest) + model.spring_d[s] * (v[b] - v[a]).dot(u);
-    if (s >= model.first_suture() && !(length > rest && pull > 0)) continue;  // a slack suture
-    const Vec3 f = pull * u;
-    force[a] += f;
-    force[b] -= f;
+    double tension = force_law::spring_tension(model.spring_k[s], model.spring_d[s], length, rest, (v[b] - v[a]).dot(u));
+    if (s >= model.first_suture()) tension = force_law::suture_tension(tension, length, rest);
+    force[a] += tension * u;
+    force[b] -= tension * u;
   }
-  // Volume, per tet: f_i = k_v (V_r - V) dV/dx_i, gradient of E = k_v/2 (V - V_r)^2.
-  // Nodal: f_i = -p_t dV/dx_i with p_t the mean of the tet's nodal pressures.
+  // Volume: f_i = -p dV/dx_i with the tet's pressure p = k_v (V - V_r), or
+  // with the nodal term the mean of its corners' nodal pressures.
   if (model.has_volume()) {
     std::vector<double> q;
     if (model.has_nodal_volume()) nodal_pressures(model, x, q);
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& tet = model.tet_points[t];
-      const Vec3 &p0 = x[tet[0]], &p1 = x[tet[1]], &p2 = x[tet[2]], &p3 = x[tet[3]];
-      const double scale = model.has_nodal_volume()
-                               ? -(q[tet[0]] + q[tet[1]] + q[tet[2]] + q[tet[3]]) / 4
-                               : model.tet_k[t] * (model.tet_rest_volume[t] - signed_volume(p0, p1, p2, p3));
-      // dV/dp1 = (p2-p0)x(p3-p0)/6, dV/dp2 = (p3-p0)x(p1-p0)/6, dV/dp3 = (p1-p0)x(p2-p0)/6, dV/dp0 = -sum.
-      const Vec3 g1 = (p2 - p0).cross(p3 - p0) / 6.0;
-      const Vec3 g2 = (p3 - p0).cross(p1 - p0) / 6.0;
-      const Vec3 g3 = (p1 - p0).cross(p2 - p0) / 6.0;
+      const Vec3 e1 = x[tet[1]] - x[tet[0]], e2 = x[tet[2]] - x[tet[0]], e3 = x[tet[3]] - x[tet[0]];
+      const double p = model.has_nodal_volume()
+                           ? force_law::tet_pressure_from_nodal(q[tet[0]], q[tet[1]], q[tet[2]], q[tet[3]])
+                           : force_law::volume_pressure(model.tet_k[t], force_law::tet_volume6(e1, e2, e3) / 6,
+                                                        model.tet_rest_volume[t]);
+      Vec3 g1, g2, g3;  // 6 dV/dx_k
+      force_law::tet_volume_gradients6(e1, e2, e3, g1, g2, g3);
+      const double scale = -p / 6;
       force[tet[0]] -= scale * (g1 + g2 + g3);
       force[tet[1]] += scale * g1;
       force[tet[2]] += scale * g2;
@@ -54,15 +54,12 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
                                std::vector<Vec3>& force, const std::vector<double>& scale) {
   Reaction reaction;
   for (size_t i = 0; i < x.size(); ++i) {
-    const Vec3 d = x[i] - center;
-    const double dist = d.norm();
-    if (dist >= radius) continue;
-    // At the exact centre the direction is undefined; push along +z.
-    const Vec3 n = dist > 0 ? Vec3(d / dist) : Vec3(0, 0, 1);
-    const Vec3 f = stiffness * (scale.empty() ? 1.0 : scale[i]) * (radius - dist) * n;
+    const Vec3 offset = x[i] - center;
+    Vec3 f;
+    if (!force_law::push_penalty(offset, radius, stiffness * (scale.empty() ? 1.0 : scale[i]), f)) continue;
     force[i] += f;
     reaction.force -= f;
-    reaction.torque += d.cross(-f);
+    reaction.torque += offset.cross(-f);
     ++reaction.contacts;
   }
   return reaction;
@@ -73,7 +70,8 @@ Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& att
   Reaction reaction;
   for (size_t k = 0; k < attachment.points.size(); ++k) {
     const int32_t i = attachment.points[k];
-    const Vec3 f = stiffness * (scale.empty() ? 1.0 : scale[i]) * (center + attachment.offsets[k] - x[i]);
+    const Vec3 f = force_law::pull_attachment(Vec3(center + attachment.offsets[k]), x[i],
+                                              stiffness * (scale.empty() ? 1.0 : scale[i]));
     force[i] += f;
     reaction.force -= f;
     reaction.torque += (x[i] - center).cross(-f);

@@ -4,8 +4,8 @@
 // Model's own arrays, a force array zeroed and filled each step, then
 // integration. Written for clarity, not speed: `organsim bench` times it on
 // the same model and precision as the real step and prints the speedup.
-// Same physics and state as the CPU backend (displacement u and step
-// increment d, DESIGN.md section 2).
+// Same force law (core/physics/force_law.h) and state as the CPU backend
+// (displacement u from rest and step increment d = u_t - u_{t-1}).
 #include <vector>
 
 #include "core/model/model.h"
@@ -16,9 +16,9 @@ template <class Real>
 class ScatterStep {
  public:
   explicit ScatterStep(const Model& model);
-  // One step of dt (springs + dampers, volume (per tet or nodal) or the shear
-  // element and its damper if the model has it, gravity, position Verlet
-  // with drag); no tool.
+  // One step of dt (springs + dampers, sutures on their schedule, volume (per
+  // tet or nodal) or the shear element and its damper if the model has it,
+  // gravity, position Verlet with drag); no tool.
   void step(double dt);
   // Current positions x_t (internal numbering).
   void positions(std::vector<Vec3>& out) const;
@@ -29,6 +29,7 @@ class ScatterStep {
   const Model& model_;
   std::vector<V3> rest_, u_, d_, force_;
   std::vector<Real> nodal_;  // nodal pressures of the nodal volume term (npoint; empty without it)
+  double time_ = 0;          // s, for the sutures' rest lengths
   std::vector<M3> stress_;   // smoothed shear element: sum of k_t H_t, then P(Fbar), per point (npoint; else empty)
 };
 

@@ -1,7 +1,8 @@
 #pragma once
-// The scripted virtual tool: a sphere whose centre follows keyframes
-// (time, position), linearly interpolated and held constant outside them.
-#include <optional>
+// The tool as a backend sees it: its mode, its pose per step, the points a
+// pulling tool holds and the reaction it feels. The scripted tool (keyframes,
+// grasp and release times) is core/scenario/tool_spec.h.
+#include <cstdint>
 #include <vector>
 
 #include "core/util/vec.h"
@@ -9,23 +10,6 @@
 namespace organsim {
 
 enum class ToolMode { Push, Pull };
-
-struct Keyframe {
-  double t = 0;            // s
-  Vec3 position{0, 0, 0};  // tool centre, m
-};
-
-struct ToolSpec {
-  double radius = 0.01;                 // sphere radius, m
-  double contact_stiffness = 200.0;     // push: penalty N/m per m of penetration; pull: attachment springs N/m
-  ToolMode mode = ToolMode::Push;
-  double grasp_radius = 0.015;          // pull: points within this distance of the centre are grasped, m
-  double grasp_time = 0;                // pull: s
-  std::optional<double> release_time;   // pull: s; held to the end when absent
-  std::vector<Keyframe> keyframes;      // sorted by t, at least one
-
-  Vec3 position_at(double t) const;
-};
 
 // Tool state given to a backend for one step.
 struct ToolPose {
@@ -44,6 +28,14 @@ struct Reaction {
   Vec3 force{0, 0, 0};   // N
   Vec3 torque{0, 0, 0};  // N m, about the tool centre
   int32_t contacts = 0;  // points in contact or attached
+};
+
+// The tool parameters a backend needs besides its per-tick pose.
+struct BackendTool {
+  bool present = false;
+  ToolMode mode = ToolMode::Push;
+  double radius = 0;             // m
+  double contact_stiffness = 0;  // N/m
 };
 
 }  // namespace organsim

@@ -8,6 +8,7 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/nodal_volume.h"
 #include "core/model/shear_element.h"
+#include "core/physics/force_law.h"
 #include "core/util/error.h"
 #include "core/util/format.h"
 
@@ -56,21 +57,18 @@ double elastic_energy(const Model& model, const std::vector<Vec3>& x) {
   double e = 0;
   for (int32_t s = 0; s < model.nspring(); ++s) {
     const auto [a, b] = model.spring_ends[s];
-    const double stretch = (x[b] - x[a]).norm() - model.spring_rest[s];
-    e += 0.5 * model.spring_k[s] * stretch * stretch;
+    e += force_law::spring_energy(model.spring_k[s], (x[b] - x[a]).norm(), model.spring_rest[s]);
   }
   if (model.has_nodal_volume()) {
     std::vector<double> v;
     nodal_volumes(model, x, v);
-    for (int32_t a = 0; a < model.npoint(); ++a) {
-      const double dv = v[a] - model.point_rest_volume[a];
-      e += 0.5 * model.point_volume_k[a] * dv * dv;
-    }
+    for (int32_t a = 0; a < model.npoint(); ++a)
+      e += force_law::volume_energy(model.point_volume_k[a], v[a], model.point_rest_volume[a]);
   } else if (model.has_volume()) {
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& p = model.tet_points[t];
-      const double dv = signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) - model.tet_rest_volume[t];
-      e += 0.5 * model.tet_k[t] * dv * dv;
+      e += force_law::volume_energy(model.tet_k[t], signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]),
+                                    model.tet_rest_volume[t]);
     }
   }
   return e + shear_element_energy(model, x);
@@ -161,7 +159,6 @@ void BlowupMonitor::on_start(const Model& model, Backend& backend) {
   x_ = x_start_;
   elastic_start_ = elastic_energy(model, x_start_);
   tool_work_ = 0;
-  have_tool_ = false;
   last_check_t_ = backend.time();
   checks_ = 0;
   // Floor: KE of the whole mass moving at 1e-3 of the model's size per second.
@@ -209,12 +206,10 @@ std::optional<BlowupFinding> BlowupMonitor::check_energy(const Model& model, dou
 }
 
 void BlowupMonitor::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
-  // Tool work bound, every tick (cheap, no readback): |F| |dc|.
-  if (info.tool_active) {
-    if (have_tool_) tool_work_ += info.reaction.force.norm() * (info.tool_center - last_tool_).norm();
-    last_tool_ = info.tool_center;
-    have_tool_ = true;
-  }
+  // Tool work bound, every tick (cheap, no readback): |F| |dc| over the
+  // tick's own path, the first tick's included (a grasp that pulls from the
+  // first tick on puts energy in at once).
+  if (info.tool_active) tool_work_ += info.reaction.force.norm() * (info.tool_center - info.tool_from).norm();
   if ((info.tick + 1) % options_.interval_ticks != 0) return;
   std::swap(x_prev_, x_);
   backend.positions(x_);

@@ -82,9 +82,7 @@ class BlowupMonitor final : public RunObserver {
   double elastic_start_ = 0;   // J
   double tool_work_ = 0;       // J, upper bound: sum |F| |dc| over ticks
   double energy_floor_ = 0;    // J
-  Vec3 last_tool_{0, 0, 0};
   double last_check_t_ = 0;
-  bool have_tool_ = false;
   int64_t checks_ = 0;
 };
 

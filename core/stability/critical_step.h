@@ -16,7 +16,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "core/model/model.h"
-#include "core/sim/tool.h"
+#include "core/scenario/tool_spec.h"
 
 namespace organsim {
 

@@ -69,5 +69,33 @@ void blow_up_in_contact(const std::string& backend) {
 TEST(BlowupInContact, CpuStopsWithAFiniteForceLog) { blow_up_in_contact("cpu"); }
 TEST(BlowupInContact, GlStopsWithAFiniteForceLog) { blow_up_in_contact("gl"); }
 
+// The opposite case: a stable run whose pulling tool grasps at t = 0 and
+// moves from the first tick on, checked every tick. The tool's work in the
+// first tick is part of the energy budget, so the check stays quiet (a budget
+// that skipped it stopped this run at the first check).
+TEST(BlowupInContact, GraspPullingFromTheFirstTickIsNotABlowUp) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "blowup_grasp_first_tick";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json s = nlohmann::json::parse(std::ifstream(stress / "dt_over.json"));
+  s["mesh"]["tet"] = (stress / "box.mesh").string();
+  s["time"] = {{"duration", 0.02}, {"dt", 0.0002}, {"substeps", 5}};
+  s["tool"] = {{"radius", 0.005},
+               {"contact_stiffness", 2000},
+               {"mode", "pull"},
+               {"grasp_radius", 0.012},
+               {"grasp_time", 0.0},
+               {"keyframes", {{{"t", 0.0}, {"position", {0.02, 0.02, 0.04}}},
+                              {{"t", 0.1}, {"position", {0.022, 0.02, 0.038}}}}}};
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const test::CliResult r = test::run_organsim(
+      "run '" + (dir / "scene.json").string() + "' --backend cpu --check-interval 1 -o '" + (dir / "out").string() + "'",
+      dir);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("grasp:"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("grasp:    0 points"), std::string::npos) << r.out;
+}
+
 }  // namespace
 }  // namespace organsim

@@ -119,13 +119,17 @@ TEST(VtkSeries, FreeFallStatesOpenInVtkWithVelocityGt) {
 TEST(VtkSeries, PushedBlockHasFixedBaseAndToolForceEqualToTheLoggedReaction) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "vtk_series" / "push";
   fs::remove_all(dir);
-  // Base fixed, the tool presses 4 mm into the top centre and holds from 30 ms on.
+  // Base fixed, the tool presses 4 mm into the middle of the top face's edge
+  // y = 0 and holds from 30 ms on. The edge's points weigh half the median
+  // free point (a top face point), so the contact stiffness they get is
+  // halved (Model::tool_k_scale): the file must show the force the backend
+  // applied with that scale, not the scenario's bare stiffness.
   const nlohmann::json extra = nlohmann::json::parse(R"({
     "fixed": [{"plane": {"point": [0, 0, 0.001], "normal": [0, 0, -1]}}],
     "gravity": [0, 0, 0],
     "time": {"duration": 0.06},
     "tool": {"radius": 0.01, "contact_stiffness": 500,
-             "keyframes": [{"t": 0, "position": [0.02, 0.02, 0.031]}, {"t": 0.03, "position": [0.02, 0.02, 0.026]}]}
+             "keyframes": [{"t": 0, "position": [0.02, 0.0, 0.031]}, {"t": 0.03, "position": [0.02, 0.0, 0.026]}]}
   })");
   const auto run = run_organsim("run " + scenario_in(dir, extra).string() + " -o " + (dir / "out").string(), dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;

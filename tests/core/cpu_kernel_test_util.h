@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/sim/cpu_backend.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "tests/core/test_models.h"
 
 namespace organsim::testing {

@@ -7,7 +7,7 @@
 
 #include "core/mesh/tet_mesh.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
 

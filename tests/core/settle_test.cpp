@@ -4,7 +4,7 @@
 
 #include "core/model/model.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/settle.h"
+#include "core/run/settle.h"
 #include "test_models.h"
 
 namespace organsim {

@@ -150,13 +150,13 @@ TEST(ShearElementDamper, DissipatesForEveryDeformationAndVelocity) {
     double power = 0;
     for (int i = 0; i < 4; ++i) power += f[i].dot(v[i]);
     const Eigen::Matrix3d Fdot = deformation_gradient(model, 0, v);
-    const double J = F.determinant(), jd = std::max(J, kShearElementMinJ);
+    const double J = F.determinant(), jd = std::max(J, force_law::kShearElementMinJ);
     const Eigen::Matrix3d A = Fdot * (J * F.inverse().transpose()).transpose();
     const Eigen::Matrix3d Dd = (A + A.transpose()) / (2 * jd);
     const double expected = -2 * kTau * kt * jd * Dd.squaredNorm();
     EXPECT_LT(power, 0) << "trial " << trial << " J " << J;
     EXPECT_NEAR(power, expected, 1e-9 * std::abs(expected)) << "trial " << trial << " J " << J;
-    crushed += J < kShearElementMinJ;
+    crushed += J < force_law::kShearElementMinJ;
     inverted += J < 0;
   }
   // The draws reach both the barrier's extension and inverted tets.

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/scenario/scenario.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/util/error.h"
 #include "tests/core/stability_test_util.h"

@@ -6,7 +6,7 @@
 
 #include "core/model/model.h"
 #include "core/scenario/scenario.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 
 namespace organsim::testing {
 

@@ -7,7 +7,7 @@
 
 #include "core/mesh/mesh_io.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "core/topology/tear.h"
 #include "core/topology/topology_editor.h"
 #include "tests/core/topology_test_util.h"

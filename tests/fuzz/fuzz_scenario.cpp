@@ -7,7 +7,7 @@
 
 #include "core/mesh/tet_mesh.h"
 #include "core/scenario/scenario.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "core/stability/critical_step.h"
 #include "tests/fuzz/fuzz_check.h"
 

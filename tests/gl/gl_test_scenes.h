@@ -12,7 +12,7 @@
 #include "core/sim/backend.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/reference_forces.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "core/sim/run_observer.h"
 #include "tests/core/test_models.h"
 

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/gl/gl_backend.h"
-#include "core/sim/run.h"
+#include "core/run/run.h"
 #include "gl_test_scenes.h"
 
 namespace organsim {

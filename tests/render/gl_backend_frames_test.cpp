@@ -25,6 +25,7 @@ class HiddenBackend : public Backend {
   std::string device() const override { return inner_.device(); }
   std::string precision() const override { return inner_.precision(); }
   Plan plan() const override { return inner_.plan(); }
+  const StepPlan& step_plan() const override { return inner_.step_plan(); }
   int32_t reaction_latency_ticks() const override { return inner_.reaction_latency_ticks(); }
   Reaction tick(const TickRequest& r) override { return inner_.tick(r); }
   void attach(const Attachment& a) override { inner_.attach(a); }

@@ -121,6 +121,7 @@ class LateBackend : public Backend {
   std::string device() const override { return "test"; }
   std::string precision() const override { return "double"; }
   Plan plan() const override { return {}; }
+  const StepPlan& step_plan() const override { return plan_; }
   int32_t reaction_latency_ticks() const override { return 1; }
   Reaction tick(const TickRequest&) override { return {}; }
   void attach(const Attachment&) override {}
@@ -129,6 +130,9 @@ class LateBackend : public Backend {
   void positions(std::vector<Vec3>&) const override {}
   void set_state(const std::vector<Vec3>&, const std::vector<Vec3>&) override {}
   double time() const override { return 0; }
+
+ private:
+  StepPlan plan_;
 };
 
 TEST(ForcePlotRecorder, ShiftsLateReactionsToTheTickTheyBelongTo) {

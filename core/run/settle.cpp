@@ -1,4 +1,4 @@
-#include "core/sim/settle.h"
+#include "core/run/settle.h"
 
 #include <chrono>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "core/sim/run.h"
+#include "core/run/run.h"
 
 #include <chrono>
 #include <cmath>
@@ -195,6 +195,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       info.tick = i;
       info.t = t1;
       info.tool_center = request.tool_to;
+      info.tool_from = request.tool_from;
       info.tool_active = request.tool_active;
       info.reaction = r;
       for (RunObserver* o : options.observers) o->on_tick(*current, backend, info);

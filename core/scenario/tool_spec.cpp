@@ -1,4 +1,4 @@
-#include "core/sim/tool.h"
+#include "core/scenario/tool_spec.h"
 
 namespace organsim {
 

@@ -1,0 +1,162 @@
+#pragma once
+// The force law of organsim, written once: each element's force (and, where
+// a caller needs it, its energy) as a small function of plain numbers,
+// templated on the number type. Every evaluation of the physics calls these:
+// the double-precision reference (core/sim/reference_forces.cpp), the
+// generic CPU kernel and the scatter step in their precision, the energy of
+// the blow-up monitor, the shear element's reference and energy, and every
+// output that reports a force (the ParaView series' tool force). The
+// AVX-512 kernels evaluate the same formulas on 8 or 16 lanes and are tested
+// against the generic kernel lane by lane; the GLSL twin of this file is
+// shaders/force_law.glsl (step.comp and its companions include it).
+// docs/physics.md derives each formula. SI units: m, N, Pa, s.
+//
+// The functions take no Model: what an element's parameters are (stiffness
+// from E and nu, rest lengths and volumes) is the Model's business
+// (core/model); how elements are gathered and summed is each backend's.
+
+namespace organsim::force_law {
+
+// --- Springs -----------------------------------------------------------------
+
+// Tension of a spring with its damper, N (positive pulls the ends together):
+//   T = k (L - r) + d (v_b - v_a) . u,  u = (x_b - x_a) / L.
+// The force on end a is T u, on end b -T u. `closing_rate` is (v_b - v_a) . u
+// in m/s (negative while the ends approach).
+template <class Real>
+inline Real spring_tension(Real k, Real d, Real length, Real rest, Real closing_rate) {
+  return k * (length - rest) + d * closing_rate;
+}
+
+// A suture is a spring that pulls only: no force while slack (L <= r), and
+// its damper never turns the pull into a push. Returns the tension it
+// applies given the spring law's `tension`.
+template <class Real>
+inline Real suture_tension(Real tension, Real length, Real rest) {
+  return length > rest && tension > Real(0) ? tension : Real(0);
+}
+
+// Elastic energy of a spring, J: k/2 (L - r)^2. A suture stores none while slack.
+template <class Real>
+inline Real spring_energy(Real k, Real length, Real rest) {
+  const Real stretch = length - rest;
+  return k * stretch * stretch / 2;
+}
+template <class Real>
+inline Real suture_energy(Real k, Real length, Real rest) {
+  return length > rest ? spring_energy(k, length, rest) : Real(0);
+}
+
+// --- Volume conservation -------------------------------------------------------
+
+// 6 V of the tet (x0, x1, x2, x3) from its edges e_k = x_k - x0: e1 . (e2 x e3).
+template <class V3>
+inline auto tet_volume6(const V3& e1, const V3& e2, const V3& e3) {
+  return e1.dot(e2.cross(e3));
+}
+
+// 6 dV/dx_k for k = 1, 2, 3 (dV/dx_0 = -(sum of the three)):
+//   g1 = e2 x e3, g2 = e3 x e1, g3 = e1 x e2.
+template <class V3>
+inline void tet_volume_gradients6(const V3& e1, const V3& e2, const V3& e3, V3& g1, V3& g2, V3& g3) {
+  g1 = e2.cross(e3);
+  g2 = e3.cross(e1);
+  g3 = e1.cross(e2);
+}
+
+// Pressure of a volume term, Pa: p = k (V - V_r). The force on a vertex x_i
+// of the volume is -p dV/dx_i (the gradient of E = k/2 (V - V_r)^2). The
+// per-tet term uses the tet's k_v, V_t; the averaged nodal term uses each
+// point's k_a, V_a (sum of V_t / 4 over its tets) and gives a tet the mean
+// of its corners' pressures (tet_pressure_from_nodal).
+template <class Real>
+inline Real volume_pressure(Real k, Real volume, Real rest_volume) {
+  return k * (volume - rest_volume);
+}
+template <class Real>
+inline Real tet_pressure_from_nodal(Real q0, Real q1, Real q2, Real q3) {
+  return (q0 + q1 + q2 + q3) / 4;
+}
+template <class Real>
+inline Real volume_energy(Real k, Real volume, Real rest_volume) {
+  const Real dv = volume - rest_volume;
+  return k * dv * dv / 2;
+}
+
+// --- Shear element (nu < 1/4; core/model/shear_element.h derives it) -------
+
+// Where the barrier -ln J hands over to its quadratic extension.
+inline constexpr double kShearElementMinJ = 0.5;
+
+// phi(J): -ln J from kShearElementMinJ up, its quadratic Taylor expansion there below.
+double shear_barrier(double J);
+
+// phi'(J): -1/J from kShearElementMinJ up, (J - 2 J_min) / J_min^2 below (the
+// extension's slope, continuous with its first two derivatives at J_min).
+template <class Real>
+inline Real shear_barrier_slope(Real J) {
+  const Real jm = static_cast<Real>(kShearElementMinJ);
+  return J >= jm ? Real(-1) / J : (J - 2 * jm) / (jm * jm);
+}
+
+// cof F = J F^-T, column by column: the cross products of F's other columns.
+template <class Matrix3>
+inline Matrix3 shear_cofactor(const Matrix3& F) {
+  Matrix3 c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
+
+// P(F) = F + phi'(J) cof F, the first Piola-Kirchhoff stress per unit k of
+// the element's energy psi(F) = (|F|^2 - 3) / 2 + phi(J).
+template <class Matrix3>
+inline Matrix3 shear_stress(const Matrix3& F) {
+  const Matrix3 cof = shear_cofactor(F);
+  return F + shear_barrier_slope(F.col(0).dot(cof.col(0))) * cof;
+}
+
+// psi(F) = (|F|^2 - 3) / 2 + phi(J), the element's energy per unit k, J.
+template <class Matrix3>
+inline double shear_energy_density(const Matrix3& F) {
+  return (static_cast<double>(F.squaredNorm()) - 3) / 2 + shear_barrier(static_cast<double>(F.determinant()));
+}
+
+// The damper's stress per unit k for the rate dF/dt = Fdot (Kelvin-Voigt,
+// tau the damping time): (2 tau / J_d) sym(Fdot cof^T) cof, J_d = max(J, J_min).
+template <class Matrix3, class Real>
+inline Matrix3 shear_damping_stress(const Matrix3& Fdot, const Matrix3& cof, Real J, Real tau) {
+  const Real jd = J > static_cast<Real>(kShearElementMinJ) ? J : static_cast<Real>(kShearElementMinJ);
+  const Matrix3 a = Fdot * cof.transpose();
+  return (tau / jd) * (a + a.transpose()) * cof;
+}
+
+// --- Tool ---------------------------------------------------------------------
+
+// Push contact of a sphere (radius R, penalty k N/m, the point's stiffness
+// share s): a point at `offset` = x - c from the centre with |offset| < R
+// gets f = k s (R - |offset|) offset / |offset| (along +z at the exact
+// centre, where the direction is undefined). Returns false, f untouched,
+// for a point outside the sphere.
+template <class V3, class Real>
+inline bool push_penalty(const V3& offset, Real radius, Real k, V3& f) {
+  const Real dist = offset.norm();
+  if (!(dist < radius)) return false;
+  const V3 n = dist > Real(0) ? V3(offset / dist) : V3(Real(0), Real(0), Real(1));
+  f = k * (radius - dist) * n;
+  return true;
+}
+template <class Real>
+inline Real push_penalty_energy(Real k, Real radius, Real dist) {
+  return dist < radius ? k * (radius - dist) * (radius - dist) / 2 : Real(0);
+}
+
+// A pulling tool's attachment spring: f = k s (target - x), target = c + o
+// (the point's offset from the centre at grasp time).
+template <class V3, class Real>
+inline V3 pull_attachment(const V3& target, const V3& x, Real k) {
+  return k * (target - x);
+}
+
+}  // namespace organsim::force_law

@@ -1,0 +1,54 @@
+#include "core/run/prepare_run.h"
+
+#include "core/run/run.h"
+#include "core/util/error.h"
+
+namespace organsim {
+
+Model build_scenario_model(const Scenario& scenario, const TetMesh& mesh, const Material& material) {
+  try {
+    return build_model(mesh, material, model_options(scenario), scenario.mesh.path.string());
+  } catch (const Error& e) {
+    // build_model names the JSON path (fixed[0].indices[3]) but not the file.
+    if (e.kind() == ErrorKind::Scenario) throw Error(e.kind(), scenario.file.string() + ": " + e.what());
+    throw;
+  }
+}
+
+PreparedRun prepare_run(const Scenario& scenario, const Model& model, const PrepareRunOptions& options) {
+  PreparedRun prepared;
+  const ToolSpec* tool = scenario.tool ? &scenario.tool->spec : nullptr;
+  prepared.stability = estimate_critical_step(model, critical_step_options(model, tool));
+  if (options.settle && scenario.time.settle > 0) {
+    const TimeDef& time = scenario.time;
+    prepared.settled = settle(model, {time.settle, time.dt, time.substeps, options.threads});
+  }
+  return prepared;
+}
+
+BlowupMonitor PreparedRun::blowup_monitor(const Scenario& scenario, double dt, int32_t interval_ticks) const {
+  BlowupMonitorOptions options;
+  options.interval_ticks = interval_ticks;
+  BlowupContext context;
+  context.dt = dt;
+  if (scenario.tool) {
+    context.tool_radius = scenario.tool->spec.radius;
+    context.tool_contact_stiffness = scenario.tool->spec.contact_stiffness;
+  }
+  context.stability = stability;
+  return BlowupMonitor(options, context);
+}
+
+void PreparedRun::start(Backend& backend) const {
+  if (settled) backend.set_state(settled->positions, settled->positions);
+}
+
+nlohmann::json PreparedRun::meta() const {
+  nlohmann::json j;
+  j["dt_crit"] = stability.dt_crit;
+  j["stability"] = to_json(stability);
+  j["settle"] = settled ? to_json(*settled) : nlohmann::json(nullptr);
+  return j;
+}
+
+}  // namespace organsim

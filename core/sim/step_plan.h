@@ -1,0 +1,52 @@
+#pragma once
+// The step as one list of named passes, computed once from the Model and the
+// tool (at construction and at every rebuild) and followed by every backend:
+// which compiled variant of the CPU kernels runs and whether the AVX-512
+// kernels can run it, which GL shader variants and dispatches run, and what
+// `organsim run --plan` prints (the same pass names on every backend, each
+// with that backend's own detail). A pass that the scene does not need is
+// not in the list, and no backend executes code or touches data for it.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/model/model.h"
+#include "core/sim/tool.h"
+
+namespace organsim {
+
+enum class Pass : uint8_t {
+  NodalPressure,   // every point's nodal volume and pressure, then a barrier (averaged nodal volume term)
+  ShearSmoothing,  // every point's stress on its node-averaged deformation gradient, then a barrier
+  Springs,         // springs and their dampers, sutures on their schedule
+  Volume,          // the volume term's tet forces (per tet, or from the nodal pressures)
+  ShearElement,    // the shear element's tet forces and its damper (nu < 1/4)
+  Gravity,         // m g on every free point
+  ToolContact,     // the tool's push penalty or pull attachments, and its reaction
+  Integrate,       // position Verlet with drag
+};
+
+// The per-tet term of a model: at most one of these (core/model/stiffness.h).
+enum class ElementTerm : uint8_t { None, TetVolume, NodalVolume, ShearElement, SmoothedShear };
+// The tool pass of a step: absent, or the tool's mode.
+enum class ToolTerm : uint8_t { None, Push, Pull };
+
+struct StepPlan {
+  ElementTerm element = ElementTerm::None;
+  bool gravity = false;
+  ToolTerm tool = ToolTerm::None;  // the scene's tool; a tick without contact skips it
+  int32_t sutures = 0;             // springs that pull only, on a schedule
+  std::vector<Pass> passes;        // in order of execution
+
+  bool has(Pass pass) const;
+  bool volume() const { return element == ElementTerm::TetVolume || element == ElementTerm::NodalVolume; }
+  bool shear() const { return element == ElementTerm::ShearElement || element == ElementTerm::SmoothedShear; }
+};
+
+StepPlan make_step_plan(const Model& model, const BackendTool& tool);
+
+// "nodal-pressure", "shear-smoothing", "springs", "volume", "shear-element",
+// "gravity", "tool-contact", "integrate".
+const char* pass_name(Pass pass);
+
+}  // namespace organsim
