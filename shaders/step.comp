@@ -14,7 +14,7 @@
 // dependent loads (entry, then neighbour), so the slowest chunk's slot count
 // times the memory latency bounds the step; T > 1 divides that chain by T and
 // gives each multiprocessor T times more warps to hide it (docs/gl.md).
-// Physics of DESIGN.md section 2, the same formulas as core/sim/cpu_backend.cpp.
+// Physics of docs/physics.md, the same formulas as core/sim/cpu_backend.cpp.
 #ifndef THREADS_PER_POINT
 #define THREADS_PER_POINT 1
 #endif

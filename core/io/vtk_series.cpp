@@ -100,7 +100,7 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   for (int32_t i : order) fixed.values.push_back(model.fixed[static_cast<size_t>(i)]);
   attributes.point_data.push_back(std::move(fixed));
   if (tool_ && tool_->mode == ToolMode::Push) {
-    // The penalty contact of DESIGN.md section 4, as the backends apply it.
+    // The push tool's penalty contact (docs/physics.md, "Tool").
     for (size_t i = 0; i < n; ++i) {
       const Vec3 d = positions_[i] - tool_center;
       const double r = d.norm();

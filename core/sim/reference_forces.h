@@ -1,5 +1,5 @@
 #pragma once
-// Naive per-spring / per-tet scatter of the forces of DESIGN.md section 2, in
+// Naive per-spring / per-tet scatter of the forces of docs/physics.md, in
 // double precision. The test oracle for every gather kernel (CPU and GL):
 // simple enough to check by eye.
 #include <vector>
