@@ -5,7 +5,7 @@
 // integration. Written for clarity, not speed: `organsim bench` times it on
 // the same model and precision as the real step and prints the speedup.
 // Same physics and state as the CPU backend (displacement u and step
-// increment d, docs/physics.md "Integration").
+// increment d, docs/architecture.md "Model and State").
 #include <vector>
 
 #include "core/model/model.h"
