@@ -58,6 +58,14 @@ std::string cpu_model_name() {
   return "unknown CPU";
 }
 
+// " WORD ": a whole field of a table line.
+std::string field(const std::string& word) {
+  std::string s(" ");
+  s += word;
+  s += ' ';
+  return s;
+}
+
 std::string fixed4(double v) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(4) << v;
@@ -99,15 +107,15 @@ TEST(RunBench, JsonFileHoldsTheFiguresOfTheTablePrintedInTheSameRun) {
     bool printed = false;
     while (std::getline(lines, line)) {
       if (line.find(" cpu     " + row["precision"].get<std::string>()) == std::string::npos) continue;
-      if (line.find(" " + std::to_string(row["points"].get<int>()) + " ") == std::string::npos) continue;
-      if (line.find(" " + std::to_string(row["tets"].get<int>()) + " ") == std::string::npos) continue;
-      if (line.find(" " + fixed4(med) + " ") != std::string::npos) printed = true;
+      if (line.find(field(std::to_string(row["points"].get<int>()))) == std::string::npos) continue;
+      if (line.find(field(std::to_string(row["tets"].get<int>()))) == std::string::npos) continue;
+      if (line.find(field(fixed4(med))) != std::string::npos) printed = true;
     }
     EXPECT_TRUE(printed) << "no table line with " << row.dump() << "\n" << r.out;
     EXPECT_DOUBLE_EQ(row["speedup_over_scatter"].get<double>(), row["scatter_median_ms"].get<double>() / med);
   }
   // The mesh the progress line reported is the one timed.
-  EXPECT_NE(r.err.find(" " + std::to_string(j["rows"][0]["points"].get<int>()) + " meshed"), std::string::npos)
+  EXPECT_NE(r.err.find(field(std::to_string(j["rows"][0]["points"].get<int>())) + "meshed"), std::string::npos)
       << r.err;
   // Nothing else left in the folder: no temporary beside the file.
   for (const auto& e : fs::directory_iterator(dir)) {
