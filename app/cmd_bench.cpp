@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -26,6 +27,7 @@
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/change_cost.h"
+#include "core/util/atomic_file.h"
 #include "core/util/error.h"
 #include "core/util/format.h"
 #include "meshing/mesh_surface.h"
@@ -73,7 +75,7 @@ struct BenchArgs {
   std::string surface;        // default: the built-in liver-like surface (= examples/liver.off)
   bool exude = true;
   bool frames = true;         // also measure one rendered frame per model
-  bool json = false;
+  std::string json;           // --json FILE: the results as JSON ("-": on stdout instead of the table)
 };
 
 struct Machine {
@@ -199,21 +201,33 @@ std::string fixed(double v, int digits) {
   return s.str();
 }
 
-void run_bench(const BenchArgs& args) {
-  if (args.repetitions < 1 || args.steps < 1 || args.warmup < 0) {
-    throw Error(ErrorKind::Usage, "bench: --repetitions and --steps must be >= 1, --warmup >= 0");
-  }
-  const Machine machine = read_machine();
-  const std::string date = utc_now();
-  TriangleMesh surface = args.surface.empty() ? make_liver_surface(4) : read_surface(args.surface);
-  const std::string surface_name = args.surface.empty() ? "built-in liver-like surface (examples/liver.off)" : args.surface;
-  const bool explicit_backends = !args.backends.empty();
-
+// Everything one bench run measured, printed as a table or written as JSON.
+struct Results {
+  Machine machine;
+  std::string date;
+  std::string surface_name;
   std::vector<Row> rows;
   std::vector<FrameRow> frame_rows;
   std::vector<std::pair<int32_t, ChangeCost>> change_rows;  // points, cost of one local cut
   std::string frames_unavailable;
   std::vector<std::pair<std::string, std::string>> unavailable;  // backend, reason
+};
+
+Results measure(const BenchArgs& args) {
+  Results res;
+  res.machine = read_machine();
+  res.date = utc_now();
+  TriangleMesh surface = args.surface.empty() ? make_liver_surface(4) : read_surface(args.surface);
+  res.surface_name = args.surface.empty() ? "built-in liver-like surface (examples/liver.off)" : args.surface;
+  const std::string& surface_name = res.surface_name;
+  const bool explicit_backends = !args.backends.empty();
+  const bool quiet = args.json == "-";  // the JSON alone on stdout, as before: no progress lines either
+
+  std::vector<Row>& rows = res.rows;
+  std::vector<FrameRow>& frame_rows = res.frame_rows;
+  std::vector<std::pair<int32_t, ChangeCost>>& change_rows = res.change_rows;
+  std::string& frames_unavailable = res.frames_unavailable;
+  std::vector<std::pair<std::string, std::string>>& unavailable = res.unavailable;
   std::vector<Vec3> positions;
   for (const int32_t target : args.sizes) {
     MeshOptions mo;
@@ -236,7 +250,7 @@ void run_bench(const BenchArgs& args) {
     // it is stable at (at most --dt), as a run would be.
     const double dt_crit = estimate_critical_step(model).dt_crit;
     const double dt = std::min(args.dt, 0.5 * dt_crit);
-    if (!args.json) {
+    if (!quiet) {
       std::cerr << "bench: " << target << " points asked, " << model.npoint() << " meshed in "
                 << fixed(report.seconds, 2) << " s; dt_crit " << dt_crit << " s, dt " << dt << " s\n";
     }
@@ -288,66 +302,74 @@ void run_bench(const BenchArgs& args) {
     }
   }
 
-  if (args.json) {
-    nlohmann::json j;
-    j["date"] = date;
-    j["organsim_version"] = ORGANSIM_VERSION;
-    j["machine"] = {{"cpu", machine.cpu}, {"logical_cpus", machine.logical_cpus},
-                    {"load_average_at_start", machine.load_average}};
-    j["settings"] = {{"warmup_steps", args.warmup}, {"repetitions", args.repetitions},
-                     {"steps_per_repetition", args.steps}, {"dt", args.dt},
-                     {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
-                     {"volume_formulation", args.nodal_volume ? "nodal" : "per_tet"},
-                     {"poisson_ratio", args.poisson_ratio >= 0 ? nlohmann::json(args.poisson_ratio) : nlohmann::json()},
-                     {"gravity", true}, {"tool", false}, {"exude", args.exude}, {"surface", surface_name}};
-    j["rows"] = nlohmann::json::array();
-    for (const Row& r : rows) {
-      nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
-                           {"tets", r.tets}, {"dt", r.dt}, {"dt_crit", r.dt_crit},
-                           {"backend", r.backend}, {"precision", r.precision},
-                           {"device", r.device}, {"median_ms", r.timing.median_ms},
-                           {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
-                           {"steps_per_second", 1e3 / r.timing.median_ms},
-                           {"scatter_median_ms", r.scatter.median_ms},
-                           {"speedup_over_scatter", r.scatter.median_ms / r.timing.median_ms},
-                           {"dispatches_per_step", r.plan.dispatches_per_step},
-                           {"syncs_per_step", r.plan.syncs_per_step}, {"blowup_check_ms", r.check_ms},
-                           {"blowup_check_interval_ticks", r.check_interval}};
-      nlohmann::json passes = nlohmann::json::array();
-      for (const PassInfo& p : r.plan.passes) passes.push_back(p.name);
-      jr["passes"] = passes;
-      if (const PaperRow* p = paper_row(r.target)) {
-        jr["paper"] = {{"model", p->model}, {"points", p->points}, {"springs", p->springs},
-                       {"quadro_fx_3450_ms", p->quadro_fx_3450}, {"geforce_go_7900_ms", p->geforce_go_7900},
-                       {"xeon_3ghz_ms", p->xeon_3ghz}};
-      }
-      j["rows"].push_back(jr);
-    }
-    j["frames"] = nlohmann::json::array();
-    for (const FrameRow& f : frame_rows) {
-      const FrameCost& c = f.cost;
-      j["frames"].push_back({{"points", f.points}, {"width", c.width}, {"height", c.height},
-                             {"triangles", c.triangles}, {"renderer", c.renderer}, {"upload_ms", c.upload_ms},
-                             {"render_ms", c.render_ms}, {"readback_ms", c.readback_ms}, {"png_ms", c.png_ms},
-                             {"video_ms", c.video_ms}, {"run_loop_ms", c.run_loop_ms()}});
-    }
-    if (!frames_unavailable.empty()) j["frames_unavailable"] = frames_unavailable;
-    j["topology_change"] = nlohmann::json::array();
-    for (const auto& [points, c] : change_rows) {
-      j["topology_change"].push_back({{"points", points}, {"faces_separated", c.faces_separated},
-                                      {"points_added", c.points_added}, {"detect_ms", c.detect_ms},
-                                      {"model_ms", c.model_ms}, {"backend_rebuild_ms", c.backend_ms},
-                                      {"dt_check_ms", c.dt_check_ms}, {"total_ms", c.total_ms()},
-                                      {"full_dt_crit_ms", c.dt_crit_ms},
-                                      {"guaranteed_over_dt_crit", c.guaranteed_over_dt_crit}});
-    }
-    j["unavailable"] = nlohmann::json::array();
-    for (const auto& [b, why] : unavailable) j["unavailable"].push_back({{"backend", b}, {"reason", why}});
-    std::cout << j.dump(2) << "\n";
-    return;
-  }
+  return res;
+}
 
-  std::cout << "organsim bench, " << date << "\n";
+nlohmann::json to_json(const Results& res, const BenchArgs& args) {
+  const Machine& machine = res.machine;
+  nlohmann::json j;
+  j["date"] = res.date;
+  j["organsim_version"] = ORGANSIM_VERSION;
+  j["machine"] = {{"cpu", machine.cpu}, {"logical_cpus", machine.logical_cpus},
+                  {"load_average_at_start", machine.load_average}};
+  j["settings"] = {{"sizes", args.sizes}, {"threads", args.threads},
+                   {"warmup_steps", args.warmup}, {"repetitions", args.repetitions},
+                   {"steps_per_repetition", args.steps}, {"dt", args.dt},
+                   {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
+                   {"volume_formulation", args.nodal_volume ? "nodal" : "per_tet"},
+                   {"poisson_ratio", args.poisson_ratio >= 0 ? nlohmann::json(args.poisson_ratio) : nlohmann::json()},
+                   {"gravity", true}, {"tool", false}, {"exude", args.exude}, {"surface", res.surface_name}};
+  j["rows"] = nlohmann::json::array();
+  for (const Row& r : res.rows) {
+    nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
+                         {"tets", r.tets}, {"dt", r.dt}, {"dt_crit", r.dt_crit},
+                         {"backend", r.backend}, {"precision", r.precision},
+                         {"device", r.device}, {"median_ms", r.timing.median_ms},
+                         {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
+                         {"steps_per_second", 1e3 / r.timing.median_ms},
+                         {"scatter_median_ms", r.scatter.median_ms},
+                         {"speedup_over_scatter", r.scatter.median_ms / r.timing.median_ms},
+                         {"dispatches_per_step", r.plan.dispatches_per_step},
+                         {"syncs_per_step", r.plan.syncs_per_step}, {"blowup_check_ms", r.check_ms},
+                         {"blowup_check_interval_ticks", r.check_interval}};
+    nlohmann::json passes = nlohmann::json::array();
+    for (const PassInfo& p : r.plan.passes) passes.push_back(p.name);
+    jr["passes"] = passes;
+    if (const PaperRow* p = paper_row(r.target)) {
+      jr["paper"] = {{"model", p->model}, {"points", p->points}, {"springs", p->springs},
+                     {"quadro_fx_3450_ms", p->quadro_fx_3450}, {"geforce_go_7900_ms", p->geforce_go_7900},
+                     {"xeon_3ghz_ms", p->xeon_3ghz}};
+    }
+    j["rows"].push_back(jr);
+  }
+  j["frames"] = nlohmann::json::array();
+  for (const FrameRow& f : res.frame_rows) {
+    const FrameCost& c = f.cost;
+    j["frames"].push_back({{"points", f.points}, {"width", c.width}, {"height", c.height},
+                           {"triangles", c.triangles}, {"renderer", c.renderer}, {"upload_ms", c.upload_ms},
+                           {"render_ms", c.render_ms}, {"readback_ms", c.readback_ms}, {"png_ms", c.png_ms},
+                           {"video_ms", c.video_ms}, {"run_loop_ms", c.run_loop_ms()}});
+  }
+  if (!res.frames_unavailable.empty()) j["frames_unavailable"] = res.frames_unavailable;
+  j["topology_change"] = nlohmann::json::array();
+  for (const auto& [points, c] : res.change_rows) {
+    j["topology_change"].push_back({{"points", points}, {"faces_separated", c.faces_separated},
+                                    {"points_added", c.points_added}, {"detect_ms", c.detect_ms},
+                                    {"model_ms", c.model_ms}, {"backend_rebuild_ms", c.backend_ms},
+                                    {"dt_check_ms", c.dt_check_ms}, {"total_ms", c.total_ms()},
+                                    {"full_dt_crit_ms", c.dt_crit_ms},
+                                    {"guaranteed_over_dt_crit", c.guaranteed_over_dt_crit}});
+  }
+  j["unavailable"] = nlohmann::json::array();
+  for (const auto& [b, why] : res.unavailable) j["unavailable"].push_back({{"backend", b}, {"reason", why}});
+  return j;
+}
+
+void print_table(const Results& res, const BenchArgs& args) {
+  const Machine& machine = res.machine;
+  const std::vector<Row>& rows = res.rows;
+  const std::vector<FrameRow>& frame_rows = res.frame_rows;
+  std::cout << "organsim bench, " << res.date << "\n";
   std::cout << "machine: " << machine.cpu << ", " << machine.logical_cpus << " logical CPUs, load average "
             << machine.load_average << " at start\n";
   const std::string material_terms =
@@ -360,7 +382,7 @@ void run_bench(const BenchArgs& args) {
             << " + gravity + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
             << args.warmup << " warm-up steps, then "
             << args.repetitions << " repetitions of " << args.steps << " steps; median (min..max) ms per step\n";
-  std::cout << "models:  " << surface_name << " meshed to the paper's point counts"
+  std::cout << "models:  " << res.surface_name << " meshed to the paper's point counts"
             << (args.exude ? " (with exudation)" : "") << "\n\n";
   std::cout << std::left << std::setw(8) << "paper" << std::right << std::setw(7) << "points" << std::setw(8)
             << "springs" << std::setw(8) << "tets" << std::setw(8) << "dt us" << "  " << std::left << std::setw(8)
@@ -395,7 +417,7 @@ void run_bench(const BenchArgs& args) {
       std::cout << "  " << key << " (" << r.points << " points)\n";
     }
   }
-  for (const auto& [b, why] : unavailable) std::cout << "  " << b << ": not measured: " << why << "\n";
+  for (const auto& [b, why] : res.unavailable) std::cout << "  " << b << ": not measured: " << why << "\n";
 
   std::cout << "\nspeedup over the plain per-spring / per-tet scatter step (1 thread, no layout, same model,\n"
                "precision and dt, timed in this run), median ms per step:\n";
@@ -425,18 +447,43 @@ void run_bench(const BenchArgs& args) {
                 << std::setw(6) << fixed(c.video_ms, 1) << "\n";
     }
   }
-  if (!frames_unavailable.empty()) std::cout << "\nframes: not measured: " << frames_unavailable << "\n";
+  if (!res.frames_unavailable.empty()) std::cout << "\nframes: not measured: " << res.frames_unavailable << "\n";
 
   std::cout << "\none topology change (a local cut through the model's middle, 4 x 3 spring lengths, cpu double, 1 "
                "thread), median ms:\n";
   std::cout << "   points  faces  copies  detect  split+model  backend rebuild  dt check   total |  full dt_crit"
                "  guaranteed/dt_crit\n";
-  for (const auto& [points, c] : change_rows) {
+  for (const auto& [points, c] : res.change_rows) {
     std::cout << std::setw(9) << points << std::setw(7) << c.faces_separated << std::setw(8) << c.points_added
               << std::setw(8) << fixed(c.detect_ms, 2) << std::setw(13) << fixed(c.model_ms, 2) << std::setw(17)
               << fixed(c.backend_ms, 2) << std::setw(10) << fixed(c.dt_check_ms, 3) << std::setw(8)
               << fixed(c.total_ms(), 2) << " | " << std::setw(13) << fixed(c.dt_crit_ms, 1) << std::setw(20)
               << fixed(c.guaranteed_over_dt_crit, 2) << "\n";
+  }
+}
+
+void run_bench(const BenchArgs& args) {
+  if (args.repetitions < 1 || args.steps < 1 || args.warmup < 0) {
+    throw Error(ErrorKind::Usage, "bench: --repetitions and --steps must be >= 1, --warmup >= 0");
+  }
+  if (!args.json.empty() && args.json != "-") {
+    // Found out before the minutes of measuring, not after.
+    const std::filesystem::path folder = std::filesystem::path(args.json).parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+      throw Error(ErrorKind::Output, args.json + ": cannot write: " + folder.string() + " is not a folder");
+    }
+  }
+  const Results res = measure(args);
+  if (args.json == "-") {
+    std::cout << to_json(res, args).dump(2) << "\n";
+    return;
+  }
+  print_table(res, args);
+  // The same figures as the table, as a data file (docs/bench/ keeps one per
+  // machine and date); written whole or not at all.
+  if (!args.json.empty()) {
+    write_file_atomically(args.json, [&](std::ostream& out) { out << to_json(res, args).dump(2) << "\n"; });
+    std::cout << "\nwrote " << args.json << "\n";
   }
 }
 
@@ -480,7 +527,10 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");
   cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
   cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");
-  cmd->add_flag("--json", args->json, "Print the results as JSON");
+  cmd->add_option("--json", args->json,
+                  "Also write the results as JSON to FILE (written whole or not at all); - prints the JSON on stdout "
+                  "instead of the table")
+      ->type_name("FILE");
   cmd->callback([args, backends, precisions] {
     args->backends = split_list(*backends);
     args->precisions = split_list(*precisions);

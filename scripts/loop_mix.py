@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Instruction mix of the hot loops in an object file (docs/bench.md, "Fourth session").
+"""Instruction mix of the hot loops in an object file (docs/bench.md, "Looking inside the step").
 
 Finds every loop (a backward conditional jump) of at least --min instructions
 in the functions whose name contains --function, and counts its instructions

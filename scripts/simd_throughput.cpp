@@ -2,7 +2,7 @@
 // measured with 12 independent chains each (so latency does not limit it).
 // It answers whether a machine runs 512-bit instructions at full width or
 // as two 256-bit halves, which decides how fast the AVX-512 kernels can be
-// (docs/bench.md, "Fourth session"). Build and run (one core, idle):
+// (docs/bench.md, "Looking inside the step"). Build and run (one core, idle):
 //
 //   g++ -O2 -march=native scripts/simd_throughput.cpp -o /tmp/simd && /tmp/simd
 //

@@ -157,7 +157,7 @@ EglContext::EglContext(const EglContextOptions& options) : debug_(options.debug)
         release_display(c.display);
         fail("eglBindAPI(EGL_OPENGL_API)", c.platform);
       }
-      // 4.5 core: llvmpipe refuses 4.6 with EGL_BAD_MATCH (PLATFORM.md).
+      // 4.5 core: Mesa's llvmpipe refuses 4.6 with EGL_BAD_MATCH.
       const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
                                    EGL_CONTEXT_MINOR_VERSION, 5,
                                    EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,

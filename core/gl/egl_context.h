@@ -1,6 +1,6 @@
 #pragma once
 // A headless OpenGL 4.5 core context through EGL, without any window or
-// surface (PLATFORM.md "Headless EGL"). Tries the EGL device platform first,
+// surface (docs/gl.md, "Context"). Tries the EGL device platform first,
 // preferring a hardware device over Mesa's software one, then Mesa's
 // surfaceless platform. Every failure throws Error(ErrorKind::Backend) naming
 // the EGL call and its error code in hex; there is no fallback to the CPU.

@@ -10,8 +10,9 @@ namespace organsim {
 // Reverse Cuthill-McKee order of the graph given by `edges` over npoint
 // nodes: order[k] = node placed at position k. Neighbouring points end up
 // close in memory, which matters more than anything for threaded gathers
-// (DESIGN.md section 3). Each connected component starts from a
-// pseudo-peripheral node; ties break by node id, so the order is deterministic.
+// (docs/architecture.md, "Numbering and the gather layout"). Each connected
+// component starts from a pseudo-peripheral node; ties break by node id, so
+// the order is deterministic.
 std::vector<int32_t> reverse_cuthill_mckee(int32_t npoint, const std::vector<Edge>& edges);
 
 // Stable sort of `order` by decreasing valence within consecutive windows of

@@ -78,7 +78,7 @@ bool starts_at_or_after(double tick_start, double event_time, double dt) {
 }
 
 // After a topology change the run's dt must still be below dt_crit of the
-// new Model (a cut should not lower it, DESIGN.md section 5; this checks it).
+// new Model (a cut should not lower it, docs/topology.md; this checks it).
 void check_step_after_change(const StabilityReport& report, const Scenario& s, double t, bool allow_unstable) {
   try {
     const std::string warning = check_time_step(report, s.time.dt, s.time.substeps, allow_unstable);

@@ -1,11 +1,12 @@
 #pragma once
 // The CPU backend's fast float step: AVX-512, 16 points per register
-// (DESIGN.md section 3). Same physics, layout and state as the generic
-// kernel in cpu_backend.cpp (which stays the portable fallback and the
-// double-precision reference); what differs is how neighbours are read:
-// each point's state is one 32-byte record (x, y, z, 0, dx, dy, dz, 0) and a
-// group of 16 neighbours is fetched with plain loads and transposed in
-// registers, because a 16-lane hardware gather costs several times more here.
+// (docs/architecture.md, "CPU kernels and how one is chosen"). Same physics,
+// layout and state as the generic kernel in cpu_backend.cpp (which stays the
+// portable fallback and the double-precision reference); what differs is how
+// neighbours are read: each point's state is one 32-byte record (x, y, z, 0,
+// dx, dy, dz, 0) and a group of 16 neighbours is fetched with plain loads and
+// transposed in registers, because a 16-lane hardware gather costs several
+// times more here.
 //
 // Compiled only where the compiler targets AVX-512 (the default native build
 // on this machine); elsewhere avx512_kernel_compiled() is false and the

@@ -1,5 +1,5 @@
 #pragma once
-// Blow-up detection during a run (DESIGN.md section 6), for any backend.
+// Blow-up detection during a run (docs/stability.md), for any backend.
 //
 // Every `interval_ticks` ticks the monitor reads the positions back (a sync
 // on the GL backend, hence the interval) and checks, in this order:

@@ -1,5 +1,5 @@
 #pragma once
-// The critical time step of a Model at rest, before a run (DESIGN.md section 6).
+// The critical time step of a Model at rest, before a run (docs/stability.md).
 //
 // Position Verlet is central differences: undamped it is stable while
 // dt < 2 / omega_max, omega_max^2 = largest eigenvalue of M^-1 K with K the

@@ -1,5 +1,5 @@
 #pragma once
-// Error against run time (DESIGN.md section 6): what `organsim study` measures
+// Error against run time (docs/stability.md): what `organsim study` measures
 // for each configuration against a converged reference. Plain data and maths
 // here; running the configurations and writing files is app/cmd_study.cpp.
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// Blade detection (DESIGN.md section 5). A blade is a straight cutting edge
+// Blade detection (docs/topology.md). A blade is a straight cutting edge
 // (a, b); over one interval it sweeps the quad (a0, b0, b1, a1), taken as the
 // two triangles (a0, b0, b1) and (a0, b1, a1). An interior face between tets
 // T1 and T2 is cut when the segment between their centroids (in the current

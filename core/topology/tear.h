@@ -1,5 +1,5 @@
 #pragma once
-// Tearing (DESIGN.md section 5): from a time on, a spring whose strain
+// Tearing (docs/topology.md): from a time on, a spring whose strain
 // (L - r) / r stays above a threshold for a number of consecutive ticks
 // separates, in one of the tets it belongs to, the interior face most
 // perpendicular to its stretch (largest |n . l/L|). At most a fixed number of

@@ -4,6 +4,10 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <string>
 
 #include "tests/app/run_cli_test_util.h"
 
@@ -15,7 +19,7 @@ namespace fs = std::filesystem;
 TEST(RunBench, QuickJsonRunHasOneRowPerSizeAndConfigurationWithThePaperFigures) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench";
   const auto r = test::run_organsim(
-      "bench --sizes 300,1617 --backend cpu --precision double --repetitions 3 --steps 5 --warmup 2 --no-exude --json", dir);
+      "bench --sizes 300,1617 --backend cpu --precision double --repetitions 3 --steps 5 --warmup 2 --no-exude --json -", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["rows"].size(), 2u);
@@ -44,9 +48,95 @@ TEST(RunBench, QuickJsonRunHasOneRowPerSizeAndConfigurationWithThePaperFigures) 
   EXPECT_DOUBLE_EQ(j["rows"][1]["paper"]["xeon_3ghz_ms"].get<double>(), 0.99);
 }
 
+// The CPU model as /proc/cpuinfo names it (what the file must record).
+std::string cpu_model_name() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  }
+  return "unknown CPU";
+}
+
+// " WORD ": a whole field of a table line.
+std::string field(const std::string& word) {
+  std::string s(" ");
+  s += word;
+  s += ' ';
+  return s;
+}
+
+std::string fixed4(double v) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(4) << v;
+  return s.str();
+}
+
+// `--json FILE` prints the table as usual and writes the same run's figures
+// to FILE: the data files under docs/bench/ are made this way.
+TEST(RunBench, JsonFileHoldsTheFiguresOfTheTablePrintedInTheSameRun) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_json_file";
+  fs::remove_all(dir);
+  const fs::path file = dir / "bench.json";
+  const auto r = test::run_organsim("bench --sizes 300 --backend cpu --precision double,float --repetitions 3 "
+                                    "--steps 5 --warmup 2 --no-exude --no-frames --json " + file.string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(file)) << r.out;
+  const auto j = nlohmann::json::parse(test::slurp(file));  // throws (and fails) unless it is whole JSON
+
+  // What was asked is what the file says was run.
+  EXPECT_EQ(j["settings"]["sizes"], nlohmann::json::array({300}));
+  EXPECT_EQ(j["settings"]["repetitions"], 3);
+  EXPECT_EQ(j["settings"]["steps_per_repetition"], 5);
+  EXPECT_EQ(j["settings"]["warmup_steps"], 2);
+  EXPECT_EQ(j["settings"]["exude"], false);
+  EXPECT_EQ(j["machine"]["cpu"], cpu_model_name());
+  EXPECT_NE(r.out.find("machine: " + j["machine"]["cpu"].get<std::string>()), std::string::npos) << r.out;
+  EXPECT_TRUE(j["frames"].empty());
+
+  // One row per precision, each the row the table printed: its counts and
+  // its median (the table rounds to 4 decimals) on one line of stdout.
+  ASSERT_EQ(j["rows"].size(), 2u);
+  EXPECT_EQ(j["rows"][0]["precision"], "double");
+  EXPECT_EQ(j["rows"][1]["precision"], "float");
+  for (const auto& row : j["rows"]) {
+    EXPECT_EQ(row["backend"], "cpu");
+    const double med = row["median_ms"];
+    std::istringstream lines(r.out);
+    std::string line;
+    bool printed = false;
+    while (std::getline(lines, line)) {
+      if (line.find(" cpu     " + row["precision"].get<std::string>()) == std::string::npos) continue;
+      if (line.find(field(std::to_string(row["points"].get<int>()))) == std::string::npos) continue;
+      if (line.find(field(std::to_string(row["tets"].get<int>()))) == std::string::npos) continue;
+      if (line.find(field(fixed4(med))) != std::string::npos) printed = true;
+    }
+    EXPECT_TRUE(printed) << "no table line with " << row.dump() << "\n" << r.out;
+    EXPECT_DOUBLE_EQ(row["speedup_over_scatter"].get<double>(), row["scatter_median_ms"].get<double>() / med);
+  }
+  // The mesh the progress line reported is the one timed.
+  EXPECT_NE(r.err.find(field(std::to_string(j["rows"][0]["points"].get<int>())) + "meshed"), std::string::npos)
+      << r.err;
+  // Nothing else left in the folder: no temporary beside the file.
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_TRUE(name == "bench.json" || name == "stdout.txt" || name == "stderr.txt") << name;
+  }
+}
+
+TEST(RunBench, AJsonFileThatCannotBeWrittenIsAnOutputErrorNamingIt) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_json_bad";
+  const fs::path file = dir / "no_such_folder" / "bench.json";
+  const auto r = test::run_organsim("bench --sizes 300 --backend cpu --precision float --repetitions 1 --steps 2 "
+                                    "--warmup 0 --no-exude --no-frames --json " + file.string(), dir);
+  EXPECT_EQ(r.exit_code, 7) << r.err;
+  EXPECT_NE(r.err.find(file.string()), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(file));
+}
+
 TEST(RunBench, ABackendAskedForByNameRunsOrIsAnErrorNeverACpuRow) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_gl";
-  const auto r = test::run_organsim("bench --sizes 300 --backend gl --repetitions 1 --steps 2 --warmup 0 --no-exude --json", dir);
+  const auto r = test::run_organsim("bench --sizes 300 --backend gl --repetitions 1 --steps 2 --warmup 0 --no-exude --json -", dir);
   if (r.exit_code == 0) {
     const auto j = nlohmann::json::parse(r.out);
     ASSERT_EQ(j["rows"].size(), 1u);

@@ -43,7 +43,7 @@ TEST(RunLiverRealtime, GuaranteedStepAndTheTenSubstepRunsForce) {
   EXPECT_EQ(fast["meta"]["substeps"], 4);
   EXPECT_EQ(fine["meta"]["substeps"], 10);
   // Within the step every mode is proven stable at (block Gershgorin,
-  // docs/accuracy.md), not only below the estimated dt_crit.
+  // docs/stability.md), not only below the estimated dt_crit.
   EXPECT_LE(fast["meta"]["dt"].get<double>(), fast["meta"]["stability"]["dt_crit_gershgorin"].get<double>());
 
   const auto& a = fine["samples"]["force"];

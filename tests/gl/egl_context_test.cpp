@@ -38,7 +38,8 @@ TEST(EglContext, DebugContextTurnsGlErrorsIntoFailures) {
   options.debug = true;
   EglContext context(options);
   // Uploading into an immutable buffer without GL_DYNAMIC_STORAGE_BIT is the
-  // silent GL_INVALID_OPERATION of PLATFORM.md: it must become an Error.
+  // GL_INVALID_OPERATION that Mesa raises silently without a debug callback
+  // (docs/gl.md, "Context"): it must become an Error.
   GLuint buffer = 0;
   glCreateBuffers(1, &buffer);
   glNamedBufferStorage(buffer, 16, nullptr, 0);
