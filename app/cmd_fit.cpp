@@ -86,6 +86,7 @@ RunResult simulate(Scenario s, const TetMesh& mesh, const Material& material, co
   }
   CpuBackendOptions cpu;
   cpu.precision = Precision::Double;
+  cpu.threads = s.backend.threads;
   auto backend = make_cpu_backend(model, backend_tool(s), cpu);
   return run_scenario(s, model, *backend, options);
 }
