@@ -43,13 +43,13 @@ TEST(RunLiverSuture, SuturesAlongTheCutCloseIt) {
   EXPECT_LT(sutures["length_max_m"].get<double>(), 0.1 * opening);
   // Bounded at every tick, not only at the end: tightening at 5 cm/s, the
   // tissue follows, and the largest tension any suture reached at the end of
-  // a tick was 0.20 N (0.05 N at the end, on the lobe's weight). 1 N is five
-  // times that and a seventeenth of what a suture pulls when the tissue does
-  // not follow (its stiffness times the opening, 17 N): a schedule that
-  // closes faster than the tissue can follow, or a suture that overshoots,
-  // pulls harder.
+  // a tick was 0.20 N (0.05 N at the end, on the lobe's weight; the run is
+  // deterministic). 0.4 N is twice that and a fortieth of what a suture
+  // pulls when the tissue does not follow (its stiffness times the opening,
+  // 17 N): sutures tightening 10 times faster than the tissue follows reach
+  // 0.46 N.
   EXPECT_LE(sutures["tension_end_N"].get<double>(), sutures["tension_max_N"].get<double>());
-  EXPECT_LT(sutures["tension_max_N"].get<double>(), 1.0);
+  EXPECT_LT(sutures["tension_max_N"].get<double>(), 0.4);
   const auto sheet = test::slurp(dir / "out" / "contact_sheet.png");
   ASSERT_GT(sheet.size(), 8u);
   EXPECT_EQ(sheet.substr(1, 3), "PNG");

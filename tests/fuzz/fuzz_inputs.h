@@ -3,8 +3,8 @@
 // the harnesses (fuzz_<kind>.cpp) call these, and so does the seed test
 // (tests/meshing/fuzz_seeds_test.cpp), which runs every seed of the corpus
 // through them. Each either accepts the input (and then checks what the next
-// stage relies on, stopping with fuzz::broken when that does not hold) or
-// throws the organsim::Error that refuses it.
+// stage relies on, stopping with fuzz::broken when that does not hold, and
+// returns what it read) or throws the organsim::Error that refuses it.
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -24,13 +24,14 @@ namespace organsim::fuzz {
 
 // kind surface: parse_surface; an accepted surface is valid and survives an
 // OFF round trip unchanged (the writers print the shortest exact text).
-inline void surface_input(std::string_view text, const std::string& source) {
-  const TriangleMesh mesh = parse_surface(text, source);
+inline TriangleMesh surface_input(std::string_view text, const std::string& source) {
+  TriangleMesh mesh = parse_surface(text, source);
   require_valid_surface(mesh);
   std::ostringstream off;
   mesh_io::write_off(off, mesh);
   const TriangleMesh again = parse_surface(off.str(), "again.off");
   require(again.points == mesh.points && again.faces == mesh.faces, "OFF round trip changed the surface");
+  return mesh;
 }
 
 inline void require_tet_round_trip(const TetMesh& mesh, const char* name,
@@ -44,11 +45,12 @@ inline void require_tet_round_trip(const TetMesh& mesh, const char* name,
 
 // kind tet: parse_tet_mesh (read, orient, validate); an accepted mesh is
 // valid and survives medit and VTK round trips unchanged.
-inline void tet_input(std::string_view text, const std::string& source) {
-  const TetMesh mesh = parse_tet_mesh(text, source);
+inline TetMesh tet_input(std::string_view text, const std::string& source) {
+  TetMesh mesh = parse_tet_mesh(text, source);
   require_valid_tet_mesh(mesh);
   require_tet_round_trip(mesh, "again.mesh", mesh_io::write_medit);
   require_tet_round_trip(mesh, "again.vtk", mesh_io::write_vtk);
+  return mesh;
 }
 
 // kind scenario, first stage: the JSON parse. An accepted scenario has a
@@ -79,13 +81,14 @@ inline void scenario_model(const Scenario& s) {
 // kind surface_check: the checks that guard CGAL Mesh_3 (meshing/
 // surface_check.h); a surface that passes is valid, closed (at least 4
 // faces) and encloses a positive volume.
-inline void surface_check_input(std::string_view text, const std::string& source) {
+inline TriangleMesh surface_check_input(std::string_view text, const std::string& source) {
   const TriangleMesh surface = parse_surface(text, source);
   std::vector<std::string> notes;
   const TriangleMesh checked = check_surface(surface, source, notes);
   require_valid_surface(checked);
   require(checked.faces.size() >= 4, "a closed surface with fewer than 4 faces passed");
   require(surface_volume(checked) > 0, "a surface enclosing no positive volume passed");
+  return checked;
 }
 
 }  // namespace organsim::fuzz

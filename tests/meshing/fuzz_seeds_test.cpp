@@ -1,9 +1,10 @@
 // Every seed of the fuzz corpus (tests/fuzz/harnesses.txt: the hand-made
 // files in tests/fuzz/corpus/<harness>/ and the row's seed globs) goes
 // through what its harness runs (tests/fuzz/fuzz_inputs.h), read as the
-// harness reads it. The harnesses accept any clean error, so a reader that
-// started refusing good files would go unnoticed there: here every seed must
-// be accepted, except the few listed below that exist to be refused, which
+// harness reads it. The harnesses accept any clean error (and any empty
+// result), so a reader that started refusing good files, or reading nothing
+// from them, would go unnoticed there: here every seed must be accepted and
+// not empty, except the few listed below that exist to be refused, which
 // must get their error. In tests/meshing because the surface_check harness
 // runs the CGAL checks.
 #include <gtest/gtest.h>
@@ -74,19 +75,20 @@ std::vector<fs::path> expand(const std::string& glob) {
   return files;
 }
 
-// What the row's harness runs on `text`, read as `source`.
-void run_harness(const Row& row, const std::string& text, const std::string& source) {
-  if (row.kind == "surface") {
-    fuzz::surface_input(text, source);
-  } else if (row.kind == "tet") {
-    fuzz::tet_input(text, source);
-  } else if (row.kind == "scenario") {
-    fuzz::scenario_model(fuzz::scenario_input(text, source));
-  } else if (row.kind == "surface_check") {
-    fuzz::surface_check_input(text, source);
-  } else {
-    FAIL() << "harnesses.txt: row " << row.name << " has an unknown kind " << row.kind;
+// What the row's harness runs on `text`, read as `source`; for an accepted
+// input, how many faces, tets or scenario ticks it gave (a reader that read
+// nothing from a good file accepts it empty).
+size_t run_harness(const Row& row, const std::string& text, const std::string& source) {
+  if (row.kind == "surface") return fuzz::surface_input(text, source).faces.size();
+  if (row.kind == "tet") return fuzz::tet_input(text, source).tets.size();
+  if (row.kind == "surface_check") return fuzz::surface_check_input(text, source).faces.size();
+  if (row.kind == "scenario") {
+    const Scenario s = fuzz::scenario_input(text, source);
+    fuzz::scenario_model(s);
+    return static_cast<size_t>(s.time.ticks());
   }
+  ADD_FAILURE() << "harnesses.txt: row " << row.name << " has an unknown kind " << row.kind;
+  return 0;
 }
 
 TEST(FuzzSeeds, EverySeedIsAcceptedUnlessListedAsRefused) {
@@ -108,7 +110,7 @@ TEST(FuzzSeeds, EverySeedIsAcceptedUnlessListedAsRefused) {
       const std::string source = "fuzz" + row.ext;  // as the harness names its input
       const auto listed = kRefused.find(seed.string());
       try {
-        run_harness(row, read_text_file(kRoot / seed), source);
+        EXPECT_GT(run_harness(row, read_text_file(kRoot / seed), source), 0u) << "accepted, but empty";
         EXPECT_EQ(listed, kRefused.end()) << "accepted, but listed as refused";
         ++accepted;
       } catch (const Error& e) {
