@@ -88,6 +88,7 @@ RunResult simulate(Scenario s, const TetMesh& mesh, const Material& material, Ru
   }
   CpuBackendOptions cpu;
   cpu.precision = Precision::Double;
+  cpu.threads = s.backend.threads;
   auto backend = make_cpu_backend(model, backend_tool(s), cpu);
   prepared.start(*backend);
   BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks());

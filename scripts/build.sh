@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Configures and builds organsim into ${ORGANSIM_BUILD_DIR:-build} (Release,
 # Ninja, ccache when present). Extra arguments go to cmake's configure step.
+# ORGANSIM_BUILD_TARGETS (names separated by spaces, e.g. "organsim") builds
+# only those targets and what they need; default: everything, tests included.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ORGANSIM_BUILD_DIR:-$root/build}
@@ -10,4 +12,6 @@ export CCACHE_BASEDIR=$root
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=${ORGANSIM_BUILD_TYPE:-Release} \
   -DORGANSIM_WERROR=${ORGANSIM_WERROR:-ON} "$@" >/dev/null
 # CGAL's Mesh_3 translation unit needs ~4 GB: two jobs fit in 24 GB.
-cmake --build "$build" -j "${ORGANSIM_JOBS:-2}"
+targets=()
+for target in ${ORGANSIM_BUILD_TARGETS:-}; do targets+=(--target "$target"); done
+cmake --build "$build" -j "${ORGANSIM_JOBS:-2}" "${targets[@]}"

@@ -3,7 +3,8 @@
 # (ASan + UBSan) into ${ORGANSIM_FUZZ_BUILD_DIR:-build-fuzz} and runs each one.
 #   scripts/fuzz.sh [--seconds S | --runs N] [NAME...]
 # --seconds S: each harness for S seconds (default 10); --runs N: N inputs
-# each. NAMEs pick rows of the table (default: all). The corpus grows in
+# each. NAMEs pick rows of the table (default: all). ORGANSIM_FUZZ_JOBS
+# harnesses run at once (default 2). The corpus grows in
 # BUILD/corpus/NAME between runs; a crash, hang or sanitizer report leaves
 # its input in BUILD/artifacts/NAME/ and makes the script fail. Prints one
 # line per harness: executions, coverage (edges), corpus size, result.
@@ -29,29 +30,52 @@ cmake --build "$build" --target organsim_fuzz -j "${ORGANSIM_JOBS:-2}"
 # Leaks are bugs too; a hang is an input taking over 10 s; 2 GB of memory
 # is far more than any input of at most 64 KiB should need.
 options=(-timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1)
-failed=0
-printf '%-15s %12s %8s %8s  %s\n' harness executions coverage corpus result
-while read -r name kind ext seeds; do
-  case $name in ''|'#'*) continue ;; esac
-  if [ ${#names[@]} -gt 0 ] && [[ ! " ${names[*]} " == *" $name "* ]]; then continue; fi
-  corpus=$build/corpus/$name artifacts=$build/artifacts/$name seed_dir=$build/seeds/$name
-  mkdir -p "$corpus" "$artifacts" "$seed_dir"
-  # Hand-made seeds and the inputs of past findings (tests/fuzz/regressions).
+# Runs harness $1, its log in BUILD/logs/NAME.log and its result line in
+# BUILD/logs/NAME.result. Seeds: the hand-made files and the inputs of past
+# findings (tests/fuzz/regressions), then the row's globs ($2).
+fuzz_one() {
+  local name=$1 seeds=$2
+  local corpus=$build/corpus/$name artifacts=$build/artifacts/$name seed_dir=$build/seeds/$name
+  mkdir -p "$corpus" "$artifacts" "$seed_dir" "$build/logs"
   cp "$root"/tests/fuzz/corpus/"$name"/* "$root"/tests/fuzz/regressions/"$name"/* "$seed_dir"/ 2>/dev/null || true
   for pattern in $seeds; do
     # shellcheck disable=SC2086  # the pattern is a glob on purpose
     cp $root/$pattern "$seed_dir"/
   done
-  log=$build/logs/$name.log
-  mkdir -p "$(dirname "$log")"
-  result=ok
+  local log=$build/logs/$name.log result=ok
   if ! "$build/tests/fuzz/organsim_fuzz_$name" "${limit[@]}" "${options[@]}" -artifact_prefix="$artifacts/" \
       "$corpus" "$seed_dir" >"$log" 2>&1; then
     result="FAILED: $(ls -t "$artifacts" | head -1 | sed "s|^|$artifacts/|"), log $log"
+  fi
+  local executions coverage
+  executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1) || true
+  coverage=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2) || true
+  printf '%-15s %12s %8s %8s  %s\n' "$name" "${executions:-?}" "${coverage:-?}" "$(ls "$corpus" | wc -l)" "$result" \
+    >"$build/logs/$name.result"
+}
+
+# The harnesses run ORGANSIM_FUZZ_JOBS at a time (default 2, one per core of
+# a 2-core machine); the table prints in harnesses.txt order at the end.
+jobs_max=${ORGANSIM_FUZZ_JOBS:-2}
+picked=()
+while read -r name kind ext seeds; do
+  case $name in ''|'#'*) continue ;; esac
+  if [ ${#names[@]} -gt 0 ] && [[ ! " ${names[*]} " == *" $name "* ]]; then continue; fi
+  picked+=("$name")
+  rm -f "$build/logs/$name.result"
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+  fuzz_one "$name" "$seeds" &
+done <"$root/tests/fuzz/harnesses.txt"
+wait
+failed=0
+printf '%-15s %12s %8s %8s  %s\n' harness executions coverage corpus result
+for name in "${picked[@]}"; do
+  if [ -f "$build/logs/$name.result" ]; then
+    cat "$build/logs/$name.result"
+    grep -q '  ok$' "$build/logs/$name.result" || failed=1
+  else
+    printf '%-15s  FAILED: the harness run did not finish, log %s\n' "$name" "$build/logs/$name.log"
     failed=1
   fi
-  executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-  coverage=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
-  printf '%-15s %12s %8s %8s  %s\n' "$name" "${executions:-?}" "${coverage:-?}" "$(ls "$corpus" | wc -l)" "$result"
-done <"$root/tests/fuzz/harnesses.txt"
+done
 exit $failed

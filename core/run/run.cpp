@@ -1,5 +1,6 @@
 #include "core/run/run.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -117,6 +118,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   std::unique_ptr<Model> owned;
   const Model* current = &model;
   std::vector<Vec3> event_positions;
+  double suture_tension_peak = 0;  // N, at the end of any tick (meta.sutures.tension_max_N)
 
   TickRequest request;
   request.dt = time.dt;
@@ -191,6 +193,10 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       }
 
       result.samples.push(t1, r.force, r.torque, request.tool_to, r.contacts);
+      if (current->nsuture() > 0) {
+        backend.positions(event_positions);
+        suture_tension_peak = std::max(suture_tension_peak, suture_tension_max(*current, event_positions, t1));
+      }
       TickInfo info;
       info.tick = i;
       info.t = t1;
@@ -226,7 +232,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
     result.meta.extra["final_springs"] = current->nspring();
     if (!failure && !scenario.events.sutures.empty()) {
       backend.positions(event_positions);
-      result.meta.extra["sutures"] = suture_summary(*current, event_positions, backend.time());
+      result.meta.extra["sutures"] = suture_summary(*current, event_positions, backend.time(), suture_tension_peak);
     }
   }
 

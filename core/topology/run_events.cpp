@@ -8,16 +8,27 @@
 
 namespace organsim {
 
-nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t) {
-  double tied = 0, length = 0, tension = 0;
+double suture_tension_max(const Model& model, const std::vector<Vec3>& x, double t) {
+  double tension = 0;
   for (int32_t s = model.first_suture(); s < model.nspring(); ++s) {
     const Suture& u = model.suture_of_spring(s);
-    const double l = (x[u.ends[1]] - x[u.ends[0]]).norm();
-    tied = std::max(tied, u.length);
-    length = std::max(length, l);
-    tension = std::max(tension, u.k * std::max(0.0, l - u.rest_at(t)));
+    tension = std::max(tension, u.k * std::max(0.0, (x[u.ends[1]] - x[u.ends[0]]).norm() - u.rest_at(t)));
   }
-  return {{"count", model.nsuture()}, {"tied_length_max_m", tied}, {"length_max_m", length}, {"tension_max_N", tension}};
+  return tension;
+}
+
+nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t, double tension_peak) {
+  double tied = 0, length = 0;
+  for (int32_t s = model.first_suture(); s < model.nspring(); ++s) {
+    const Suture& u = model.suture_of_spring(s);
+    tied = std::max(tied, u.length);
+    length = std::max(length, (x[u.ends[1]] - x[u.ends[0]]).norm());
+  }
+  return {{"count", model.nsuture()},
+          {"tied_length_max_m", tied},
+          {"length_max_m", length},
+          {"tension_end_N", suture_tension_max(model, x, t)},
+          {"tension_max_N", tension_peak}};
 }
 
 TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)

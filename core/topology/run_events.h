@@ -17,10 +17,15 @@
 
 namespace organsim {
 
+// The largest suture tension k max(0, L - r(t)) (the damper left out) at
+// positions x and time t, N; 0 without sutures.
+double suture_tension_max(const Model& model, const std::vector<Vec3>& x, double t);
+
 // meta.sutures of the force log at the end of a run: how many, their longest
-// rest length when tied and their longest length and largest tension
-// k max(0, L - r(t)) now (the damper left out), at positions x and time t.
-nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t);
+// rest length when tied, their longest length and largest tension now (at
+// positions x and time t), and `tension_peak`, the largest tension the run
+// saw at the end of any tick.
+nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t, double tension_peak);
 
 class TopologyEvents {
  public:

@@ -31,6 +31,7 @@ void write_scenario(const fs::path& path, double young, double nu) {
        {{"shape", "sphere"}, {"radius", 0.005}, {"contact_stiffness", 2000}, {"mode", "pull"},
         {"grasp_radius", 0.012}, {"grasp_time", 0},
         {"keyframes", {{{"t", 0.0}, {"position", {0.02, 0.02, 0.04}}}, {{"t", 0.1}, {"position", {0.022, 0.02, 0.038}}}}}}},
+      {"backend", {{"threads", 1}}},  // no thread timing in each of the fit's many runs
       {"outputs", {{"forces", true}}}};
   std::ofstream(path) << s.dump(2);
 }

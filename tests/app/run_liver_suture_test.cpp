@@ -1,6 +1,7 @@
 // scenarios/liver_suture.json through the CLI (meshing, frames and contact
 // sheet included): the liver_cut blade opens the lobe, sutures tied along the
-// cut at 0.2 s close it, meta.events and meta.sutures say so, --plan lists them.
+// cut at 0.2 s close it without pulling harder than the tissue needs,
+// meta.events and meta.sutures say so, --plan lists them.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -40,10 +41,15 @@ TEST(RunLiverSuture, SuturesAlongTheCutCloseIt) {
   const double opening = sutures["tied_length_max_m"];
   EXPECT_GT(opening, 5e-3);
   EXPECT_LT(sutures["length_max_m"].get<double>(), 0.1 * opening);
-  // Bounded: no suture pulls harder than its stiffness times the opening it
-  // was tied across (what it would pull if the tissue did not follow), 17 N;
-  // measured 0.05 N at the end, on the lobe's weight.
-  EXPECT_LT(sutures["tension_max_N"].get<double>(), 1000 * opening);
+  // Bounded at every tick, not only at the end: tightening at 5 cm/s, the
+  // tissue follows, and the largest tension any suture reached at the end of
+  // a tick was 0.20 N (0.05 N at the end, on the lobe's weight; the run is
+  // deterministic). 0.4 N is twice that and a fortieth of what a suture
+  // pulls when the tissue does not follow (its stiffness times the opening,
+  // 17 N): sutures tightening 10 times faster than the tissue follows reach
+  // 0.46 N.
+  EXPECT_LE(sutures["tension_end_N"].get<double>(), sutures["tension_max_N"].get<double>());
+  EXPECT_LT(sutures["tension_max_N"].get<double>(), 0.4);
   const auto sheet = test::slurp(dir / "out" / "contact_sheet.png");
   ASSERT_GT(sheet.size(), 8u);
   EXPECT_EQ(sheet.substr(1, 3), "PNG");

@@ -31,7 +31,7 @@ TEST(StudyCli, GentlePushStudy) {
   std::string output;
   const int code = run("study " + std::string(ORGANSIM_SOURCE_DIR) +
                            "/scenarios/stress/gentle_push.json --dt 0.002,0.0005,0.00025 --precision double,float "
-                           "--duration 0.1 -o " + out.string(),
+                           "--duration 0.1 --threads 1 -o " + out.string(),
                        output);
   ASSERT_EQ(code, 0) << output;
   for (const char* f : {"study.json", "study.csv", "study.png"}) EXPECT_TRUE(fs::exists(out / f)) << f;
@@ -83,7 +83,7 @@ TEST(StudyCli, ConfigurationAboveTheCriticalStepIsReportedUnstableWithItsReason)
   std::ofstream(out / "long_tick.json") << scenario.dump(2);
   std::string output;
   const int code = run("study " + (out / "long_tick.json").string() +
-                           " --dt 0.002,0.0005 --precision double --duration 0.2 -o " + out.string(),
+                           " --dt 0.002,0.0005 --precision double --duration 0.2 --threads 1 -o " + out.string(),
                        output);
   ASSERT_EQ(code, 0) << output;
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(out / "study.json"));

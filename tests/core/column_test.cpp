@@ -22,7 +22,7 @@ TEST(HangingColumn, ChainSettlesToAnalyticElongation) {
   for (int i = 0; i + 1 < n; ++i) springs.push_back({i, i + 1});
   Model model = testing::make_spring_model(points, std::vector<double>(n, m), springs, k, 0.0, {0}, Vec3(0, 0, -g));
   model.viscous_damping = 22;  // 1/s: about critical for the lowest mode (11 rad/s)
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   testing::run_ticks(*backend, 3000, 1e-4, 10);  // 3 s
   std::vector<Vec3> pos;
   backend->positions(pos);
@@ -96,7 +96,7 @@ TEST(HangingColumn, TetColumnMatchesLinearStatics) {
   const Model model = build_model(mesh, material, options);
   const std::vector<Vec3> expected = linear_static_sag(model);
 
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   testing::run_ticks(*backend, 500, 2e-5, 50);  // 0.5 s
   std::vector<Vec3> pos;
   backend->positions(pos);

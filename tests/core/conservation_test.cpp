@@ -42,7 +42,7 @@ TEST(Conservation, FreeModelKeepsMomentumAndCentreOfMassPath) {
     x[i] += 1e-3 * Vec3(noise(rng), noise(rng), noise(rng));  // deformed
     x_prev[i] = x[i] - dt * Vec3(0.1 + 0.05 * noise(rng), 0.05 * noise(rng), 0.05 * noise(rng));  // moving
   }
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   backend->set_state(x, x_prev);
   const Vec3 p0 = momentum(model, x, x_prev, dt);
   const Vec3 c0 = centre_of_mass(model, x);
@@ -66,7 +66,7 @@ TEST(Conservation, FreeModelKeepsMomentumAndCentreOfMassPath) {
 
 TEST(Conservation, ModelAtRestStaysAtRest) {
   const Model model = free_box_model(20000, 1.0);
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   testing::run_ticks(*backend, 50, 1e-4, 10);
   std::vector<Vec3> x;
   backend->positions(x);

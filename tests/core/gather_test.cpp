@@ -45,7 +45,7 @@ TEST(Gather, OneStepMatchesNaiveScatter) {
     }
     std::vector<Vec3> force;
     reference_internal_forces(model, x, v, force);
-    auto backend = make_cpu_backend(model, {});
+    auto backend = make_cpu_backend(model, {}, testing::one_thread());
     backend->set_state(x, x_prev);
     testing::run_ticks(*backend, 1, dt, 1);
     std::vector<Vec3> after;

@@ -19,7 +19,7 @@ struct Oscillation {
 Oscillation simulate(double k, double m, double d, double amplitude, double dt, double duration) {
   const double rest = 0.1;
   Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, -rest)}, {m, m}, {{0, 1}}, k, d, {0});
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   const std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0, 0, -rest - amplitude)};
   backend->set_state(x, x);
   Oscillation out;
@@ -89,7 +89,7 @@ TEST(SpringMass, ViscousDragDecaysAtHalfAlpha) {
   const double k = 10, m = 0.01, alpha = 4.0, rest = 0.1, amplitude = 0.01;
   Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, -rest)}, {m, m}, {{0, 1}}, k, 0, {0});
   model.viscous_damping = alpha;
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   const std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0, 0, -rest - amplitude)};
   backend->set_state(x, x);
   const double period = 2 * std::numbers::pi / std::sqrt(k / m);
@@ -106,7 +106,7 @@ TEST(SpringMass, ViscousDragDecaysAtHalfAlpha) {
 TEST(SpringMass, CoincidentPointsGiveNoNaN) {
   // A spring whose ends coincide has no direction: it must give no force, not NaN.
   Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, 0.1)}, {1, 1}, {{0, 1}}, 10, 0.1, {});
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   const std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0, 0, 0)};
   backend->set_state(x, x);
   testing::run_ticks(*backend, 10, 1e-3, 1);

@@ -60,7 +60,7 @@ Model sagging_box() {
 TEST(StabilityBlowup, StableSagIsQuiet) {
   const Model model = sagging_box();
   const StabilityReport r = estimate_critical_step(model);
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   BlowupMonitor monitor({}, {0.9 * r.dt_crit, 0, 0, r});
   const int substeps = 10;
   const int ticks = static_cast<int>(0.3 / (0.9 * r.dt_crit * substeps));
@@ -74,7 +74,7 @@ TEST(StabilityBlowup, StableSagIsQuiet) {
 TEST(StabilityBlowup, UnstableStepIsStoppedEarly) {
   const Model model = testing::stability_box(3, 0.03, testing::undamped_material());
   const StabilityReport r = estimate_critical_step(model);
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   std::vector<Vec3> x = model.rest_position;
   for (int32_t i = 0; i < model.npoint(); ++i)
     if (!model.fixed[i]) x[i] += 1e-9 * Vec3(std::sin(i), std::cos(3 * i), std::sin(7 * i));
@@ -148,7 +148,7 @@ TEST(StabilityBlowup, RunLoopWritesTruncatedLog) {
   s.time.dt = 1.5 * r.dt_crit;
   s.time.substeps = 5;
   s.time.duration = 400 * s.time.tick();
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   // The rest state is exactly force-free: seed the unstable mode.
   std::vector<Vec3> x = model.rest_position;
   for (int32_t i = 0; i < model.npoint(); ++i)

@@ -36,7 +36,7 @@ inline Material undamped_material(double young = 3000, double volume_modulus = 0
 // True when a perturbation of relative size 1e-6 of the model's extent grows
 // by 1e4 (or turns non-finite) within `steps` steps of dt.
 inline bool perturbation_grows(const Model& model, double dt, int steps = 3000) {
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, one_thread());
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   const double scale = 1e-6 * (model.rest_position.front() - model.rest_position.back()).norm();
@@ -57,16 +57,6 @@ inline bool perturbation_grows(const Model& model, double dt, int steps = 3000) 
     }
   }
   return false;
-}
-
-// The smallest dt at which the perturbation grows, by bisection between
-// `stable` and `unstable` to a relative width of `tolerance`.
-inline double empirical_threshold(const Model& model, double stable, double unstable, double tolerance = 2e-3) {
-  while (unstable - stable > tolerance * stable) {
-    const double mid = 0.5 * (stable + unstable);
-    (perturbation_grows(model, mid) ? unstable : stable) = mid;
-  }
-  return 0.5 * (stable + unstable);
 }
 
 }  // namespace organsim::testing

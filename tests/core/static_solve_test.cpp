@@ -56,7 +56,7 @@ TEST_P(StaticSolveRelaxed, MatchesTheCpuBackendRelaxedUnderGravity) {
   for (int32_t p = 0; p < model.npoint(); ++p) problem.load[p] = model.mass[p] * options.gravity;
   const StaticSolution s = solve_static(model, problem);
 
-  auto backend = make_cpu_backend(model, BackendTool{}, {});
+  auto backend = make_cpu_backend(model, BackendTool{}, testing::one_thread());
   testing::run_ticks(*backend, 1000, 2e-4, 10);  // 2 s: the slowest mode decays by e^-50
   std::vector<Vec3> x;
   backend->positions(x);

@@ -4,6 +4,7 @@
 // pass unchanged.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 
 #include "core/mesh/example_shapes.h"
@@ -30,9 +31,30 @@ TEST(SurfaceLimits, OrganSizedSurfacesPassAndReportTheirDiagonal) {
   // sqrt(3) * 0.1 exactly up to rounding: the diagonal of the tet's bounding box.
   EXPECT_NEAR(check_surface_limits(tetrahedron(0.1), "s.off"), std::sqrt(3.0) * 0.1, 1e-15);
   EXPECT_GT(check_surface_limits(make_liver_surface(2), "liver.off"), 0.1);
-  // The limits themselves are inclusive.
-  EXPECT_NO_THROW(check_surface_limits(tetrahedron(kMaxSurfaceSize / std::sqrt(3.0) * 0.999), "s.off"));
-  EXPECT_NO_THROW(check_surface_limits(tetrahedron(kMinSurfaceSize / std::sqrt(3.0) * 1.001), "s.off"));
+}
+
+// A closed tetrahedron whose bounding-box diagonal, as check_surface_limits
+// computes it (std::hypot of the extent), is exactly `diagonal`: legs
+// (L, side, side) with L stepped by one ulp at a time to the value that
+// rounds to it (each ulp of L moves the diagonal by about one ulp).
+TriangleMesh tetrahedron_with_diagonal(double diagonal, double side) {
+  double leg = std::sqrt(diagonal * diagonal - 2 * side * side);
+  for (int i = 0; i < 64 && std::hypot(leg, side, side) != diagonal; ++i)
+    leg = std::nextafter(leg, std::hypot(leg, side, side) < diagonal ? INFINITY : 0.0);
+  EXPECT_EQ(std::hypot(leg, side, side), diagonal);
+  return {{{0, 0, 0}, {leg, 0, 0}, {0, side, 0}, {0, 0, side}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}};
+}
+
+// The limits themselves are inclusive: a diagonal of exactly the limit
+// passes, one ulp beyond it is refused.
+TEST(SurfaceLimits, SizesAtTheLimitsPassAndOneUlpBeyondAreRefused) {
+  for (const double limit : {kMinSurfaceSize, kMaxSurfaceSize}) {
+    SCOPED_TRACE(limit);
+    const double side = 0.3 * limit;
+    EXPECT_NO_THROW(check_surface_limits(tetrahedron_with_diagonal(limit, side), "s.off"));
+    const double beyond = std::nextafter(limit, limit == kMaxSurfaceSize ? INFINITY : 0.0);
+    EXPECT_NE(refusal(tetrahedron_with_diagonal(beyond, side)).find(" m across"), std::string::npos);
+  }
 }
 
 TEST(SurfaceLimits, AbsurdSizesAreRefusedWithTheSize) {

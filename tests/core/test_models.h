@@ -8,8 +8,15 @@
 #include "core/model/model.h"
 #include "core/model/model_rebuild.h"
 #include "core/sim/backend.h"
+#include "core/sim/cpu_backend.h"
 
 namespace organsim::testing {
+
+// One CPU thread, for tests whose subject is not the thread count: results
+// are bit-identical on any count, and the automatic choice times both counts
+// at construction and re-times them during a run, which on a loaded shared
+// machine costs more than the test itself.
+inline CpuBackendOptions one_thread() { return {Precision::Double, 1}; }
 
 // The bottom face (z <= 0) held, with gravity and a chunk size.
 inline ModelOptions fixed_bottom_options(const Vec3& gravity = Vec3::Zero(), int32_t chunk = kDefaultChunkSize) {

@@ -39,7 +39,7 @@ TEST(Volume, CompressedTetPushesBackAlongVolumeGradient) {
   EXPECT_NEAR(expected[apex].y(), 0, 1e-12);
 
   // The backend applies the same force: one step from rest, x_next - x = dt^2 F / m.
-  auto backend = make_cpu_backend(model, {});
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
   backend->set_state(x, x);
   const double dt = 1e-5;
   testing::run_ticks(*backend, 1, dt, 1);
@@ -71,7 +71,7 @@ double squeezed_volume_error(double volume_modulus) {
   options.fixed.push_back(base);
   const Model model = build_model(mesh, material, options);
   BackendTool tool{true, ToolMode::Push, 2 * size, 2000};
-  auto backend = make_cpu_backend(model, tool);
+  auto backend = make_cpu_backend(model, tool, testing::one_thread());
   const Vec3 start(size / 2, size / 2, size + 2 * size), end = start - Vec3(0, 0, 0.15 * size);
   TickRequest request;
   request.dt = 2e-5;

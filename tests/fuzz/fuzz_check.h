@@ -14,8 +14,10 @@
 
 namespace organsim::fuzz {
 
+#ifdef ORGANSIM_FUZZ_EXTENSION
 // The file name every harness reads its input as: "fuzz" + the row's extension.
 inline const std::string kSource = std::string("fuzz") + ORGANSIM_FUZZ_EXTENSION;
+#endif
 
 inline std::string_view as_text(const uint8_t* data, size_t size) {
   return {reinterpret_cast<const char*>(data), size};
@@ -31,9 +33,9 @@ inline void require(bool ok, const std::string& what) {
 }
 
 // A clean error names the file first ("fuzz.off: line 3: ...").
-inline void require_names_file(const Error& e) {
+inline void require_names_file(const Error& e, const std::string& source) {
   const std::string message = e.what();
-  require(message.rfind(kSource + ": ", 0) == 0, "error message does not start with the file name: " + message);
+  require(message.rfind(source + ": ", 0) == 0, "error message does not start with the file name: " + message);
 }
 
 inline void require_valid_surface(const TriangleMesh& mesh) {

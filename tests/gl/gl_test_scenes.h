@@ -180,8 +180,10 @@ struct FinalState final : RunObserver {
   void on_finish(const Model&, Backend& backend) override { backend.positions(x); }
 };
 
-// The same scenario run on the double CPU reference (one thread) and on GL,
-// each observed by a FinalState; outputs under ORGANSIM_TEST_TMP/name_{cpu,gl}.
+// The same scenario run on the double CPU reference (one thread) and on GL
+// (with `threads_per_point` invocations per point, 0: the backend's
+// default), each observed by a FinalState; outputs under
+// ORGANSIM_TEST_TMP/name_{cpu,gl}.
 struct CpuAndGlRuns {
   RunResult cpu, gl;
   FinalState cpu_end, gl_end;
@@ -193,10 +195,13 @@ struct CpuAndGlRuns {
     return worst / scale;
   }
 };
-inline CpuAndGlRuns run_on_cpu_and_gl(const Scenario& s, const Model& model, const std::string& name) {
+inline CpuAndGlRuns run_on_cpu_and_gl(const Scenario& s, const Model& model, const std::string& name,
+                                      int32_t threads_per_point = 0) {
   CpuAndGlRuns r;
   auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
-  GlBackend gl(model, backend_tool(s), {});
+  GlBackendOptions gl_options;
+  gl_options.threads_per_point = threads_per_point;
+  GlBackend gl(model, backend_tool(s), gl_options);
   r.gl_latency = gl.reaction_latency_ticks();
   RunOptions options;
   options.outdir = std::filesystem::path(ORGANSIM_TEST_TMP) / (name + "_cpu");

@@ -41,12 +41,15 @@ struct Comparison {
 
 // Runs both backends through the same ticks. The GL reaction of tick n is
 // returned by tick n+1 (latency 1), so it is compared with the CPU's tick n.
+// GL runs with `threads_per_point` invocations per point (0: the backend's default).
 Comparison compare(const Model& model, const BackendTool& tool, const std::function<TickRequest(int)>& request_at,
-                   const Attachment* attachment = nullptr) {
+                   const Attachment* attachment = nullptr, int32_t threads_per_point = 0) {
   // One thread: the machine is shared and OpenMP spinning under load is slow.
   auto cpu = make_cpu_backend(model, tool, {Precision::Double, 1});
 
-  GlBackend gl(model, tool, {});
+  GlBackendOptions options;
+  options.threads_per_point = threads_per_point;
+  GlBackend gl(model, tool, options);
   EXPECT_EQ(cpu->reaction_latency_ticks(), 0);
   EXPECT_EQ(gl.reaction_latency_ticks(), 1);
   if (attachment) {
@@ -91,22 +94,29 @@ TickRequest tool_request(int n, const Vec3& start, const Vec3& end) {
   return r;
 }
 
+// With one invocation per point (llvmpipe's default) and with 8 (a GPU's):
+// the trajectory, not only one substep's force (kernel_test.cpp), with each
+// point's gathers split over the invocations.
 TEST(GlParity, PushMatchesTheDoubleReference) {
   // Volume, gravity, fixed bottom; a 2 cm sphere pressed 1.5 cm into the top.
   const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
   const BackendTool tool{true, ToolMode::Push, 0.02, 200.0};
   const Vec3 start(0.05, 0.05, 0.072), end(0.05, 0.05, 0.055);
-  const Comparison c = compare(model, tool, [&](int n) { return tool_request(n, start, end); });
-  std::cout << "push: position " << c.position << " of diagonal, force " << c.force << " of peak " << c.peak_force
-            << " N, " << c.max_contacts << " contacts, " << c.dispatches << " dispatches, " << c.blocked
-            << " blocked readbacks\n";
-  ASSERT_GT(c.max_contacts, 3);
-  ASSERT_GT(c.peak_force, 0.1);
-  EXPECT_LT(c.position, 1e-5);
-  EXPECT_LT(c.force, 1e-4);
-  // One fused dispatch per substep plus one reduction per tick (the extra
-  // one-substep tick that fetches the last reaction adds 2).
-  EXPECT_EQ(c.dispatches, kTicks * (kSubsteps + 1) + 2);
+  for (const int32_t threads_per_point : {1, 8}) {
+    SCOPED_TRACE(std::to_string(threads_per_point) + " invocation(s) per point");
+    const Comparison c =
+        compare(model, tool, [&](int n) { return tool_request(n, start, end); }, nullptr, threads_per_point);
+    std::cout << "push, " << threads_per_point << " invocation(s) per point: position " << c.position
+              << " of diagonal, force " << c.force << " of peak " << c.peak_force << " N, " << c.max_contacts
+              << " contacts, " << c.dispatches << " dispatches, " << c.blocked << " blocked readbacks\n";
+    ASSERT_GT(c.max_contacts, 3);
+    ASSERT_GT(c.peak_force, 0.1);
+    EXPECT_LT(c.position, 1e-5);
+    EXPECT_LT(c.force, 1e-4);
+    // One fused dispatch per substep plus one reduction per tick (the extra
+    // one-substep tick that fetches the last reaction adds 2).
+    EXPECT_EQ(c.dispatches, kTicks * (kSubsteps + 1) + 2);
+  }
 }
 
 // Above 4,096 points there are more than 64 chunks, so the reduction's 64

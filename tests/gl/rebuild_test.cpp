@@ -26,6 +26,9 @@ void run(Backend& backend, int ticks) {
 TEST(GlRebuild, IdentityRebuildKeepsTheTrajectory) {
   const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
   const Model same = rebuild_model(model, {model.tet_points, {}});
+  Model frozen = same;  // the same topology with every point fixed (1/m = 0)
+  std::fill(frozen.fixed.begin(), frozen.fixed.end(), 1);
+  std::fill(frozen.inv_mass.begin(), frozen.inv_mass.end(), 0.0);
   GlBackend straight(model, {}, {}), rebuilt(model, {}, {});
   run(straight, 20);
   run(rebuilt, 10);
@@ -38,6 +41,13 @@ TEST(GlRebuild, IdentityRebuildKeepsTheTrajectory) {
   // The same float buffers and the same dispatches: the state read back and
   // re-uploaded is exact, so nothing may differ.
   for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << "point " << i;
+  // A rebuild that did nothing would pass that too: rebuilt into `frozen`,
+  // no point may move any more.
+  rebuilt.rebuild(frozen);
+  run(rebuilt, 5);
+  std::vector<Vec3> c;
+  rebuilt.positions(c);
+  EXPECT_EQ(c, b);
 }
 
 // Hanging under gravity, fixed at its base, cut through the middle at 20 ms:

@@ -53,6 +53,16 @@ TEST(GlSuture, TensionOnlySuturesOnTheirScheduleMatchTheReference) {
   }
   EXPECT_LT(err, 1e-5 * scale);
   EXPECT_GT(schedule, 0.1 * scale);  // the schedule changes the forces: the test can tell
+  // Both kinds are at this state, so a suture that pushed while slack, or
+  // one that never pulled, would be seen: some are longer than their rest
+  // length at t = 0 (they pull), some shorter (slack: no force).
+  int taut = 0, slack = 0;
+  for (int32_t s = model.first_suture(); s < model.nspring(); ++s) {
+    const Edge& e = model.spring_ends[s];
+    ((state.x[e[1]] - state.x[e[0]]).norm() > model.spring_rest_at(s, 0.0) ? taut : slack) += 1;
+  }
+  EXPECT_GT(taut, 0);
+  EXPECT_GT(slack, 0);
 }
 
 // The beam of tests/core/suture_test_util.h, cut at 0-10 ms and sutured at
