@@ -22,6 +22,7 @@ rm -rf "$work"
 mkdir -p "$work"
 # Sockets need a short path (108 bytes); the daemons' files live in /tmp.
 run=$(mktemp -d /tmp/organsim-slurm.XXXXXX)
+chmod 755 "$run"  # munged refuses a socket folder others cannot traverse
 mkdir -p "$run/munge" "$run/state" "$run/spool" "$run/log"
 pids=()
 stop_cluster() {
