@@ -110,6 +110,11 @@ done
 logs=$(ls "$work/slurm/slurm/" | wc -l)
 [ "$logs" = 3 ] || fail "expected 3 array task logs in $work/slurm/slurm, found $logs"
 for f in "$work"/slurm/slurm/*.out; do echo "--- $f"; cat "$f"; done
+# Each task ran its own slice: 2 of the 6 cases, shards 0/3, 1/3 and 2/3.
+for i in 0 1 2; do
+  grep -q "shard $i/3: 2 cases; 0 done, 0 failed (skipped), 2 to run" "$work"/slurm/slurm/*_$i.out \
+    || fail "array task $i did not run shard $i/3 with 2 cases"
+done
 
 "$organsim" sweep --collect "$work/slurm" || fail "collect: some cases are not done"
 "$organsim" sweep "$work/sweep.json" -o "$work/local" >"$work/local.txt" || fail "the local sweep failed: $(cat "$work/local.txt")"
