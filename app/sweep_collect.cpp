@@ -87,7 +87,7 @@ void write_results_plot(const fs::path& path, const Sweep& plan, const nlohmann:
   XyPlotOptions plot;
   plot.title = o.plot_y + " against " + x;
   plot.x_label = x;
-  plot.y_label = o.plot_y;
+  plot.y_label = figure_label(o.plot_y);
   write_xy_plot(path, lines, plot);
   std::cout << "plot:     " << path.string() << " (" << plot.title << ")\n";
 }

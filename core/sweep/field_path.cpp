@@ -65,6 +65,10 @@ void set_field(nlohmann::json& root, const std::string& path, const nlohmann::js
     if (!walked.empty()) walked += '.';
     walked += step.key;
     const bool last = s + 1 == steps.size();
+    if (last && step.indices.empty() && value.is_null()) {
+      at->erase(step.key);  // null removes the field (e.g. mesh.tet to give mesh.surface instead)
+      return;
+    }
     if (!at->contains(step.key)) {
       if (!step.indices.empty())
         throw path_error(path, walked + " is not in the base scenario, so it has no element to index");

@@ -18,7 +18,8 @@ struct FieldStep {
 // Throws Error(Scenario, "PATH: <what is wrong>") for a malformed path.
 std::vector<FieldStep> parse_field_path(const std::string& path);
 
-// Sets the field at `path` in `root` to `value`. A missing key is added (the
+// Sets the field at `path` in `root` to `value`; a null value removes a
+// field (not an array element). A missing key is added (the
 // scenario parser then refuses a key it does not know, naming it), and so are
 // missing objects on the way; an index must name an existing array element.
 // Throws Error(Scenario, "PATH: <what is wrong>") when the path does not fit

@@ -5,9 +5,9 @@
 //   OUTDIR/manifest.json  the plan merged with every case's status.json.
 // Each case runs in OUTDIR/cases/<name>/ from its scenario.json there.
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <vector>
-#include <nlohmann/json.hpp>
 
 #include "core/sweep/case_status.h"
 #include "core/sweep/sweep_spec.h"

@@ -12,6 +12,12 @@ namespace fs = std::filesystem;
 
 std::string force_at_name(double t) { return "force_at_" + nlohmann::json(t).dump(); }
 
+std::string figure_label(const std::string& figure) {
+  if (figure == "peak_force" || figure.rfind("force_at_", 0) == 0) return figure + " (N)";
+  if (figure == "peak_force_t" || figure == "dt_crit" || figure == "wall_seconds") return figure + " (s)";
+  return figure;
+}
+
 nlohmann::json force_log_figures(const nlohmann::json& log, const std::vector<double>& at_times) {
   const nlohmann::json& meta = log.at("meta");
   const nlohmann::json& t = log.at("samples").at("t");

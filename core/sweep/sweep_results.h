@@ -22,6 +22,9 @@ nlohmann::json force_log_figures(const nlohmann::json& log, const std::vector<do
 // "force_at_0.1" for t = 0.1: the column name of a force_at figure.
 std::string force_at_name(double t);
 
+// A figure's name with its unit for axis labels: "peak_force (N)".
+std::string figure_label(const std::string& figure);
+
 // One entry per case of the plan (with its record): name, status,
 // overrides, figures, timing, error.
 nlohmann::json results_json(const Sweep& plan, const std::vector<CaseRecord>& records,

@@ -110,6 +110,10 @@ TEST(SweepResults, FiguresOfAForceLog) {
   EXPECT_FALSE(f[force_at_name(0.0044)].is_null());  // within half a tick of the last
   EXPECT_EQ(f["dt_crit"], 0.0005);
   EXPECT_EQ(f["samples"], 4);
+  EXPECT_EQ(figure_label("peak_force"), "peak_force (N)");
+  EXPECT_EQ(figure_label(force_at_name(0.1)), "force_at_0.1 (N)");
+  EXPECT_EQ(figure_label("dt_crit"), "dt_crit (s)");
+  EXPECT_EQ(figure_label("real_time_factor"), "real_time_factor");
 }
 
 // A run that exited 0 is done only with a complete force log.

@@ -113,6 +113,17 @@ TEST(SweepSpec, CasesTimesGridAndZipPairs) {
   EXPECT_EQ(c["time"]["duration"], 0.01);  // "set" reaches every case, not the names
 }
 
+TEST(SweepSpec, NullRemovesAFieldSoACaseCanSwitchTheMeshKind) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "sweep_spec" / "mesh_kind";
+  fs::create_directories(dir);
+  fs::copy_file(fs::path(ORGANSIM_SOURCE_DIR) / "examples/box.off", dir / "box.off",
+                fs::copy_options::overwrite_existing);
+  const Sweep s = load("mesh_kind", R"("cases": [{"name": "meshed", "mesh.tet": null, "mesh.surface": "box.off"}])");
+  const nlohmann::json c = scenario_of(s.cases[0]);
+  EXPECT_FALSE(c["mesh"].contains("tet"));
+  EXPECT_EQ(fs::path(c["mesh"]["surface"].get<std::string>()), fs::absolute(dir / "box.off"));
+}
+
 TEST(SweepSpec, MeshFileInASweepIsRelativeToTheSweepFile) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "sweep_spec" / "mesh_relative";
   fs::create_directories(dir);
@@ -190,6 +201,8 @@ TEST(FieldPath, SetsExistingAndNewFields) {
   EXPECT_EQ(j["a"]["b"][2], 9);
   EXPECT_EQ(j["a"]["c"], "x");
   EXPECT_EQ(j["d"]["e"], true);
+  set_field(j, "a.c", nullptr);  // null removes
+  EXPECT_FALSE(j["a"].contains("c"));
   EXPECT_THROW(set_field(j, "a.b[3]", 1), Error);
   EXPECT_THROW(set_field(j, "a.c[0]", 1), Error);
   EXPECT_THROW(parse_field_path("a[x]"), Error);
