@@ -217,7 +217,8 @@ const bool registered = register_command("sweep", 46, [](CLI::App& root) {
                   "Write OUTDIR's manifest.json, results.json, results.csv and results.png from the cases' outputs");
   cmd->add_option("--at", args->collect_options.at_times,
                   "Times [s] for force_at_<t> figures (|F| of the nearest sample)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->allow_extra_args(false);  // one value per --at: `--at 0.1 s.json` leaves s.json alone
   cmd->add_option("--plot-x", args->collect_options.plot_x,
                   "Swept field on the plot's x axis (default: the first whose values are all numbers)");
   cmd->add_option("--plot-y", args->collect_options.plot_y, "Figure on the plot's y axis (default peak_force)");
@@ -236,7 +237,8 @@ const bool registered = register_command("sweep", 46, [](CLI::App& root) {
   cmd->add_option("--time", args->slurm_options.time, "With --slurm: time limit per array task (default 01:00:00)");
   cmd->add_option("--partition", args->slurm_options.partition, "With --slurm: partition (default: the cluster's)");
   cmd->add_option("--slurm-setup", args->slurm_options.setup,
-                  "With --slurm: a shell line the tasks run first, e.g. 'module load gcc/12'; repeatable");
+                  "With --slurm: a shell line the tasks run first, e.g. 'module load gcc/12'; repeatable")
+      ->allow_extra_args(false);
   cmd->callback([args] { run_sweep(*args); });
 });
 
