@@ -8,7 +8,7 @@ root=$(cd "${1:-$(dirname "$0")/..}" && pwd)
 cd "$root"
 
 # Lowest first. core/<folder> by folder name; meshing/ and app/ by their own.
-layers=(util mesh physics model sim scenario stability topology io validation fit run gl render meshing app)
+layers=(util mesh physics model sim scenario stability topology io validation fit run sweep gl render meshing app)
 declare -A rank
 for i in "${!layers[@]}"; do rank[${layers[$i]}]=$i; done
 

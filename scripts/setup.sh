@@ -16,6 +16,9 @@ packages=(
   # VTK itself (Python bindings, run as /usr/bin/python3): tests read the
   # .vtu/.vtp/.pvd files we write with it and read files it writes.
   python3-vtk9
+  # A one-node Slurm cluster for the sweep's job-array test (tests/slurm):
+  # the daemons and sbatch, and munge, which signs Slurm's messages.
+  slurm-wlm munge
   # Fuzzing (scripts/fuzz.sh): clang's libFuzzer runtime and its OpenMP.
   clang-14 libclang-rt-14-dev libomp-14-dev
 )

@@ -28,6 +28,16 @@ std::filesystem::path resolve(const std::string& path, const std::filesystem::pa
   return p.lexically_normal();
 }
 
+}  // namespace
+
+const std::vector<std::string>& scenario_file_fields() {
+  // Every field parse_mesh passes to resolve(); keep the two in step.
+  static const std::vector<std::string> fields{"mesh.surface", "mesh.tet"};
+  return fields;
+}
+
+namespace {
+
 MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::filesystem::path& base_dir) {
   ObjectReader r(j, at);
   MeshDef mesh;

@@ -13,6 +13,8 @@ enum class ErrorKind {
   Numerical = 5,    // unstable step refused, blow-up detected during a run
   Backend = 6,      // GL/EGL context or shader failure
   Output = 7,       // cannot write an output
+  Cases = 8,        // organsim sweep: some cases failed (each is recorded)
+  Interrupted = 130,  // organsim sweep: stopped by SIGINT/SIGTERM; unfinished cases stay pending
 };
 
 class Error : public std::runtime_error {

@@ -1,0 +1,313 @@
+// `organsim sweep` end to end on the 125-point box of gentle_push.json, 50
+// ticks per case: a failing case is recorded while the others finish and
+// --retry-failed reruns only it; a sweep interrupted by SIGINT and rerun
+// equals an uninterrupted one; shards 0/3, 1/3, 2/3 collected equal the
+// local run, force logs byte for byte.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+
+#include "tests/app/run_cli_test_util.h"
+
+extern char** environ;
+
+namespace organsim::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path tmp(const std::string& name) { return fs::path(ORGANSIM_TEST_TMP) / "sweep" / name; }
+
+// Six cases (3 stiffnesses x 2 push depths) of 50 ticks on the box; with
+// `unstable`, a seventh whose dt is above dt_crit (1.37 ms), which `run`
+// refuses with exit 5.
+fs::path write_sweep(const fs::path& dir, bool unstable = false) {
+  fs::create_directories(dir);
+  nlohmann::json j = {
+      {"scenario", std::string(ORGANSIM_SOURCE_DIR) + "/scenarios/stress/gentle_push.json"},
+      {"set", {{"time.duration", 0.05}, {"tool.keyframes[1].t", 0.05}}},
+      {"grid", {{"material.young_modulus", {4000, 6000, 8000}}, {"tool.keyframes[1].position[2]", {0.046, 0.044}}}}};
+  if (unstable) {
+    j.erase("grid");
+    j["cases"] = {{{"name", "soft"}, {"material.young_modulus", 4000}},
+                  {{"name", "unstable"}, {"time.dt", 0.002}, {"time.substeps", 1}},
+                  {{"name", "stiff"}, {"material.young_modulus", 8000}}};
+  }
+  std::ofstream(dir / "sweep.json") << j.dump(2);
+  return dir / "sweep.json";
+}
+
+// "sweep 'SWEEP' -o 'OUT' EXTRA" (appended: gcc 12 warns falsely, -Wrestrict, on "literal" + string).
+std::string sweep_cmd(const fs::path& sweep, const fs::path& out, const std::string& extra = "") {
+  std::string s("sweep '");
+  s.append(sweep.string()).append("' -o '").append(out.string()).append("' ").append(extra);
+  return s;
+}
+
+nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(slurp(p)); }
+
+// results.json without the timing (wall time, real-time factor), which
+// differs between any two runs; everything else is a function of the scenarios.
+nlohmann::json results_without_timing(const fs::path& outdir) {
+  nlohmann::json rows = read_json(outdir / "results.json");
+  for (auto& row : rows) row.erase("timing");
+  return rows;
+}
+
+// The force log's samples as written (the meta has the run's timings).
+std::string samples_text(const fs::path& forces) {
+  const std::string text = slurp(forces);
+  const size_t at = text.find("\n \"samples\": {");
+  EXPECT_NE(at, std::string::npos) << forces;
+  return at == std::string::npos ? std::string() : text.substr(at);
+}
+
+void expect_same_sweep(const fs::path& a, const fs::path& b) {
+  const nlohmann::json ra = results_without_timing(a), rb = results_without_timing(b);
+  EXPECT_EQ(ra, rb) << ra.dump(1) << "\n---\n" << rb.dump(1);
+  for (const auto& row : ra) {
+    const std::string name = row["name"];
+    const std::string sa = samples_text(a / "cases" / name / "forces.json");
+    EXPECT_FALSE(sa.empty());
+    EXPECT_TRUE(sa == samples_text(b / "cases" / name / "forces.json")) << name << ": force samples differ";
+  }
+}
+
+// One uninterrupted local sweep that several tests compare against. ctest
+// runs each test in its own process, two at a time: the first to take the
+// lock runs it, the others find it done (a rerun of a finished sweep runs
+// nothing). The folder is per build of organsim, so a rebuilt executable
+// never meets an old reference.
+fs::path reference_sweep() {
+  const auto built = fs::last_write_time(ORGANSIM_EXE).time_since_epoch().count();
+  const fs::path dir = tmp(std::string("reference-").append(std::to_string(built)));
+  fs::create_directories(dir);
+  const int lock = open((dir / "lock").c_str(), O_CREAT | O_RDWR, 0644);
+  EXPECT_GE(lock, 0);
+  flock(lock, LOCK_EX);
+  const fs::path manifest = dir / "out" / "manifest.json";
+  if (!fs::exists(manifest) || read_json(manifest)["counts"]["done"] != 6) {
+    const fs::path sweep = write_sweep(dir);
+    const CliResult r = run_organsim(sweep_cmd(sweep, dir / "out", "--at 0.02,0.05"), dir);
+    EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  }
+  flock(lock, LOCK_UN);
+  close(lock);
+  return dir / "out";
+}
+
+TEST(SweepCli, LocalSweepWritesEveryCaseManifestAndResults) {
+  const fs::path out = reference_sweep();
+  const nlohmann::json manifest = read_json(out / "manifest.json");
+  EXPECT_EQ(manifest["counts"]["done"], 6);
+  EXPECT_EQ(manifest["counts"]["pending"], 0);
+  ASSERT_EQ(manifest["cases"].size(), 6u);
+  EXPECT_EQ(manifest["cases"][0]["name"], "young_modulus=4000,position2=0.046");
+  EXPECT_EQ(manifest["cases"][0]["exit_code"], 0);
+  EXPECT_EQ(manifest["cases"][0]["meta"]["samples"], 50);
+  EXPECT_GT(manifest["cases"][0]["meta"]["dt_crit"].get<double>(), 0.0);
+
+  const nlohmann::json rows = read_json(out / "results.json");
+  ASSERT_EQ(rows.size(), 6u);
+  // Each row's figures come from its own force log.
+  for (const auto& row : rows) {
+    const nlohmann::json log = read_json(out / "cases" / row["name"].get<std::string>() / "forces.json");
+    double peak = 0;
+    for (const auto& f : log["samples"]["force"])
+      peak =
+          std::max(peak, std::sqrt(f[0].get<double>() * f[0].get<double>() + f[1].get<double>() * f[1].get<double>() +
+                                   f[2].get<double>() * f[2].get<double>()));
+    EXPECT_EQ(row["figures"]["peak_force"].get<double>(), peak) << row.dump();
+    EXPECT_EQ(row["figures"]["dt_crit"], log["meta"]["dt_crit"]);
+  }
+  // The physics shows through: a stiffer box and a deeper push give a larger
+  // peak force (same depth, E 4000 -> 8000 Pa; same E, 4 -> 6 mm).
+  EXPECT_GT(rows[4]["figures"]["peak_force"].get<double>(), rows[0]["figures"]["peak_force"].get<double>());
+  EXPECT_GT(rows[1]["figures"]["peak_force"].get<double>(), rows[0]["figures"]["peak_force"].get<double>());
+  EXPECT_FALSE(rows[0]["figures"]["force_at_0.02"].is_null());
+
+  const std::string csv = slurp(out / "results.csv");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "case,status,material.young_modulus,tool.keyframes[1].position[2],peak_force,peak_force_t,force_at_0.02,"
+            "force_at_0.05,dt_crit,completed,stop_reason,samples,real_time_factor,wall_seconds,error");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
+  std::ifstream png(out / "results.png", std::ios::binary);
+  char magic[4] = {};
+  png.read(magic, 4);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+}
+
+TEST(SweepCli, RerunSkipsDoneCases) {
+  const fs::path dir = tmp("rerun");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  fs::copy(reference_sweep(), dir / "out", fs::copy_options::recursive);
+  const fs::path sweep = write_sweep(dir);
+  const std::string before = slurp(dir / "out" / "cases" / "young_modulus=4000,position2=0.046" / "status.json");
+  const CliResult r = run_organsim(sweep_cmd(sweep, dir / "out"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("6 done, 0 failed (skipped), 0 to run"), std::string::npos) << r.out;
+  EXPECT_EQ(slurp(dir / "out" / "cases" / "young_modulus=4000,position2=0.046" / "status.json"), before);
+}
+
+TEST(SweepCli, FailingCaseIsRecordedOthersFinishRetryRerunsOnlyIt) {
+  const fs::path dir = tmp("failing");
+  fs::remove_all(dir);
+  const fs::path sweep = write_sweep(dir, true);
+  const fs::path out = dir / "out";
+  CliResult r = run_organsim(sweep_cmd(sweep, out, "--jobs 2"), dir);
+  EXPECT_EQ(r.exit_code, 8) << r.out << r.err;  // some cases failed
+  EXPECT_NE(r.err.find("1 of 3 cases failed"), std::string::npos) << r.err;
+  const nlohmann::json m = read_json(out / "manifest.json");
+  EXPECT_EQ(m["counts"]["done"], 2);
+  EXPECT_EQ(m["counts"]["failed"], 1);
+  const nlohmann::json& bad = m["cases"][1];
+  EXPECT_EQ(bad["name"], "unstable");
+  EXPECT_EQ(bad["status"], "failed");
+  EXPECT_EQ(bad["exit_code"], 5);  // ErrorKind::Numerical: dt above dt_crit refused
+  EXPECT_NE(bad["error"].get<std::string>().find("dt_crit"), std::string::npos) << bad.dump();
+  EXPECT_EQ(m["cases"][2]["status"], "done");
+
+  const std::string soft_status = slurp(out / "cases" / "soft" / "status.json");
+  const auto unstable_log_time = fs::last_write_time(out / "cases" / "unstable" / "run.log");
+  // Without --retry-failed nothing runs; with it, only the failed case.
+  r = run_organsim(sweep_cmd(sweep, out), dir);
+  EXPECT_EQ(r.exit_code, 8);
+  EXPECT_NE(r.out.find("2 done, 1 failed (skipped; --retry-failed reruns them), 0 to run"), std::string::npos) << r.out;
+  EXPECT_EQ(fs::last_write_time(out / "cases" / "unstable" / "run.log"), unstable_log_time);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a rewritten log gets a later time
+  r = run_organsim(sweep_cmd(sweep, out, "--retry-failed"), dir);
+  EXPECT_EQ(r.exit_code, 8);
+  EXPECT_NE(r.out.find("2 done, 0 failed (skipped), 1 to run"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[1/1] unstable: failed"), std::string::npos) << r.out;
+  EXPECT_GT(fs::last_write_time(out / "cases" / "unstable" / "run.log"), unstable_log_time);
+  EXPECT_EQ(slurp(out / "cases" / "soft" / "status.json"), soft_status);  // not rerun: same wall time recorded
+}
+
+pid_t spawn_organsim(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<std::string> argv{ORGANSIM_EXE};
+  argv.insert(argv.end(), args.begin(), args.end());
+  std::vector<char*> c;
+  for (auto& a : argv) c.push_back(a.data());
+  c.push_back(nullptr);
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_addopen(&files, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&files, 1, 2);
+  pid_t pid = -1;
+  EXPECT_EQ(posix_spawn(&pid, c[0], &files, nullptr, c.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&files);
+  return pid;
+}
+
+int count_status_files(const fs::path& out) {
+  int n = 0;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(out / "cases", ec)) n += fs::exists(e.path() / "status.json");
+  return n;
+}
+
+TEST(SweepCli, InterruptedSweepRerunEqualsAnUninterruptedOne) {
+  const fs::path dir = tmp("interrupted");
+  fs::remove_all(dir);
+  const fs::path sweep = write_sweep(dir);
+  const fs::path out = dir / "out";
+  // One case at a time; SIGINT once two cases are recorded.
+  const pid_t pid = spawn_organsim({"sweep", sweep.string(), "-o", out.string(), "--jobs", "1", "--at", "0.02,0.05"},
+                                   dir / "first.log");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (count_status_files(out) < 2 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  const std::string first = slurp(dir / "first.log");
+  ASSERT_TRUE(WIFEXITED(status)) << first;
+  ASSERT_EQ(WEXITSTATUS(status), 130) << "the sweep finished before the signal; the cases are too short:\n" << first;
+  EXPECT_NE(first.find("interrupted: "), std::string::npos) << first;
+
+  const nlohmann::json m = read_json(out / "manifest.json");
+  const int done = m["counts"]["done"], pending = m["counts"]["pending"];
+  EXPECT_GE(done, 2);
+  EXPECT_GE(pending, 1);
+  EXPECT_EQ(done + pending, 6);
+  // The run stopped mid-case has no status, hence is not done, and left no process.
+  EXPECT_EQ(count_status_files(out), done);
+
+  const CliResult r = run_organsim(sweep_cmd(sweep, out, "--at 0.02,0.05"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find(std::to_string(done) + " done, 0 failed (skipped), " + std::to_string(pending) + " to run"),
+            std::string::npos)
+      << r.out;
+  expect_same_sweep(out, reference_sweep());
+}
+
+TEST(SweepCli, ShardsCollectedEqualTheLocalRun) {
+  const fs::path dir = tmp("shards");
+  fs::remove_all(dir);
+  const fs::path sweep = write_sweep(dir);
+  const fs::path out = dir / "out";
+  for (int i = 0; i < 3; ++i) {
+    const CliResult r = run_organsim(
+        sweep_cmd(sweep, out, std::string("--shard ").append(std::to_string(i)).append("/3")), dir / std::to_string(i));
+    EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find(std::string("shard ").append(std::to_string(i)).append("/3: 2 cases")), std::string::npos)
+        << r.out;
+    EXPECT_FALSE(fs::exists(out / "results.json"));  // shards leave the merging to --collect
+  }
+  const CliResult r =
+      run_organsim(std::string("sweep --collect '").append(out.string()).append("' --at 0.02,0.05"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  expect_same_sweep(out, reference_sweep());
+  EXPECT_EQ(read_json(out / "manifest.json")["counts"]["done"], 6);
+}
+
+TEST(SweepCli, BadShardAndBadSweepRunNothing) {
+  const fs::path dir = tmp("refused");
+  fs::remove_all(dir);
+  const fs::path sweep = write_sweep(dir);
+  CliResult r = run_organsim(sweep_cmd(sweep, dir / "out", "--shard 3/3"), dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--shard: 3/3: shard index 3 out of range 0..2"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+
+  nlohmann::json j = read_json(sweep);
+  j["grid"]["material.young_modulus"][2] = "stiff";
+  std::ofstream(sweep) << j.dump();
+  r = run_organsim(sweep_cmd(sweep, dir / "out"), dir);
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(
+      r.err.find(
+          R"(material.young_modulus: expected a number, got a string (set by grid["material.young_modulus"][2]))"),
+      std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(SweepCli, SlurmScriptForTheSweep) {
+  const fs::path dir = tmp("slurm_script");
+  fs::remove_all(dir);
+  const fs::path sweep = write_sweep(dir);
+  const CliResult r =
+      run_organsim(sweep_cmd(sweep, dir / "out", "--slurm --cases-per-task 2 --max-parallel 2 --time 00:10:00"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string script = slurp(dir / "out" / "sweep.sbatch");
+  EXPECT_NE(script.find("#SBATCH --array=0-2%2\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("--shard slurm"), std::string::npos) << script;
+  EXPECT_TRUE(fs::exists(dir / "out" / "cases.json"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "cases"));  // nothing ran
+}
+
+}  // namespace
+}  // namespace organsim::test

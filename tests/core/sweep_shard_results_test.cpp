@@ -1,0 +1,160 @@
+// Shard slices (local and from a Slurm array task's environment), a
+// finished run's judgement, and the figures collected from a force log.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+
+#include "core/sweep/case_status.h"
+#include "core/sweep/shard.h"
+#include "core/sweep/slurm_script.h"
+#include "core/sweep/sweep_results.h"
+#include "core/util/error.h"
+
+namespace organsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+Shard shard_with(const std::string& spec, const std::map<std::string, std::string>& env) {
+  return parse_shard(spec, [&](const char* name) -> const char* {
+    const auto it = env.find(name);
+    return it == env.end() ? nullptr : it->second.c_str();
+  });
+}
+
+std::string shard_refusal(const std::string& spec, const std::map<std::string, std::string>& env = {}) {
+  try {
+    shard_with(spec, env);
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Usage);
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted " << spec;
+  return {};
+}
+
+TEST(SweepShard, SlicesAreDisjointAndCoverEveryCase) {
+  std::multiset<size_t> taken;
+  for (int i = 0; i < 3; ++i) {
+    const Shard s = shard_with(std::to_string(i) + "/3", {});
+    for (size_t c = 0; c < 10; ++c) {
+      if (s.takes(c)) taken.insert(c);
+    }
+  }
+  ASSERT_EQ(taken.size(), 10u);
+  for (size_t c = 0; c < 10; ++c) EXPECT_EQ(taken.count(c), 1u) << c;
+}
+
+TEST(SweepShard, SlurmEnvironment) {
+  Shard s = shard_with("slurm", {{"SLURM_ARRAY_TASK_ID", "2"}, {"SLURM_ARRAY_TASK_COUNT", "3"}});
+  EXPECT_EQ(s.index, 2);
+  EXPECT_EQ(s.count, 3);
+  // An array 5-7 (no COUNT): index from MIN.
+  s = shard_with("slurm", {{"SLURM_ARRAY_TASK_ID", "6"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_MAX", "7"}});
+  EXPECT_EQ(s.index, 1);
+  EXPECT_EQ(s.count, 3);
+}
+
+TEST(SweepShard, OutOfRangeAndMalformedAreRefused) {
+  EXPECT_NE(shard_refusal("3/3").find("shard index 3 out of range 0..2"), std::string::npos);
+  EXPECT_NE(shard_refusal("1/0").find("at least 1"), std::string::npos);
+  EXPECT_NE(shard_refusal("one/3").find("expected i/N"), std::string::npos);
+  EXPECT_NE(shard_refusal("slurm").find("SLURM_ARRAY_TASK_ID is not set"), std::string::npos);
+  EXPECT_NE(shard_refusal("slurm", {{"SLURM_ARRAY_TASK_ID", "4"}, {"SLURM_ARRAY_TASK_COUNT", "3"}})
+                .find("shard index 4 out of range 0..2"),
+            std::string::npos);
+}
+
+TEST(SweepSlurmScript, ArrayPacksCasesAndThrottles) {
+  SlurmOptions o;
+  o.cases_per_task = 4;
+  o.max_parallel = 2;
+  o.cpus_per_task = 3;
+  o.partition = "short";
+  o.setup = {"module load gcc/12"};
+  EXPECT_EQ(slurm_array_tasks(10, o), 3);
+  const std::string s = slurm_script(o, 10, "/opt/organsim/bin/organsim", "/home/u/s.json", "/scratch/u/out");
+  EXPECT_NE(s.find("#SBATCH --array=0-2%2\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("#SBATCH --cpus-per-task=3\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("#SBATCH --partition=short\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("module load gcc/12\nexec '/opt/organsim/bin/organsim' sweep '/home/u/s.json' -o '/scratch/u/out' "
+                   "--shard slurm --jobs 3\n"),
+            std::string::npos)
+      << s;
+  EXPECT_EQ(shell_quote("it's"), "'it'\\''s'");
+}
+
+nlohmann::json force_log(bool completed) {
+  // |F| = 0, 5, 13, 1 at t = 0.001 .. 0.004 (tick 1 ms).
+  return {{"meta",
+           {{"tick", 0.001},
+            {"dt_crit", 0.0005},
+            {"completed", completed},
+            {"stop_reason", completed ? "" : "blow-up"},
+            {"real_time_factor", 2.0}}},
+          {"samples", {{"t", {0.001, 0.002, 0.003, 0.004}}, {"force", {{0, 0, 0}, {3, 4, 0}, {0, 5, 12}, {1, 0, 0}}}}}};
+}
+
+TEST(SweepResults, FiguresOfAForceLog) {
+  const nlohmann::json f = force_log_figures(force_log(true), {0.0021, 0.004, 0.0044, 0.01});
+  EXPECT_EQ(f["peak_force"], 13.0);
+  EXPECT_EQ(f["peak_force_t"], 0.003);
+  EXPECT_EQ(f[force_at_name(0.0021)], 5.0);  // nearest sample: t = 0.002
+  EXPECT_EQ(f[force_at_name(0.004)], 1.0);
+  EXPECT_TRUE(f[force_at_name(0.01)].is_null());     // past the last sample by more than half a tick
+  EXPECT_FALSE(f[force_at_name(0.0044)].is_null());  // within half a tick of the last
+  EXPECT_EQ(f["dt_crit"], 0.0005);
+  EXPECT_EQ(f["samples"], 4);
+  EXPECT_EQ(figure_label("peak_force"), "peak_force (N)");
+  EXPECT_EQ(figure_label(force_at_name(0.1)), "force_at_0.1 (N)");
+  EXPECT_EQ(figure_label("dt_crit"), "dt_crit (s)");
+  EXPECT_EQ(figure_label("real_time_factor"), "real_time_factor");
+}
+
+// A run that exited 0 is done only with a complete force log.
+TEST(SweepCaseStatus, JudgeRunNeedsACompleteForceLog) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "sweep_judge";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  SweepCase c;
+  c.name = "x";
+  c.scenario_hash = "abc";
+  CaseStatus s = judge_run(c, dir, 0, 0, 1.0, "");
+  EXPECT_EQ(s.state, CaseState::Failed);
+  EXPECT_EQ(s.error, "exited 0, but forces.json was not written");
+
+  std::ofstream(dir / "forces.json") << force_log(false).dump();
+  s = judge_run(c, dir, 0, 0, 1.0, "");
+  EXPECT_EQ(s.state, CaseState::Failed);
+  EXPECT_NE(s.error.find("stopped early: blow-up"), std::string::npos) << s.error;
+
+  s = judge_run(c, dir, 5, 0, 1.0, "run: ...\norgansim: error: t = 0.1: blow-up\n\n");
+  EXPECT_EQ(s.state, CaseState::Failed);
+  EXPECT_EQ(s.error, "organsim: error: t = 0.1: blow-up");
+  EXPECT_EQ(s.exit_code, 5);
+
+  std::ofstream(dir / "forces.json") << force_log(true).dump();
+  s = judge_run(c, dir, 0, 0, 1.0, "");
+  EXPECT_EQ(s.state, CaseState::Done);
+  EXPECT_EQ(s.meta["dt_crit"], 0.0005);
+  s = judge_run(c, dir, 0, 11, 1.0, "");
+  EXPECT_EQ(s.state, CaseState::Failed);
+  EXPECT_NE(s.error.find("killed by signal 11"), std::string::npos);
+
+  // Recorded, it is current only for the same scenario and while the log is there.
+  write_case_status(dir, judge_run(c, dir, 0, 0, 1.0, ""));
+  EXPECT_EQ(current_state(c, dir), CaseState::Done);
+  SweepCase changed = c;
+  changed.scenario_hash = "def";
+  EXPECT_EQ(current_state(changed, dir), CaseState::Pending);
+  fs::remove(dir / "forces.json");
+  EXPECT_EQ(current_state(c, dir), CaseState::Pending);
+}
+
+}  // namespace
+}  // namespace organsim

@@ -1,0 +1,143 @@
+#!/usr/bin/env bash
+# A real one-node Slurm cluster on localhost (munged, slurmctld and slurmd
+# from Debian's munge and slurm-wlm, a generated slurm.conf in a temporary
+# folder), started and stopped here: a 6-case sweep is submitted as an array
+# of 3 tasks (2 cases each), waited for and collected, and its table and
+# force logs must equal the same sweep run locally.
+# Usage: sweep_array_test.sh ORGANSIM_EXE WORKDIR
+# Exit 77 (ctest: skipped) only when the Slurm or munge programs are missing.
+set -euo pipefail
+organsim=$1
+work=$2
+source_dir=$(cd "$(dirname "$0")/../.." && pwd)
+
+for program in munged mungekey slurmctld slurmd sbatch squeue sinfo; do
+  if ! command -v "$program" >/dev/null; then
+    echo "SKIPPED: $program not found; install Debian's slurm-wlm and munge (bash scripts/setup.sh does)"
+    exit 77
+  fi
+done
+
+rm -rf "$work"
+mkdir -p "$work"
+# Sockets need a short path (108 bytes); the daemons' files live in /tmp.
+run=$(mktemp -d /tmp/organsim-slurm.XXXXXX)
+chmod 755 "$run"  # munged refuses a socket folder others cannot traverse
+mkdir -p "$run/munge" "$run/state" "$run/spool" "$run/log"
+pids=()
+stop_cluster() {
+  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do
+    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+  done
+  rm -rf "$run"
+}
+trap stop_cluster EXIT
+fail() {
+  echo "FAILED: $*"
+  for f in "$run"/log/*.log "$run"/munge/log; do [ -f "$f" ] && { echo "--- $f"; tail -n 20 "$f"; }; done
+  exit 1
+}
+
+# munge: the credential daemon every Slurm message is signed with.
+mungekey --create --keyfile="$run/munge/munge.key"
+chmod 600 "$run/munge/munge.key"
+munged --key-file="$run/munge/munge.key" --socket="$run/munge/sock" --pid-file="$run/munge/pid" \
+  --log-file="$run/munge/log" --seed-file="$run/munge/seed" || fail "munged did not start"
+pids+=("$(cat "$run/munge/pid")")
+
+free_port() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
+host=$(hostname -s)
+user=$(id -un)
+cat >"$run/slurm.conf" <<CONF
+ClusterName=organsimtest
+SlurmctldHost=$host
+SlurmUser=$user
+SlurmdUser=$user
+AuthType=auth/munge
+AuthInfo=socket=$run/munge/sock
+CredType=cred/munge
+SlurmctldPort=$(free_port)
+SlurmdPort=$(free_port)
+StateSaveLocation=$run/state
+SlurmdSpoolDir=$run/spool
+SlurmctldPidFile=$run/slurmctld.pid
+SlurmdPidFile=$run/slurmd.pid
+SlurmctldLogFile=$run/log/slurmctld.log
+SlurmdLogFile=$run/log/slurmd.log
+# No cgroups: processes are tracked through /proc, tasks are not bound.
+ProctrackType=proctrack/linuxproc
+TaskPlugin=task/none
+JobAcctGatherType=jobacct_gather/none
+AccountingStorageType=accounting_storage/none
+SchedulerType=sched/builtin
+SelectType=select/cons_tres
+SelectTypeParameters=CR_CPU
+ReturnToService=2
+MpiDefault=none
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN
+PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
+CONF
+export SLURM_CONF=$run/slurm.conf
+slurmctld || fail "slurmctld did not start"
+for _ in $(seq 50); do [ -f "$run/slurmctld.pid" ] && break; sleep 0.1; done
+pids+=("$(cat "$run/slurmctld.pid")")
+slurmd || fail "slurmd did not start"
+for _ in $(seq 50); do [ -f "$run/slurmd.pid" ] && break; sleep 0.1; done
+pids+=("$(cat "$run/slurmd.pid")")
+for _ in $(seq 300); do
+  [ "$(sinfo -h -o %T 2>/dev/null)" = idle ] && break
+  sleep 0.1
+done
+[ "$(sinfo -h -o %T)" = idle ] || fail "the node did not come up (sinfo: $(sinfo -h -o %T))"
+
+# The sweep: 3 stiffnesses x 2 push depths on the 125-point box, 50 ticks each.
+cat >"$work/sweep.json" <<JSON
+{"scenario": "$source_dir/scenarios/stress/gentle_push.json",
+ "set": {"time.duration": 0.05, "tool.keyframes[1].t": 0.05},
+ "grid": {"material.young_modulus": [4000, 6000, 8000], "tool.keyframes[1].position[2]": [0.046, 0.044]}}
+JSON
+"$organsim" sweep "$work/sweep.json" -o "$work/slurm" --slurm --cases-per-task 2 --time 00:05:00 --submit \
+  | tee "$work/submit.txt"
+grep -q -- '--array=0-2$' "$work/slurm/sweep.sbatch" || fail "expected an array of 3 tasks in sweep.sbatch"
+job=$(sed -n 's/^job: *//p' "$work/submit.txt")
+[ -n "$job" ] || fail "no job id printed"
+for _ in $(seq 1200); do
+  [ -z "$(squeue -h -j "$job" 2>/dev/null)" ] && break
+  sleep 0.25
+done
+[ -z "$(squeue -h -j "$job")" ] || fail "job $job still queued or running after 300 s: $(squeue -j "$job")"
+logs=$(ls "$work/slurm/slurm/" | wc -l)
+[ "$logs" = 3 ] || fail "expected 3 array task logs in $work/slurm/slurm, found $logs"
+for f in "$work"/slurm/slurm/*.out; do echo "--- $f"; cat "$f"; done
+# Each task ran its own slice: 2 of the 6 cases, shards 0/3, 1/3 and 2/3.
+for i in 0 1 2; do
+  grep -q "shard $i/3: 2 cases; 0 done, 0 failed (skipped), 2 to run" "$work"/slurm/slurm/*_$i.out \
+    || fail "array task $i did not run shard $i/3 with 2 cases"
+done
+
+"$organsim" sweep --collect "$work/slurm" || fail "collect: some cases are not done"
+"$organsim" sweep "$work/sweep.json" -o "$work/local" >"$work/local.txt" || fail "the local sweep failed: $(cat "$work/local.txt")"
+
+# Same table (timing aside) and byte-identical force samples.
+python3 - "$work/slurm" "$work/local" <<'PY' || fail "the Slurm sweep differs from the local one"
+import json, sys, pathlib
+a, b = (pathlib.Path(p) for p in sys.argv[1:3])
+def rows(d):
+    r = json.loads((d / "results.json").read_text())
+    for row in r:
+        row.pop("timing")
+    return r
+ra, rb = rows(a), rows(b)
+assert len(ra) == 6, len(ra)
+assert all(row["status"] == "done" for row in ra), ra
+assert ra == rb, (ra, rb)
+def samples(p):
+    t = p.read_text()
+    return t[t.index('\n "samples": {'):]
+for row in ra:
+    name = row["name"]
+    assert samples(a / "cases" / name / "forces.json") == samples(b / "cases" / name / "forces.json"), name
+print("slurm sweep equals the local sweep:", len(ra), "cases")
+PY
+echo "PASSED"
