@@ -76,7 +76,7 @@ const ParameterSlot& slot_named(const std::string& name) {
 // that keeps the haptic tick (so the force samples stay at the same times).
 RunResult simulate(Scenario s, const TetMesh& mesh, const Material& material, const RunOptions& options) {
   s.material = material;
-  const Model model = build_model(mesh, material, model_options(s), s.mesh.path.string());
+  const Model model = build_model(mesh, material, scenario_model_options(s), s.mesh.path.string());
   const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
   const StabilityReport stability = estimate_critical_step(model, critical_step_options(model, tool));
   if (s.time.dt > stability.dt_crit) {
@@ -116,6 +116,8 @@ void fit_command(const FitArgs& args) {
   }
   if (s.material.spring_stiffness)
     throw Error(ErrorKind::Scenario, args.scenario + ": material.spring_stiffness: fit needs young_modulus instead");
+  if (!s.materials.empty())
+    throw Error(ErrorKind::Scenario, args.scenario + ": materials: fit adjusts one `material`; per-label materials are not fitted");
   const MeasuredCurve curve = read_measured_curve(args.measured);
 
   const TetMesh mesh = load_scenario_mesh(s.mesh);

@@ -58,7 +58,7 @@ std::string human_bytes(size_t bytes) {
 // Errors from build_model name the JSON path (fixed[0].indices[3]) but not the file.
 Model build_scenario_model(const Scenario& s, const TetMesh& mesh) {
   try {
-    return build_model(mesh, s.material, model_options(s), s.mesh.path.string());
+    return build_model(mesh, s.material, scenario_model_options(s), s.mesh.path.string());
   } catch (const Error& e) {
     if (e.kind() == ErrorKind::Scenario) throw Error(e.kind(), s.file.string() + ": " + e.what());
     throw;

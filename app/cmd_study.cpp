@@ -231,7 +231,7 @@ void study_command(const StudyArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (args.duration > 0) s.time.duration = args.duration;
   const TetMesh mesh = load_scenario_mesh(s.mesh);
-  const Model model = build_model(mesh, s.material, model_options(s), s.mesh.path.string());
+  const Model model = build_model(mesh, s.material, scenario_model_options(s), s.mesh.path.string());
   const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
   const StabilityReport stability = estimate_critical_step(model, critical_step_options(model, tool));
   const double tick = s.time.tick();

@@ -5,6 +5,8 @@
 #include "app/progress_line.h"
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/units.h"
+#include "core/sim/run.h"
+#include "meshing/mesh_image.h"
 
 namespace organsim::app {
 
@@ -26,6 +28,20 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
       line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
     };
     mesh = mesh_surface(surface, options, def.path.string(), report);
+  } else if (def.kind == MeshDef::Kind::Image) {
+    ImageMeshOptions options;
+    options.target_points = def.target_points;
+    options.cell_size = def.cell_size;
+    options.label_cell_size = def.label_cell_size;
+    options.facet_distance = def.facet_distance;
+    options.exude = def.exude;
+    options.labels = def.labels;
+    if (def.scale_given) options.metres_per_unit = def.scale;  // only for a header without a unit
+    ProgressLine line;
+    options.on_stage = [&line, &def](const std::string& stage) {
+      line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
+    };
+    mesh = mesh_image_file(def.path, options, report);
   } else {
     mesh = read_tet_mesh(def.path);
     scale_points(mesh.points, def.scale);
@@ -35,6 +51,12 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   return mesh;
+}
+
+ModelOptions scenario_model_options(const Scenario& scenario) {
+  ModelOptions options = model_options(scenario);
+  options.label_materials = scenario.materials;
+  return options;
 }
 
 }  // namespace organsim::app

@@ -1,8 +1,9 @@
 #pragma once
-// Loads a scenario's mesh: reads a tet mesh, or reads a surface and meshes it
-// with CGAL (meshing/), then applies the scenario's scale. In app/ because
-// core/ must not depend on meshing/ (CGAL).
+// Loads a scenario's mesh: reads a tet mesh, or reads a surface or a
+// labelled image and meshes it with CGAL (meshing/), applying the scenario's
+// scale. In app/ because core/ must not depend on meshing/ (CGAL).
 #include "core/mesh/tet_mesh.h"
+#include "core/model/model.h"
 #include "core/scenario/scenario.h"
 #include "meshing/mesh_surface.h"
 
@@ -11,5 +12,8 @@ namespace organsim::app {
 // `report` (optional) receives counts and quality; its `seconds` is the time
 // taken to read and (for surfaces) mesh.
 TetMesh load_scenario_mesh(const MeshDef& mesh, MeshReport* report = nullptr);
+
+// model_options(scenario) with the scenario's per-label materials.
+ModelOptions scenario_model_options(const Scenario& scenario);
 
 }  // namespace organsim::app
