@@ -19,7 +19,8 @@
 #include <iostream>
 #include <set>
 #include <sstream>
-#include <unordered_map>
+
+#include "meshing/complex_to_tet_mesh.h"
 
 namespace organsim {
 
@@ -125,29 +126,7 @@ TetMesh Mesh3ImageDomain::mesh(const Mesh3ImageCriteria& c) const {
     CGAL::refine_mesh_3(complex, domain, criteria, no_perturb(), no_exude());
   }
 
-  const Triangulation& tr = complex.triangulation();
-  TetMesh mesh;
-  std::unordered_map<Triangulation::Vertex_handle, int32_t> index;
-  mesh.tets.reserve(complex.number_of_cells_in_complex());
-  mesh.labels.reserve(complex.number_of_cells_in_complex());
-  for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
-    Tet tet{};
-    for (int k = 0; k < 4; ++k) {
-      const auto v = cell->vertex(k);
-      const auto [it, inserted] = index.try_emplace(v, static_cast<int32_t>(mesh.points.size()));
-      if (inserted) {
-        const auto& p = tr.point(v);
-        mesh.points.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
-      }
-      tet[k] = it->second;
-    }
-    if (signed_volume(mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]], mesh.points[tet[3]]) < 0) {
-      std::swap(tet[2], tet[3]);
-    }
-    mesh.tets.push_back(tet);
-    mesh.labels.push_back(static_cast<int32_t>(complex.subdomain_index(cell)));
-  }
-  return mesh;
+  return complex_to_tet_mesh(complex, /*labels=*/true);
 }
 
 }  // namespace organsim

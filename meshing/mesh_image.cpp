@@ -9,6 +9,7 @@
 #include "core/util/format.h"
 #include "meshing/cell_size_search.h"
 #include "meshing/mesh_3_image.h"
+#include "meshing/meshed_check.h"
 
 namespace organsim {
 
@@ -160,12 +161,7 @@ TetMesh mesh_label_image(LabelImage image, const ImageMeshOptions& options, cons
   if (to_world.determinant() < 0) {
     for (Tet& t : mesh.tets) std::swap(t[2], t[3]);  // a mirroring placement (e.g. LPS voxel axes)
   }
-  try {
-    validate_tet_mesh(mesh, source);
-  } catch (const Error& e) {
-    throw Error(ErrorKind::Numerical, std::string("meshing gave a degenerate mesh, not used: ") + e.what() +
-                                          "; try another cell size");
-  }
+  check_meshed(mesh, source);
 
   if (report != nullptr) {
     *report = describe_tet_mesh(mesh);

@@ -12,6 +12,7 @@
 #include "core/util/error.h"
 #include "meshing/cell_size_search.h"
 #include "meshing/mesh_3.h"
+#include "meshing/meshed_check.h"
 #include "meshing/surface_check.h"
 
 namespace organsim {
@@ -104,13 +105,7 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
     throw input_error(source, "meshing produced no tetrahedra at cell size " + format_number(h) +
                                   " m; is the surface much smaller than the cell size?");
   }
-  // Never hand on a mesh we would refuse to read back (zero or negative volumes).
-  try {
-    validate_tet_mesh(mesh, source);
-  } catch (const Error& e) {
-    throw Error(ErrorKind::Numerical, std::string("meshing gave a degenerate mesh, not used: ") + e.what() +
-                                          "; try another cell size");
-  }
+  check_meshed(mesh, source);
   if (report != nullptr) {
     *report = describe_tet_mesh(mesh);
     report->notes = notes;
