@@ -123,6 +123,8 @@ void fit_command(const FitArgs& args) {
   }
   if (s.material.spring_stiffness)
     throw Error(ErrorKind::Scenario, args.scenario + ": material.spring_stiffness: fit needs young_modulus instead");
+  if (!s.materials.empty())
+    throw Error(ErrorKind::Scenario, args.scenario + ": materials: fit adjusts one `material`; per-label materials are not fitted");
   const MeasuredCurve curve = read_measured_curve(args.measured);
 
   const TetMesh mesh = load_scenario_mesh(s.mesh);

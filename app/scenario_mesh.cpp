@@ -5,6 +5,8 @@
 #include "app/progress_line.h"
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/units.h"
+#include "core/run/run.h"
+#include "meshing/mesh_image.h"
 
 namespace organsim::app {
 
@@ -26,6 +28,20 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
       line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
     };
     mesh = mesh_surface(surface, options, def.path.string(), report);
+  } else if (def.kind == MeshDef::Kind::Image) {
+    ImageMeshOptions options;
+    options.target_points = def.target_points;
+    options.cell_size = def.cell_size;
+    options.label_cell_size = def.label_cell_size;
+    options.facet_distance = def.facet_distance;
+    options.exude = def.exude;
+    options.labels = def.labels;
+    if (def.scale_given) options.metres_per_unit = def.scale;  // only for a header without a unit
+    ProgressLine line;
+    options.on_stage = [&line, &def](const std::string& stage) {
+      line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
+    };
+    mesh = mesh_image_file(def.path, options, report);
   } else {
     mesh = read_tet_mesh(def.path);
     scale_points(mesh.points, def.scale);

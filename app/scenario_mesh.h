@@ -1,8 +1,9 @@
 #pragma once
-// Loads a scenario's mesh: reads a tet mesh, or reads a surface and meshes it
-// with CGAL (meshing/), then applies the scenario's scale. In app/ because
-// core/ must not depend on meshing/ (CGAL).
+// Loads a scenario's mesh: reads a tet mesh, or reads a surface or a
+// labelled image and meshes it with CGAL (meshing/), applying the scenario's
+// scale. In app/ because core/ must not depend on meshing/ (CGAL).
 #include "core/mesh/tet_mesh.h"
+#include "core/model/model.h"
 #include "core/scenario/scenario.h"
 #include "meshing/mesh_surface.h"
 

@@ -10,7 +10,7 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/make_mesh_3.h>
 
-#include <unordered_map>
+#include "meshing/complex_to_tet_mesh.h"
 
 namespace organsim {
 
@@ -59,30 +59,7 @@ TetMesh Mesh3Domain::mesh(const Mesh3Criteria& c) const {
                                                                exude(time_limit = 0))
                                   : CGAL::make_mesh_3<Complex>(*impl_->domain, criteria, no_perturb(), no_exude());
 
-  // Index only vertices used by cells of the complex (the triangulation also
-  // holds vertices outside it), in the order the cells first use them.
-  const Triangulation& tr = complex.triangulation();
-  TetMesh mesh;
-  std::unordered_map<Triangulation::Vertex_handle, int32_t> index;
-  mesh.tets.reserve(complex.number_of_cells_in_complex());
-  for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
-    Tet tet{};
-    for (int k = 0; k < 4; ++k) {
-      const auto v = cell->vertex(k);
-      const auto [it, inserted] = index.try_emplace(v, static_cast<int32_t>(mesh.points.size()));
-      if (inserted) {
-        const auto& p = tr.point(v);  // a weighted point
-        mesh.points.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
-      }
-      tet[k] = it->second;
-    }
-    // Triangulation cells are positively oriented; make sure in our convention.
-    if (signed_volume(mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]], mesh.points[tet[3]]) < 0) {
-      std::swap(tet[2], tet[3]);
-    }
-    mesh.tets.push_back(tet);
-  }
-  return mesh;
+  return complex_to_tet_mesh(complex, /*labels=*/false);
 }
 
 }  // namespace organsim

@@ -10,7 +10,9 @@
 
 #include "core/mesh/mesh_io.h"
 #include "core/util/error.h"
+#include "meshing/cell_size_search.h"
 #include "meshing/mesh_3.h"
+#include "meshing/meshed_check.h"
 #include "meshing/surface_check.h"
 
 namespace organsim {
@@ -33,14 +35,6 @@ std::string format_number(double value) {
   return out.str();
 }
 
-// The point count N of a Mesh_3 mesh falls roughly like h^-3 with the cell
-// size h (more slowly for coarse meshes, where surface points dominate).
-// Start from N ~ kPointsPerVolume * V / h^3, then secant steps on
-// (log h, log N). Deterministic: the same surface and target give the same h.
-constexpr double kPointsPerVolume = 1.0;  // first guess only; corrected by the iteration
-constexpr double kAcceptTolerance = 0.03;  // stop when within 3 % (the promise is 10 %)
-constexpr int kMaxTries = 10;
-
 // Absurd cell sizes are refused before Mesh_3 runs for hours: a surface
 // enclosing V m^3 meshed at cell size h gets roughly V / h^3 points.
 constexpr double kMaxEstimatedPoints = 5e7;
@@ -60,51 +54,6 @@ void check_point_estimate(double volume, double h) {
 
 void stage(const MeshOptions& options, const std::string& what) {
   if (options.on_stage) options.on_stage(what);
-}
-
-struct Try {
-  double h;
-  int32_t points;
-};
-
-double search_cell_size(const Mesh3Domain& domain, double volume, int32_t target, const MeshOptions& options,
-                        const std::string& source, std::vector<std::string>& notes) {
-  const auto facet_distance = [&](double h) { return options.facet_distance.value_or(0.1 * h); };
-  std::vector<Try> tries;
-  double h = std::cbrt(kPointsPerVolume * volume / target);
-  for (int i = 0; i < kMaxTries; ++i) {
-    stage(options, "searching the cell size for " + std::to_string(target) + " points: try " + std::to_string(i + 1) +
-                       " of at most " + std::to_string(kMaxTries) + ", cell size " + format_number(h) + " m");
-    const TetMesh m = domain.mesh({h, facet_distance(h), /*exude=*/false});
-    tries.push_back({h, static_cast<int32_t>(m.points.size())});
-    const double error = std::log(static_cast<double>(tries.back().points) / target);
-    if (std::abs(error) < std::log1p(kAcceptTolerance)) break;
-    double slope = -3.0;
-    if (tries.size() >= 2) {
-      const Try& a = tries[tries.size() - 2];
-      const Try& b = tries.back();
-      if (a.h != b.h && a.points != b.points) {
-        slope = (std::log(double(b.points)) - std::log(double(a.points))) / (std::log(b.h) - std::log(a.h));
-      }
-      slope = std::clamp(slope, -4.0, -1.0);
-    }
-    // Never jump by more than a factor 2 in one step.
-    const double step = std::clamp(-error / slope, -std::log(2.0), std::log(2.0));
-    h *= std::exp(step);
-  }
-  const Try best = *std::min_element(tries.begin(), tries.end(), [&](const Try& a, const Try& b) {
-    return std::abs(std::log(double(a.points) / target)) < std::abs(std::log(double(b.points) / target));
-  });
-  std::ostringstream note;
-  note << "target " << target << " points: cell size " << format_number(best.h) << " m after " << tries.size()
-       << " tries (" << best.points << " points)";
-  notes.push_back(note.str());
-  if (std::abs(best.points - target) > 0.1 * target) {
-    throw input_error(source, "cannot reach " + std::to_string(target) + " points within 10 %: closest was " +
-                                      std::to_string(best.points) + " at cell size " + format_number(best.h) +
-                                      " m; give --cell-size instead");
-  }
-  return best.h;
 }
 
 }  // namespace
@@ -140,7 +89,11 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
   if (options.cell_size) {
     h = *options.cell_size;
   } else if (options.target_points) {
-    h = search_cell_size(domain, surface_volume(checked), *options.target_points, options, source, notes);
+    const auto points_at = [&](double cell) {
+      return static_cast<int32_t>(domain.mesh({cell, options.facet_distance.value_or(0.1 * cell), /*exude=*/false}).points.size());
+    };
+    h = search_cell_size(points_at, surface_volume(checked), *options.target_points,
+                         [&](const std::string& what) { stage(options, what); }, source, notes);
   } else {
     h = size / 20.0;  // default: see docs/meshing.md
     notes.push_back("no --cell-size or --target-points: cell size " + format_number(h) +
@@ -152,13 +105,7 @@ TetMesh mesh_surface(const TriangleMesh& surface, const MeshOptions& options, co
     throw input_error(source, "meshing produced no tetrahedra at cell size " + format_number(h) +
                                   " m; is the surface much smaller than the cell size?");
   }
-  // Never hand on a mesh we would refuse to read back (zero or negative volumes).
-  try {
-    validate_tet_mesh(mesh, source);
-  } catch (const Error& e) {
-    throw Error(ErrorKind::Numerical, std::string("meshing gave a degenerate mesh, not used: ") + e.what() +
-                                          "; try another cell size");
-  }
+  check_meshed(mesh, source);
   if (report != nullptr) {
     *report = describe_tet_mesh(mesh);
     report->notes = notes;

@@ -6,6 +6,10 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   libcgal-dev libeigen3-dev libcli11-dev nlohmann-json3-dev
+  # Labelled images (segmentations) for `organsim mesh`: NIfTI-1 through
+  # libniftiio (libnifti2-dev brings it, its nifti1.h and znzlib), NRRD
+  # through teem; CGAL ImageIO (in libcgal-dev) reads .inr.
+  libnifti2-dev libteem-dev zlib1g-dev
   libgtest-dev
   libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri
   # OpenCV: the four module packages only (~254 MB instead of ~825 MB for

@@ -128,6 +128,8 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
     }
     attributes.cell_data.push_back(std::move(ratio));
     attributes.cell_data.push_back({"max_spring_strain", 1, max_edge_strain(model, positions_), false});
+    // Each tet's label (a segmentation's), so ParaView can colour or threshold by it.
+    if (!model.tet_label.empty()) attributes.cell_data.push_back(label_cell_array(model.tet_label));
     std::snprintf(name, sizeof name, "state_%05d.vtu", static_cast<int>(steps_.size()));
   }
 

@@ -2,6 +2,10 @@
 // and 4.1. Linear tetrahedra
 // (element type 4) are kept; other elements are read past. Node tags are
 // arbitrary numbers in Gmsh: points are the nodes the tets use, in file order.
+// A tet's physical tag (its volume entity's first one in 4.1, from
+// $Entities) is its label; a file without physical tags gives no labels.
+#include <algorithm>
+#include <cstdint>
 #include <unordered_map>
 #include <vector>
 
@@ -46,6 +50,9 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
   std::unordered_map<int64_t, int32_t> node_index;  // Gmsh tag -> position in `nodes`
   std::vector<std::array<int64_t, 4>> tet_tags;
   std::vector<int> tet_lines;
+  std::vector<int64_t> tet_physical;               // 0: none
+  std::unordered_map<int64_t, int64_t> volume_physical;  // 4.1: volume entity tag -> its first physical tag
+  int64_t physical = 0;                            // of the element being read
   const auto add_node = [&](int64_t tag, const Vec3& p) {
     if (!node_index.emplace(tag, static_cast<int32_t>(nodes.size())).second) in.fail("node " + std::to_string(tag) + " is defined twice");
     nodes.push_back(p);
@@ -68,6 +75,7 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
     if (type == 4) {
       tet_tags.push_back(tet);
       tet_lines.push_back(line);
+      tet_physical.push_back(physical);
     }
   };
 
@@ -87,7 +95,7 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
       for (int64_t e = 0; e < n; ++e) {
         in.next_int("an element number");
         const int64_t type = in.next_int("an element type");
-        in.next_int("the physical region");
+        physical = in.next_int("the physical region");
         in.next_int("the elementary region");
         const int64_t count = in.next_int("the element's node count");
         if (count != nodes_of_type(type)) {
@@ -133,7 +141,11 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
         in.next_int("an element tag");
         const int64_t type = in.next_int("an element type");
         const int64_t ntags = in.next_int("the element's tag count");
-        for (int64_t t = 0; t < ntags; ++t) in.next_int("an element tag");
+        physical = 0;
+        for (int64_t t = 0; t < ntags; ++t) {
+          const int64_t tag = in.next_int("an element tag");
+          if (t == 0) physical = tag;  // 2.2: the physical tag comes first
+        }
         read_element_nodes(type);
       }
       expect(in, "$EndElements");
@@ -143,8 +155,10 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
       in.next_int("the minimum element tag");
       in.next_int("the maximum element tag");
       for (int64_t b = 0; b < blocks; ++b) {
-        in.next_int("the entity dimension");
-        in.next_int("the entity tag");
+        const int64_t dimension = in.next_int("the entity dimension");
+        const int64_t entity = in.next_int("the entity tag");
+        const auto it = volume_physical.find(entity);
+        physical = dimension == 3 && it != volume_physical.end() ? it->second : 0;
         const int64_t type = in.next_int("the element type");
         const int64_t n = in.next_int("the block's element count");
         for (int64_t e = 0; e < n; ++e) {
@@ -153,8 +167,29 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
         }
       }
       expect(in, "$EndElements");
+    } else if (section == "$Entities" && v4) {
+      // Points, curves, surfaces and volumes, each with its physical tags;
+      // only the volumes' are kept.
+      int64_t counts[4];
+      for (int64_t& n : counts) n = in.checked_count(in.next_int("an entity count"), 4, "entities");
+      for (int dim = 0; dim < 4; ++dim) {
+        for (int64_t e = 0; e < counts[dim]; ++e) {
+          const int64_t tag = in.next_int("an entity tag");
+          for (int k = 0; k < (dim == 0 ? 3 : 6); ++k) in.next_double("an entity coordinate");
+          const int64_t nphysical = in.checked_count(in.next_int("the physical tag count"), 2, "physical tags");
+          for (int64_t k = 0; k < nphysical; ++k) {
+            const int64_t p = in.next_int("a physical tag");
+            if (dim == 3 && k == 0) volume_physical[tag] = p;
+          }
+          if (dim > 0) {
+            const int64_t nbounding = in.checked_count(in.next_int("the bounding entity count"), 2, "bounding entities");
+            for (int64_t k = 0; k < nbounding; ++k) in.next_int("a bounding entity tag");
+          }
+        }
+      }
+      expect(in, "$EndEntities");
     } else if (!section.empty() && section[0] == '$') {
-      skip_section(in, section, false);  // $PhysicalNames, $Entities, $NodeData, ...
+      skip_section(in, section, false);  // $PhysicalNames, $NodeData, ...
     } else {
       in.fail("expected a $Section, got '" + section + "'");
     }
@@ -185,6 +220,15 @@ TetMesh read_gmsh(std::string_view text, const std::string& source) {
     for (int32_t& v : tet) v = new_index[static_cast<size_t>(v)];
   }
   mesh.tets = std::move(tets);
+  if (std::any_of(tet_physical.begin(), tet_physical.end(), [](int64_t p) { return p != 0; })) {
+    for (size_t t = 0; t < tet_physical.size(); ++t) {
+      if (tet_physical[t] < INT32_MIN || tet_physical[t] > INT32_MAX) {
+        throw input_error(source, "line " + std::to_string(tet_lines[t]) + ": tetrahedron " + std::to_string(t) +
+                                      " has physical tag " + std::to_string(tet_physical[t]) + ", beyond a 32-bit label");
+      }
+      mesh.labels.push_back(static_cast<int32_t>(tet_physical[t]));
+    }
+  }
   return mesh;
 }
 

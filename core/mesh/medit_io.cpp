@@ -1,5 +1,7 @@
 // medit .mesh (INRIA) tet meshes, ASCII: Vertices and Tetrahedra are used;
 // the other known sections are read past. Indices in the file start at 1.
+// A tet's reference is its label (TetMesh::labels).
+#include <cstdint>
 #include <ostream>
 
 #include "core/mesh/mesh_io_detail.h"
@@ -57,8 +59,10 @@ TetMesh read_medit(std::string_view text, const std::string& source) {
           }
           tet[k] = static_cast<int32_t>(v - 1);
         }
-        in.next_int("a tetrahedron reference");
+        const int64_t ref = in.next_int("a tetrahedron reference");
+        if (ref < INT32_MIN || ref > INT32_MAX) in.fail("tetrahedron " + std::to_string(t) + " has reference " + std::to_string(ref) + ", beyond a 32-bit label");
         mesh.tets.push_back(tet);
+        mesh.labels.push_back(static_cast<int32_t>(ref));
       }
     } else {
       const SkippedSection* section = nullptr;
@@ -90,7 +94,12 @@ void write_medit(std::ostream& out, const TetMesh& mesh) {
   out << "Triangles\n" << boundary.size() << '\n';
   for (const Tri& f : boundary) out << f[0] + 1 << ' ' << f[1] + 1 << ' ' << f[2] + 1 << " 1\n";
   out << "Tetrahedra\n" << mesh.tets.size() << '\n';
-  for (const Tet& t : mesh.tets) out << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << ' ' << t[3] + 1 << " 1\n";
+  // A tet's reference is its label (1 for an unlabelled mesh).
+  for (size_t i = 0; i < mesh.tets.size(); ++i) {
+    const Tet& t = mesh.tets[i];
+    out << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << ' ' << t[3] + 1 << ' '
+        << (mesh.labels.empty() ? 1 : mesh.labels[i]) << '\n';
+  }
   out << "End\n";
 }
 

@@ -166,7 +166,11 @@ void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh) {
   write_file_atomically(path, [&](std::ostream& out) {
     if (ext == ".mesh") mesh_io::write_medit(out, mesh);
     else if (ext == ".vtk") mesh_io::write_vtk(out, mesh);
-    else write_vtu(out, mesh.points, mesh.tets);
+    else {
+      VtkAttributes attributes;
+      if (!mesh.labels.empty()) attributes.cell_data.push_back(label_cell_array(mesh.labels));
+      write_vtu(out, mesh.points, mesh.tets, attributes);
+    }
   });
 }
 

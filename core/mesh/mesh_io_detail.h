@@ -48,6 +48,10 @@ class TokenReader {
 bool parse_double(std::string_view token, double& value);
 bool parse_int(std::string_view token, int64_t& value);
 
+// A tet label read as a number (VTK arrays hold doubles): true when it is a
+// whole number in int32 range.
+bool label_from_value(double value, int32_t& label);
+
 // Writes "x y z" with the shortest text that reads back to the same doubles.
 void write_point(std::ostream& out, const Vec3& p);
 

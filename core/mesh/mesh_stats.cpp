@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -127,7 +129,27 @@ MeshReport describe_tet_mesh(const TetMesh& mesh) {
       q.min_tet_volume = std::min(q.min_tet_volume, tq.volume);
     }
   }
+  report.labels = label_stats(mesh);
   return report;
+}
+
+std::vector<LabelStats> label_stats(const TetMesh& mesh) {
+  std::map<int32_t, LabelStats> by_label;
+  for (size_t t = 0; t < mesh.labels.size(); ++t) {
+    LabelStats& s = by_label[mesh.labels[t]];
+    s.label = mesh.labels[t];
+    ++s.tets;
+    const Tet& k = mesh.tets[t];
+    s.mesh_volume += signed_volume(mesh.points[k[0]], mesh.points[k[1]], mesh.points[k[2]], mesh.points[k[3]]);
+  }
+  std::vector<LabelStats> stats;
+  for (auto& [label, s] : by_label) stats.push_back(s);
+  return stats;
+}
+
+std::optional<double> LabelStats::relative_difference() const {
+  if (!image_volume || !(*image_volume > 0)) return std::nullopt;
+  return std::abs(mesh_volume - *image_volume) / *image_volume;
 }
 
 namespace {
@@ -156,7 +178,17 @@ std::string format_mesh_report(const MeshReport& r) {
     std::snprintf(label, sizeof label, "%4zu %7d ", k, count);
     out << "  " << label << std::string(static_cast<size_t>(width), '#') << "\n";
   }
+  for (const LabelStats& l : r.labels) {
+    out << std::defaultfloat << std::setprecision(4) << "label " << l.label << (l.name.empty() ? "" : " (" + l.name + ")")
+        << ": " << l.tets << " tets, volume " << l.mesh_volume << " m^3";
+    if (l.image_volume) {
+      out << " (image " << *l.image_volume << " m^3, " << std::fixed << std::setprecision(1)
+          << 100.0 * l.relative_difference().value_or(0) << " % off)";
+    }
+    out << "\n";
+  }
   for (const std::string& note : r.notes) out << "note: " << note << "\n";
+  for (const std::string& warning : r.warnings) out << "warning: " << warning << "\n";
   out.precision(2);
   out << "time " << std::fixed << r.seconds << " s\n";
   return out.str();
@@ -179,6 +211,20 @@ nlohmann::json mesh_report_json(const MeshReport& r) {
   j["springs_per_point"] = {{"mean", mean_valence(r)}, {"max", max_valence}, {"histogram", r.valence_histogram}};
   j["seconds"] = r.seconds;
   j["notes"] = r.notes;
+  if (!r.warnings.empty()) j["warnings"] = r.warnings;
+  if (!r.labels.empty()) {
+    nlohmann::json labels = nlohmann::json::array();
+    for (const LabelStats& l : r.labels) {
+      nlohmann::json e = {{"label", l.label}, {"tets", l.tets}, {"mesh_volume_m3", l.mesh_volume}};
+      if (!l.name.empty()) e["name"] = l.name;
+      if (l.image_volume) {
+        e["image_volume_m3"] = *l.image_volume;
+        e["relative_difference"] = l.relative_difference().value_or(0);
+      }
+      labels.push_back(e);
+    }
+    j["labels"] = labels;
+  }
   return j;
 }
 

@@ -17,8 +17,11 @@ struct TriangleMesh {
 // A tetrahedral volume mesh. Tets are positively oriented:
 // dot(p1 - p0, cross(p2 - p0, p3 - p0)) > 0.
 struct TetMesh {
-  std::vector<Vec3> points;  // vertex positions, m (npoint)
-  std::vector<Tet> tets;     // vertex ids (ntet x 4)
+  std::vector<Vec3> points;     // vertex positions, m (npoint)
+  std::vector<Tet> tets;        // vertex ids (ntet x 4)
+  // Each tet's subdomain label (a segmentation's label, a medit reference, a
+  // Gmsh physical tag): empty for an unlabelled mesh, else one per tet.
+  std::vector<int32_t> labels;
 };
 
 // Signed volume of the tet (a, b, c, d); positive for the orientation above.

@@ -9,6 +9,10 @@ namespace organsim {
 void validate_tet_mesh(const TetMesh& mesh, const std::string& source) {
   if (mesh.points.empty()) throw input_error(source, "mesh has no points");
   if (mesh.tets.empty()) throw input_error(source, "mesh has no tetrahedra");
+  if (!mesh.labels.empty() && mesh.labels.size() != mesh.tets.size()) {
+    throw input_error(source, std::to_string(mesh.labels.size()) + " tet labels for " + std::to_string(mesh.tets.size()) +
+                                  " tetrahedra, expected one per tetrahedron");
+  }
   const auto npoint = static_cast<int64_t>(mesh.points.size());
   for (size_t i = 0; i < mesh.points.size(); ++i) {
     if (!mesh.points[i].allFinite())

@@ -2,12 +2,19 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <ostream>
 
 #include "core/mesh/mesh_io_detail.h"
 
 namespace organsim::mesh_io {
+
+bool label_from_value(double value, int32_t& label) {
+  if (!(value >= -2147483648.0 && value <= 2147483647.0) || value != std::floor(value)) return false;
+  label = static_cast<int32_t>(value);
+  return true;
+}
 
 void TokenReader::skip_space() {
   while (pos_ < text_.size()) {

@@ -18,6 +18,7 @@ struct VtkArray {
   int components = 1;
   std::vector<double> values;  // (n x components)
   bool as_uint8 = false;       // written as UInt8 (masks), else Float64
+  bool as_int32 = false;       // written as Int32 (labels)
 };
 
 struct VtkAttributes {
@@ -29,6 +30,9 @@ void write_vtu(std::ostream& out, const std::vector<Vec3>& points, const std::ve
                const VtkAttributes& attributes = {});
 void write_vtp(std::ostream& out, const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                const VtkAttributes& attributes = {});
+
+// The cell array `label` (Int32) of a labelled mesh's tets.
+VtkArray label_cell_array(const std::vector<int32_t>& labels);
 
 // A ParaView collection: (time in s, file relative to the .pvd) per step.
 void write_pvd(std::ostream& out, const std::vector<std::pair<double, std::string>>& steps);

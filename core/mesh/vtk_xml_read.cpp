@@ -406,6 +406,7 @@ TetMesh read_vtu(std::string_view bytes, const std::string& source) {
   const auto cells = in.cells("Cells", ncell);
   const auto types = in.values("Cells", "types", ncell, 1);
   const auto npoint = static_cast<int64_t>(mesh.points.size());
+  std::vector<int64_t> tet_cells;  // the cell each tet is
   for (int64_t c = 0; c < ncell; ++c) {
     const int64_t type = vtk_index(types[c]);
     if (type == 1 || type == 3 || type == 5) continue;  // vertices, lines, triangles: read past
@@ -423,6 +424,19 @@ TetMesh read_vtu(std::string_view bytes, const std::string& source) {
       tet[k] = static_cast<int32_t>(cells[c][k]);
     }
     mesh.tets.push_back(tet);
+    tet_cells.push_back(c);
+  }
+  // The cell array `label` is each tet's label.
+  if (in.find("CellData", "label") != nullptr) {
+    const auto labels = in.values("CellData", "label", ncell, 1);
+    for (int64_t c : tet_cells) {
+      int32_t label = 0;
+      if (!label_from_value(labels[static_cast<size_t>(c)], label)) {
+        in.fail("cell " + std::to_string(c) + " has label " + format_number(labels[static_cast<size_t>(c)]) +
+                ", expected a 32-bit integer");
+      }
+      mesh.labels.push_back(label);
+    }
   }
   return mesh;
 }

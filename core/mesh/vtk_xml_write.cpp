@@ -53,6 +53,9 @@ void write_attributes(std::ostream& out, const char* element, const std::vector<
     if (a.as_uint8) {
       std::vector<uint8_t> v(a.values.begin(), a.values.end());
       write_array(out, "UInt8", a.name, a.components, v);
+    } else if (a.as_int32) {
+      std::vector<int32_t> v(a.values.begin(), a.values.end());
+      write_array(out, "Int32", a.name, a.components, v);
     } else {
       write_array(out, "Float64", a.name, a.components, a.values);
     }
@@ -90,6 +93,14 @@ void write_cells(std::ostream& out, const std::vector<Cell>& cells, int corners)
 }
 
 }  // namespace
+
+VtkArray label_cell_array(const std::vector<int32_t>& labels) {
+  VtkArray a;
+  a.name = "label";
+  a.values.assign(labels.begin(), labels.end());
+  a.as_int32 = true;
+  return a;
+}
 
 void write_vtu(std::ostream& out, const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                const VtkAttributes& attributes) {

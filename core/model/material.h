@@ -48,14 +48,21 @@ struct Material {
   ShearFormulation shear_formulation = ShearFormulation::Smoothed;  // used only below nu = 1/4
 };
 
+// A material for the tets of some labels (a scenario's `materials` entry).
+struct LabelMaterial {
+  std::vector<int32_t> labels;  // tet labels (TetMesh::labels) this material is for
+  Material material;
+};
+
 // One fixed-point selector; a point is fixed when any selector matches it.
 struct FixedSelector {
-  enum class Kind { Box, Plane, Sphere, Indices } kind = Kind::Indices;
+  enum class Kind { Box, Plane, Sphere, Indices, Label } kind = Kind::Indices;
   Vec3 min{0, 0, 0}, max{0, 0, 0};        // Box, m
   Vec3 point{0, 0, 0}, normal{0, 0, 1};   // Plane: points with dot(x - point, normal) >= 0, m
   Vec3 center{0, 0, 0};                   // Sphere centre, m
   double radius = 0;                      // Sphere radius, m
   std::vector<int32_t> indices;           // Indices: input point numbering
+  int32_t label = 0;                      // Label: every point of a tet with this label
 };
 
 }  // namespace organsim

@@ -77,7 +77,16 @@ struct Model {
   // Scene parameters.
   Vec3 gravity{0, 0, 0};             // m/s^2
   double viscous_damping = 0;        // alpha, 1/s
-  Material material;                 // as given, for reporting
+  Material material;                 // as given (the first of `materials` when there are several), for reporting
+  // Per-label materials (ModelOptions::label_materials): each tet's material
+  // index into `materials`; both empty when one material is used everywhere.
+  // Quantities that are one number for the whole model (viscous damping, the
+  // shear element's damping time and smoothed share, whether the shear
+  // element or a volume term is used, and its form) must agree between them:
+  // build_model refuses materials that differ there.
+  std::vector<Material> materials;
+  std::vector<int32_t> tet_material;  // (ntet) or empty
+  std::vector<int32_t> tet_label;     // each tet's mesh label (ntet); empty for an unlabelled mesh
 
   // Per-point gather layout (springs and tets gathered per point, no atomics).
   GatherLayout layout;
@@ -99,6 +108,7 @@ struct Model {
   bool has_smoothed_shear() const { return shear_smoothed_share > 0; }
   bool has_gravity() const { return gravity.squaredNorm() > 0; }
   double tool_scale(int32_t i) const { return tool_k_scale.empty() ? 1.0 : tool_k_scale[i]; }
+  const Material& material_of_tet(int32_t t) const { return tet_material.empty() ? material : materials[tet_material[t]]; }
   double total_mass() const;
   double rest_volume() const;
 };
@@ -109,6 +119,9 @@ struct ModelOptions {
   int32_t chunk_size = kDefaultChunkSize;   // C of SELL-C-sigma
   int32_t sort_window = kDefaultSortWindow; // sigma of SELL-C-sigma
   bool reorder_for_locality = true;         // reverse Cuthill-McKee before the valence sort
+  // Materials by tet label (scenario `materials`); empty: the one material
+  // for every tet. Every label of the mesh must have exactly one.
+  std::vector<LabelMaterial> label_materials;
 };
 
 // Builds the Model. Throws Error(Input) naming the element for tets with

@@ -72,6 +72,9 @@ Model rebuild_with(const Model& previous, const TopologyChange& change, const st
   model.version = previous.version + 1;
   model.mesh_points = previous.mesh_points;
   model.material = previous.material;
+  model.materials = previous.materials;
+  model.tet_material = previous.tet_material;  // tet ids are kept by every change
+  model.tet_label = previous.tet_label;
   model.gravity = previous.gravity;
   model.viscous_damping = previous.viscous_damping;
 

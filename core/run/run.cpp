@@ -20,6 +20,7 @@ ModelOptions model_options(const Scenario& scenario) {
   ModelOptions o;
   o.gravity = scenario.gravity;
   o.fixed = scenario.fixed;
+  o.label_materials = scenario.materials;
   return o;
 }
 

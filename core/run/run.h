@@ -15,7 +15,7 @@
 
 namespace organsim {
 
-// Model options from the scenario's fixed selectors and gravity.
+// Model options from the scenario: fixed selectors, gravity, per-label materials.
 ModelOptions model_options(const Scenario& scenario);
 // What the backend needs to know about the tool (absent => no tool pass).
 BackendTool backend_tool(const Scenario& scenario);

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <charconv>
 #include <cmath>
 
 #include "core/mesh/units.h"
@@ -43,9 +44,19 @@ MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::files
   MeshDef mesh;
   const auto surface = r.string("surface");
   const auto tet = r.string("tet");
-  if (surface && tet) throw at.error("give either \"surface\" or \"tet\", not both");
-  if (!surface && !tet) throw at.error("missing \"surface\" (a closed triangle surface to mesh) or \"tet\" (a tet mesh)");
-  if (surface) {
+  const auto image = r.string("image");
+  if (int(surface.has_value()) + int(tet.has_value()) + int(image.has_value()) > 1) {
+    throw at.error("give one of \"surface\", \"image\" or \"tet\"");
+  }
+  if (!surface && !tet && !image) {
+    throw at.error("missing \"surface\" (a closed triangle surface to mesh), \"image\" (a labelled image to mesh) or "
+                   "\"tet\" (a tet mesh)");
+  }
+  if (image) {
+    mesh.kind = MeshDef::Kind::Image;
+    if (image->empty()) throw r.at("image").error("expected a file name");
+    mesh.path = resolve(*image, base_dir);
+  } else if (surface) {
     mesh.kind = MeshDef::Kind::Surface;
     if (surface->empty()) throw r.at("surface").error("expected a file name");
     mesh.path = resolve(*surface, base_dir);
@@ -54,6 +65,7 @@ MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::files
     if (tet->empty()) throw r.at("tet").error("expected a file name");
     mesh.path = resolve(*tet, base_dir);
   }
+  mesh.scale_given = r.has("scale") || r.has("units");
   if (auto s = r.number("scale")) mesh.scale = require_positive(*s, r.at("scale"));
   if (auto u = r.string("units")) {
     if (r.has("scale")) throw at.error("give \"units\" or \"scale\", not both");
@@ -64,14 +76,39 @@ MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::files
   }
   if (const nlohmann::json* o = r.get("options")) {
     const JsonPath oat = r.at("options");
-    if (mesh.kind != MeshDef::Kind::Surface) throw oat.error("meshing options apply only to a \"surface\" mesh");
+    if (mesh.kind == MeshDef::Kind::Tet) throw oat.error("meshing options apply only to a \"surface\" or \"image\" mesh");
     ObjectReader opt(*o, oat);
+    if (mesh.kind == MeshDef::Kind::Image) {
+      if (const nlohmann::json* l = opt.get("labels")) {
+        const JsonPath lat = opt.at("labels");
+        if (!l->is_array() || l->empty()) throw lat.error("expected a non-empty array of labels");
+        for (size_t i = 0; i < l->size(); ++i) {
+          const int64_t v = read_integer((*l)[i], lat.index(i));
+          if (v < 1 || v > INT32_MAX) throw lat.index(i).error("expected a label > 0 (got " + std::to_string(v) + ")");
+          mesh.labels.push_back(static_cast<int32_t>(v));
+        }
+      }
+      if (const nlohmann::json* sizes = opt.get("label_cell_size")) {
+        const JsonPath sat = opt.at("label_cell_size");
+        if (!sizes->is_object()) throw sat.error("expected an object {\"LABEL\": cell size in m}");
+        for (const auto& [key, value] : sizes->items()) {
+          int64_t label = 0;
+          const auto [end, ec] = std::from_chars(key.data(), key.data() + key.size(), label);
+          if (ec != std::errc() || end != key.data() + key.size() || label < 1 || label > INT32_MAX) {
+            throw sat.field(key).error("expected a label > 0 as the key");
+          }
+          mesh.label_cell_size[static_cast<int32_t>(label)] = require_positive(read_number(value, sat.field(key)), sat.field(key));
+        }
+      }
+    }
     if (auto n = opt.integer("target_points")) {
       if (*n < 10 || *n > 10'000'000) throw opt.at("target_points").error("expected an integer in 10..10000000 (got " + std::to_string(*n) + ")");
       mesh.target_points = static_cast<int32_t>(*n);
     }
     if (auto h = opt.number("cell_size")) mesh.cell_size = require_positive(*h, opt.at("cell_size"));
-    if (mesh.target_points && mesh.cell_size) throw oat.error("give target_points or cell_size, not both");
+    if (mesh.target_points && (mesh.cell_size || !mesh.label_cell_size.empty())) {
+      throw oat.error("give target_points or cell sizes, not both");
+    }
     if (auto d = opt.number("facet_distance")) mesh.facet_distance = require_positive(*d, opt.at("facet_distance"));
     if (auto e = opt.boolean("exude")) mesh.exude = *e;
     opt.finish();
@@ -119,9 +156,35 @@ Material parse_material(const nlohmann::json& j, const JsonPath& at) {
   return m;
 }
 
+// One `materials` entry: "labels" and the fields of a `material`.
+LabelMaterial parse_label_material(const nlohmann::json& j, const JsonPath& at) {
+  if (!j.is_object()) throw at.error("expected an object {\"labels\": [...], material fields...}");
+  if (!j.contains("labels")) throw at.field("labels").error("missing (required): the tet labels this material is for");
+  const nlohmann::json& labels = j["labels"];
+  const JsonPath lat = at.field("labels");
+  if (!labels.is_array() || labels.empty()) throw lat.error("expected a non-empty array of labels");
+  LabelMaterial m;
+  for (size_t i = 0; i < labels.size(); ++i) {
+    const int64_t v = read_integer(labels[i], lat.index(i));
+    if (v < INT32_MIN || v > INT32_MAX) throw lat.index(i).error("expected a 32-bit integer label");
+    m.labels.push_back(static_cast<int32_t>(v));
+  }
+  nlohmann::json fields = j;
+  fields.erase("labels");
+  m.material = parse_material(fields, at);
+  return m;
+}
+
+std::vector<LabelMaterial> parse_materials(const nlohmann::json& j, const JsonPath& at) {
+  if (!j.is_array() || j.empty()) throw at.error("expected a non-empty array of {\"labels\": [...], material fields...}");
+  std::vector<LabelMaterial> out;
+  for (size_t i = 0; i < j.size(); ++i) out.push_back(parse_label_material(j[i], at.index(i)));
+  return out;
+}
+
 FixedSelector parse_selector(const nlohmann::json& j, const JsonPath& at) {
   ObjectReader r(j, at);
-  if (j.size() != 1) throw at.error("expected exactly one of \"box\", \"plane\", \"sphere\" or \"indices\"");
+  if (j.size() != 1) throw at.error("expected exactly one of \"box\", \"plane\", \"sphere\", \"indices\" or \"label\"");
   FixedSelector s;
   if (const nlohmann::json* b = r.get("box")) {
     ObjectReader box(*b, r.at("box"));
@@ -146,6 +209,11 @@ FixedSelector parse_selector(const nlohmann::json& j, const JsonPath& at) {
     s.center = read_vec3(sphere.require("center"), sphere.at("center"));
     s.radius = require_positive(read_number(sphere.require("radius"), sphere.at("radius")), sphere.at("radius"));
     sphere.finish();
+  } else if (const nlohmann::json* label = r.get("label")) {
+    s.kind = FixedSelector::Kind::Label;
+    const int64_t v = read_integer(*label, r.at("label"));
+    if (v < INT32_MIN || v > INT32_MAX) throw r.at("label").error("expected a 32-bit integer label");
+    s.label = static_cast<int32_t>(v);
   } else if (const nlohmann::json* ids = r.get("indices")) {
     const JsonPath iat = r.at("indices");
     if (!ids->is_array()) throw iat.error("expected an array of point indices");
@@ -161,7 +229,7 @@ FixedSelector parse_selector(const nlohmann::json& j, const JsonPath& at) {
 }
 
 std::vector<FixedSelector> parse_fixed(const nlohmann::json& j, const JsonPath& at) {
-  if (!j.is_array()) throw at.error("expected an array of selectors ({\"box\"|\"plane\"|\"sphere\"|\"indices\": ...})");
+  if (!j.is_array()) throw at.error("expected an array of selectors ({\"box\"|\"plane\"|\"sphere\"|\"indices\"|\"label\": ...})");
   std::vector<FixedSelector> out;
   for (size_t i = 0; i < j.size(); ++i) out.push_back(parse_selector(j[i], at.index(i)));
   return out;
@@ -219,6 +287,11 @@ Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& ba
   r.string("description");  // free text for people; not used
   s.mesh = parse_mesh(r.require("mesh"), r.at("mesh"), base_dir);
   if (const auto* m = r.get("material")) s.material = parse_material(*m, r.at("material"));
+  if (const auto* m = r.get("materials")) {
+    if (r.has("material")) throw root.error("give \"material\" (one for every tet) or \"materials\" (per label), not both");
+    s.materials = parse_materials(*m, r.at("materials"));
+    s.material = s.materials.front().material;
+  }
   if (const auto* f = r.get("fixed")) s.fixed = parse_fixed(*f, r.at("fixed"));
   if (auto g = r.vec3("gravity")) s.gravity = *g;
   if (const auto* t = r.get("time")) s.time = parse_time(*t, r.at("time"));

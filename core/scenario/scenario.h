@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -22,15 +23,21 @@ namespace organsim {
 
 // `mesh`: a closed surface meshed on the fly, or a tetrahedral mesh file.
 struct MeshDef {
-  enum class Kind { Surface, Tet } kind = Kind::Tet;
+  enum class Kind { Surface, Tet, Image } kind = Kind::Tet;
   std::filesystem::path path;  // resolved against the scenario file's folder
   double scale = 1.0;          // coordinates are multiplied by this (e.g. 0.001 for mm input)
   std::string units = "m";     // the file's length unit as given ("mm", "cm", "m"); scale follows from it
-  // Surface meshing options (Kind::Surface only), in metres after scaling.
+  // Meshing options (Kind::Surface and Kind::Image), in metres after scaling.
   std::optional<int32_t> target_points;
   std::optional<double> cell_size;       // m
   std::optional<double> facet_distance;  // m
   bool exude = true;
+  // Kind::Image only: the labels to mesh (empty: every label > 0), a cell
+  // size per label (m), and whether `units`/`scale` were given (they apply
+  // only when the image's header names no unit).
+  std::vector<int32_t> labels;
+  std::map<int32_t, double> label_cell_size;
+  bool scale_given = false;
 };
 
 // `time`: the run lasts `duration`; one haptic tick is dt * substeps.
@@ -60,7 +67,8 @@ inline constexpr double kDefaultGravityZ = -9.81;  // m/s^2, along -z
 struct Scenario {
   std::filesystem::path file;  // the scenario file as given (for messages and the log)
   MeshDef mesh;
-  Material material;
+  Material material;                    // the first of `materials` when those are given
+  std::vector<LabelMaterial> materials;  // per-label materials; empty: `material` everywhere
   std::vector<FixedSelector> fixed;
   Vec3 gravity{0, 0, kDefaultGravityZ};  // m/s^2; [0,0,0] switches the gravity pass off
   TimeDef time;

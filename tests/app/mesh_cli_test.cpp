@@ -2,6 +2,7 @@
 // naming the file and the problem, and writes no output file; --json parses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -239,6 +240,47 @@ TEST(ExampleCli, RegeneratesTheCommittedExamplesByteForByte) {
     const auto committed = std::filesystem::path(ORGANSIM_SOURCE_DIR) / "examples" / (std::string(shape) + ".off");
     EXPECT_EQ(read_text_file(path), read_text_file(committed)) << shape << ": examples/ is out of date or the generator changed";
   }
+}
+
+}  // namespace
+}  // namespace organsim
+
+namespace organsim {
+namespace {
+
+TEST(MeshImageCli, LabelledImageGivesALabelledMeshAndVolumesPerLabel) {
+  const auto dir = testing::fresh_test_dir("mesh_image_cli");
+  const auto out = dir / "phantom.vtu";
+  const CliRun run = run_organsim("mesh " + std::string(ORGANSIM_SOURCE_DIR) +
+                                      "/examples/phantom.nii.gz --cell-size 0.004 --cell-size 2:0.002 --no-exude --json -o " +
+                                      out.string(),
+                                  dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(run.out);  // CGAL's progress must not reach stdout
+  ASSERT_EQ(report["labels"].size(), 2u);
+  EXPECT_EQ(report["labels"][0]["label"], 1);
+  EXPECT_EQ(report["labels"][1]["label"], 2);
+  EXPECT_GT(report["labels"][1]["image_volume_m3"].get<double>(), 2e-6);
+  const TetMesh mesh = read_tet_mesh(out);
+  ASSERT_EQ(mesh.labels.size(), mesh.tets.size());
+  EXPECT_EQ(static_cast<int>(std::count(mesh.labels.begin(), mesh.labels.end(), 2)), report["labels"][1]["tets"].get<int>());
+}
+
+TEST(MeshImageCli, BadImagesExitWithTheInputCodeAndWriteNothing) {
+  const auto dir = testing::fresh_test_dir("mesh_image_cli_bad");
+  const std::string phantom = std::string(ORGANSIM_SOURCE_DIR) + "/examples/phantom.nii.gz";
+  const CliRun none = run_organsim("mesh " + phantom + " --labels 9 -o " + (dir / "out.vtu").string(), dir);
+  EXPECT_EQ(none.exit_code, 3);
+  EXPECT_NE(none.err.find("phantom.nii.gz: no voxel of the labels 9: it has labels 1 ("), std::string::npos) << none.err;
+  write_fixture(dir / "garbage.nii", "this is not a NIfTI header");
+  const CliRun garbage = run_organsim("mesh " + (dir / "garbage.nii").string() + " -o " + (dir / "out.vtu").string(), dir);
+  EXPECT_EQ(garbage.exit_code, 3);
+  EXPECT_NE(garbage.err.find("garbage.nii: not a readable NIfTI-1 file"), std::string::npos) << garbage.err;
+  const CliRun per_label = run_organsim("mesh " + (std::string(ORGANSIM_SOURCE_DIR) + "/examples/sphere.off") +
+                                            " --cell-size 2:0.01 -o " + (dir / "out.vtu").string(), dir);
+  EXPECT_EQ(per_label.exit_code, 2);
+  EXPECT_NE(per_label.err.find("a size per label is for labelled images only"), std::string::npos) << per_label.err;
+  EXPECT_EQ(other_files(dir, "garbage.nii"), std::vector<std::string>{}) << "an output or temporary file was left";
 }
 
 }  // namespace

@@ -246,7 +246,7 @@ TEST(ScenarioParse, InconsistentCombinationsAreRejected) {
   EXPECT_EQ(error_of(j), "scene.json: outputs.video: needs outputs.frames (the images it is made of)");
   j = minimal();
   j["mesh"]["options"] = {{"target_points", 1000}};
-  EXPECT_EQ(error_of(j), "scene.json: mesh.options: meshing options apply only to a \"surface\" mesh");
+  EXPECT_EQ(error_of(j), "scene.json: mesh.options: meshing options apply only to a \"surface\" or \"image\" mesh");
   j = minimal();
   j["fixed"] = json::parse(R"([{"box": {"min": [0,0,0], "max": [1,1,1]}, "indices": [1]}])");
   EXPECT_NE(error_of(j).find("fixed[0]: expected exactly one of"), std::string::npos);

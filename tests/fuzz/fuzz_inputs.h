@@ -5,7 +5,13 @@
 // through them. Each either accepts the input (and then checks what the next
 // stage relies on, stopping with fuzz::broken when that does not hold, and
 // returns what it read) or throws the organsim::Error that refuses it.
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -17,6 +23,9 @@
 #include "core/scenario/scenario.h"
 #include "core/run/run.h"
 #include "core/stability/critical_step.h"
+#include "core/sweep/case_names.h"
+#include "core/sweep/sweep_spec.h"
+#include "meshing/label_image.h"
 #include "meshing/surface_check.h"
 #include "tests/fuzz/fuzz_check.h"
 
@@ -89,6 +98,71 @@ inline TriangleMesh surface_check_input(std::string_view text, const std::string
   require(checked.faces.size() >= 4, "a closed surface with fewer than 4 faces passed");
   require(surface_volume(checked) > 0, "a surface enclosing no positive volume passed");
   return checked;
+}
+
+// kind sweep: parse the sweep file, expand it and build every case's
+// scenario (what `organsim sweep` does before it runs anything). The base
+// scenario is always scenarios/stress/gentle_push.json (a fuzzed "scenario"
+// path could name /dev/zero). An accepted sweep has cases, each with a
+// valid name and a scenario.
+inline Sweep sweep_input(std::string_view text, const std::string& source) {
+  nlohmann::ordered_json j;
+  try {
+    j = nlohmann::ordered_json::parse(text);
+  } catch (const nlohmann::json::exception&) {
+    parse_sweep_text(text, source);  // must refuse it, naming the file
+    broken("invalid JSON accepted");
+  }
+  if (j.is_object()) j["scenario"] = ORGANSIM_SOURCE_DIR "/scenarios/stress/gentle_push.json";
+  Sweep sweep = parse_sweep(j, source);
+  require(!sweep.cases.empty(), "sweep accepted without cases");
+  for (const SweepCase& c : sweep.cases) {
+    require(case_name_problem(c.name).empty(), "sweep accepted a bad case name: " + c.name);
+    require(!c.scenario_text.empty(), "sweep case without a scenario");
+  }
+  return sweep;
+}
+
+// An upper bound on the cases a sweep file expands to (the sweep harness
+// skips inputs above 256 to keep each execution short; the limit itself is
+// tested in tests/core).
+inline size_t sweep_case_bound(std::string_view text) {
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(text, nullptr, false);
+  if (!j.is_object()) return 1;
+  auto length = [](const nlohmann::ordered_json& v) -> size_t { return v.is_array() ? std::max<size_t>(1, v.size()) : 1; };
+  size_t n = j.contains("cases") ? length(j["cases"]) : 1;
+  for (const char* section : {"grid", "zip"}) {
+    if (!j.contains(section) || !j[section].is_object()) continue;
+    for (const auto& item : j[section].items()) {
+      n *= length(item.value());
+      if (n > 256) return n;
+      if (section[0] == 'z') break;  // zip: one axis
+    }
+  }
+  return n;
+}
+
+// kind label_image: the labelled-image readers (.nii .nii.gz .nrrd .inr by
+// the name's extension). Their libraries read files by name, so the bytes
+// are written to a file named `source` in a folder of this process first;
+// errors name that path. An accepted image is consistent.
+inline LabelImage label_image_input(std::string_view bytes, const std::string& source,
+                                    std::filesystem::path* written = nullptr) {
+  static const std::filesystem::path dir = [] {
+    const auto d = std::filesystem::temp_directory_path() / ("organsim_fuzz_image_" + std::to_string(getpid()));
+    std::filesystem::create_directories(d);
+    return d;
+  }();
+  const std::filesystem::path path = dir / source;
+  if (written) *written = path;
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  LabelImage image = read_label_image(path);
+  require(image.voxel_count() > 0 && image.voxel_count() <= kMaxImageVoxels, "image accepted with a bad voxel count");
+  require(static_cast<int64_t>(image.labels.size()) == image.voxel_count(), "labels do not match the size");
+  for (int32_t l : image.labels) require(l >= 0, "image accepted with a negative label");
+  require(image.axes.allFinite() && image.origin.allFinite() && image.axes.determinant() != 0,
+          "image accepted with a degenerate placement");
+  return image;
 }
 
 }  // namespace organsim::fuzz

@@ -76,7 +76,7 @@ std::vector<fs::path> expand(const std::string& glob) {
 }
 
 // What the row's harness runs on `text`, read as `source`; for an accepted
-// input, how many faces, tets or scenario ticks it gave (a reader that read
+// input, how many faces, tets, scenario ticks, sweep cases or voxels it gave (a reader that read
 // nothing from a good file accepts it empty).
 size_t run_harness(const Row& row, const std::string& text, const std::string& source) {
   if (row.kind == "surface") return fuzz::surface_input(text, source).faces.size();
@@ -87,6 +87,8 @@ size_t run_harness(const Row& row, const std::string& text, const std::string& s
     fuzz::scenario_model(s);
     return static_cast<size_t>(s.time.ticks());
   }
+  if (row.kind == "sweep") return fuzz::sweep_input(text, source).cases.size();
+  if (row.kind == "label_image") return static_cast<size_t>(fuzz::label_image_input(text, source).voxel_count());
   ADD_FAILURE() << "harnesses.txt: row " << row.name << " has an unknown kind " << row.kind;
   return 0;
 }
