@@ -74,12 +74,19 @@ inline Scenario scenario_input(std::string_view text, const std::string& source)
 
 // kind scenario, second stage: what `organsim run` does before the first
 // step that depends on the scenario alone (the Model on a small box scaled
-// by mesh.scale, the critical time step and its check, the backend's tool).
+// by mesh.scale and labelled for per-label materials, the critical time step
+// and its check, the backend's tool).
 // The mesh file itself is not read: the mesh readers have their own
 // harnesses. Its errors name the JSON path or the mesh (cmd_run adds the file).
 inline void scenario_model(const Scenario& s) {
   TetMesh mesh = make_box_tet_mesh({0, 0, 0}, {0.1, 0.1, 0.1}, 2, 2, 2);
   for (Vec3& p : mesh.points) p *= s.mesh.scale;
+  // Per-label materials need a labelled mesh: the box's tets take the labels
+  // the materials name, in turn.
+  std::vector<int32_t> labels;
+  for (const LabelMaterial& m : s.materials) labels.insert(labels.end(), m.labels.begin(), m.labels.end());
+  if (!labels.empty())
+    for (size_t t = 0; t < mesh.tets.size(); ++t) mesh.labels.push_back(labels[t % labels.size()]);
   const Model model = build_model(mesh, s.material, model_options(s), "box.mesh");
   const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
   const StabilityReport report = estimate_critical_step(model, critical_step_options(model, tool));
@@ -110,7 +117,7 @@ inline Sweep sweep_input(std::string_view text, const std::string& source) {
   try {
     j = nlohmann::ordered_json::parse(text);
   } catch (const nlohmann::json::exception&) {
-    parse_sweep_text(text, source);  // must refuse it, naming the file
+    parse_sweep_text(std::string(text), source);  // must refuse it, naming the file
     broken("invalid JSON accepted");
   }
   if (j.is_object()) j["scenario"] = ORGANSIM_SOURCE_DIR "/scenarios/stress/gentle_push.json";
