@@ -12,17 +12,9 @@ layers=(util mesh physics model sim scenario stability topology io validation fi
 declare -A rank
 for i in "${!layers[@]}"; do rank[${layers[$i]}]=$i; done
 
-# The layer a source file belongs to: core/<folder>/..., meshing/..., app/...
-layer_of_file() {
-  case "$1" in
-    core/*/*) echo "${1#core/}" | cut -d/ -f1 ;;
-    meshing/*) echo meshing ;;
-    app/*) echo app ;;
-    *) echo "" ;;
-  esac
-}
-# The layer an include path names: "core/<folder>/x.h", "meshing/x.h", "app/x.h".
-layer_of_include() {
+# The layer of a path, a source file's or an include's: core/<folder>/...,
+# meshing/..., app/...; "" for anything else.
+layer_of() {
   case "$1" in
     core/*/*) echo "${1#core/}" | cut -d/ -f1 ;;
     meshing/*) echo meshing ;;
@@ -34,7 +26,7 @@ layer_of_include() {
 status=0
 checked=0
 while IFS= read -r file; do
-  from=$(layer_of_file "$file")
+  from=$(layer_of "$file")
   [ -n "$from" ] || continue
   if [ -z "${rank[$from]+x}" ]; then
     echo "$file: folder '$from' has no place in the layer order (scripts/check_layers.sh)"
@@ -43,7 +35,7 @@ while IFS= read -r file; do
   fi
   while IFS= read -r line; do
     include=$(sed -E 's/^[^"]*"([^"]+)".*/\1/' <<<"${line#*:}")
-    to=$(layer_of_include "$include")
+    to=$(layer_of "$include")
     [ -n "$to" ] || continue
     checked=$((checked + 1))
     if [ -z "${rank[$to]+x}" ]; then
