@@ -67,6 +67,13 @@ LabelImage read_nifti(const std::filesystem::path& path, const std::string& sour
   const auto file_bytes = static_cast<int64_t>(std::filesystem::file_size(path, ec));
   if (ec) throw input_error(source, "cannot read its size: " + ec.message());
   const bool compressed = nifti_is_gzfile(path.c_str()) != 0;
+  // vox_offset is a float in the header: a negative or huge one would make
+  // the bound below meaningless (a 353-byte file claiming 455 M voxels at
+  // vox_offset -4e37 passed it and made the library allocate them).
+  if (nim->iname_offset < 0 || (!compressed && nim->iname_offset > file_bytes)) {
+    throw input_error(source, "the header's vox_offset (" + std::to_string(nim->iname_offset) +
+                                  ") lies outside the file's " + std::to_string(file_bytes) + " bytes");
+  }
   const int64_t offset = compressed ? 0 : static_cast<int64_t>(nim->iname_offset);
   check_data_size(image.voxel_count(), nim->nbyper, max_data_bytes(file_bytes - offset, compressed), source);
   if (nifti_image_load(nim.get()) != 0 || nim->data == nullptr) {

@@ -30,6 +30,8 @@ cmake --build "$build" --target organsim_fuzz -j "${ORGANSIM_JOBS:-2}"
 # Leaks are bugs too; a hang is an input taking over 10 s; 2 GB of memory
 # is far more than any input of at most 64 KiB should need.
 options=(-timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1)
+# Leaks inside Debian's image libraries on their error paths, named one by one.
+export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 # Runs harness $1, its log in BUILD/logs/NAME.log and its result line in
 # BUILD/logs/NAME.result. Seeds: the hand-made files and the inputs of past
 # findings (tests/fuzz/regressions), then the row's globs ($2).

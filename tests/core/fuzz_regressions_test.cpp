@@ -62,7 +62,9 @@ TEST(FuzzRegressions, EverySavedInputIsListed) {
   std::set<std::string> listed;
   for (const Regression& r : kCases) listed.insert(r.file);
   for (const auto& e : fs::recursive_directory_iterator(kRegressions)) {
-    if (!e.is_regular_file() || e.path().parent_path().filename() == "surface_check") continue;
+    // surface_check and the image readers need the meshing library: tests/meshing checks theirs.
+    const std::string harness = e.path().parent_path().filename().string();
+    if (!e.is_regular_file() || harness == "surface_check" || harness == "nifti") continue;
     const std::string rel = fs::relative(e.path(), kRegressions).string();
     EXPECT_TRUE(listed.count(rel)) << rel << " has no row in kCases";
   }

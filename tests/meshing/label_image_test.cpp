@@ -192,6 +192,11 @@ TEST(LabelImage, BadImagesAreRefusedNamingTheFileAndTheProblem) {
   write_fixture(dir / "garbage.nii", "not a nifti header");
   refused(dir / "garbage.nii", "not a readable NIfTI-1 file");
   refused(dir / "missing.nii.gz", "no such file");
+  // Found by the fuzzer (tests/fuzz/regressions/nifti): 353 bytes whose
+  // header claims 455 M voxels at vox_offset -4e37; the size check must not
+  // be fooled by the offset (the library allocated the voxels).
+  refused(std::filesystem::path(ORGANSIM_SOURCE_DIR) / "tests/fuzz/regressions/nifti/negative_vox_offset.nii",
+          "lies outside the file");
 }
 
 TEST(LabelImage, NoVoxelOfTheAskedLabelsListsTheLabelsThere) {
