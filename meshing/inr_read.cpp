@@ -4,9 +4,11 @@
 // segmentation. The format names no length unit and no orientation: the
 // axes are the spacings VX, VY, VZ, the origin TX, TY, TZ where given.
 #include <CGAL/ImageIO.h>
+#include <zlib.h>
 
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "core/util/error.h"
 #include "meshing/label_image.h"
@@ -34,9 +36,25 @@ std::vector<int32_t> copy_inr_labels(const _image& im, int64_t count, const std:
   throw input_error(source, "voxels of " + std::to_string(im.wdim) + " bytes: expected 1, 2, 4 or 8-byte integers");
 }
 
+// CGAL ImageIO picks its reader by the file's magic, whatever the file's
+// name: a .inr that is really a PGM reached the PGM reader, which hung on a
+// header the fuzzer made (tests/fuzz/regressions/inr). Only INR is read
+// here: the file, inflated if gzipped, must start with INR's header line.
+void require_inr_header(const std::filesystem::path& path, const std::string& source) {
+  constexpr std::string_view kMagic = "#INRIMAGE-4#{";
+  gzFile file = gzopen(path.c_str(), "rb");
+  if (file == nullptr) throw input_error(source, "cannot open it");
+  char head[kMagic.size()] = {};
+  const int read = gzread(file, head, static_cast<unsigned>(kMagic.size()));
+  gzclose(file);
+  if (read != static_cast<int>(kMagic.size()) || std::string_view(head, kMagic.size()) != kMagic)
+    throw input_error(source, "not an INR image: it does not start with \"#INRIMAGE-4#{\"");
+}
+
 }  // namespace
 
 LabelImage read_inr(const std::filesystem::path& path, const std::string& source) {
+  require_inr_header(path, source);
   int error = 0;
   std::unique_ptr<_image, ImageFree> im(_readImageHeaderAndGetError(path.c_str(), &error));
   if (!im || error != 0) throw input_error(source, "not a readable INR image (bad header)");

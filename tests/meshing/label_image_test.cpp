@@ -197,6 +197,9 @@ TEST(LabelImage, BadImagesAreRefusedNamingTheFileAndTheProblem) {
   // be fooled by the offset (the library allocated the voxels).
   refused(std::filesystem::path(ORGANSIM_SOURCE_DIR) / "tests/fuzz/regressions/nifti/negative_vox_offset.nii",
           "lies outside the file");
+  // Also found by the fuzzer: a .inr that is a PGM inside hung CGAL's PGM reader.
+  refused(std::filesystem::path(ORGANSIM_SOURCE_DIR) / "tests/fuzz/regressions/inr/pgm_inside.inr",
+          "not an INR image");
 }
 
 TEST(LabelImage, NoVoxelOfTheAskedLabelsListsTheLabelsThere) {
