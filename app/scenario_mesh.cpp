@@ -1,6 +1,8 @@
 #include "app/scenario_mesh.h"
 
 #include <chrono>
+#include <functional>
+#include <string>
 
 #include "app/progress_line.h"
 #include "core/mesh/mesh_io.h"
@@ -9,6 +11,17 @@
 #include "meshing/mesh_image.h"
 
 namespace organsim::app {
+
+namespace {
+
+// Shows the mesher's stage on `line` ("organsim: meshing liver.off: ...").
+std::function<void(const std::string&)> meshing_stage_line(ProgressLine& line, const MeshDef& def) {
+  return [&line, &def](const std::string& stage) {
+    line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
+  };
+}
+
+}  // namespace
 
 TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
   const auto start = std::chrono::steady_clock::now();
@@ -24,9 +37,7 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
     options.facet_distance = def.facet_distance;
     options.exude = def.exude;
     ProgressLine line;  // meshing a large target takes minutes: say which stage it is in
-    options.on_stage = [&line, &def](const std::string& stage) {
-      line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
-    };
+    options.on_stage = meshing_stage_line(line, def);
     mesh = mesh_surface(surface, options, def.path.string(), report);
   } else if (def.kind == MeshDef::Kind::Image) {
     ImageMeshOptions options;
@@ -38,9 +49,7 @@ TetMesh load_scenario_mesh(const MeshDef& def, MeshReport* report) {
     options.labels = def.labels;
     if (def.scale_given) options.metres_per_unit = def.scale;  // only for a header without a unit
     ProgressLine line;
-    options.on_stage = [&line, &def](const std::string& stage) {
-      line.show("organsim: meshing " + def.path.filename().string() + ": " + stage);
-    };
+    options.on_stage = meshing_stage_line(line, def);
     mesh = mesh_image_file(def.path, options, report);
   } else {
     mesh = read_tet_mesh(def.path);

@@ -15,13 +15,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void blow_up_in_contact(const std::string& backend) {
-  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / ("blowup_contact_" + backend);
+// scenarios/stress/dt_over.json (the 4 cm box, base fixed) with its mesh
+// path made absolute, for a scene written into a fresh `dir`.
+nlohmann::json stress_box_scene(const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
   nlohmann::json s = nlohmann::json::parse(std::ifstream(stress / "dt_over.json"));
   s["mesh"]["tet"] = (stress / "box.mesh").string();
+  return s;
+}
+
+void blow_up_in_contact(const std::string& backend) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / ("blowup_contact_" + backend);
+  nlohmann::json s = stress_box_scene(dir);
   // dt 2.5 ms is 1.6 x dt_crit of the box alone (1.55 ms), more with the
   // tool's contact stiffness: it diverges within a few hundred ticks.
   s["time"] = {{"duration", 1.0}, {"dt", 0.0025}, {"substeps", 1}};
@@ -75,11 +82,7 @@ TEST(BlowupInContact, GlStopsWithAFiniteForceLog) { blow_up_in_contact("gl"); }
 // that skipped it stopped this run at the first check).
 TEST(BlowupInContact, GraspPullingFromTheFirstTickIsNotABlowUp) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "blowup_grasp_first_tick";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
-  nlohmann::json s = nlohmann::json::parse(std::ifstream(stress / "dt_over.json"));
-  s["mesh"]["tet"] = (stress / "box.mesh").string();
+  nlohmann::json s = stress_box_scene(dir);
   s["time"] = {{"duration", 0.02}, {"dt", 0.0002}, {"substeps", 5}};
   s["tool"] = {{"radius", 0.005},
                {"contact_stiffness", 2000},
