@@ -15,7 +15,6 @@
 #include "core/model/shear_element.h"
 #include "core/physics/force_law.h"
 #include "core/sim/cpu_kernel_avx512.h"
-#include "core/sim/cpu_kernel_avx512_double.h"
 #include "core/sim/kernel_inputs.h"
 #include "core/sim/step_plan.h"
 #include "core/sim/thread_choice.h"
@@ -77,7 +76,7 @@ class CpuBackend final : public Backend {
   // Lanes evaluated together: one 512-bit register of Real.
   static constexpr int32_t kLanes = 64 / static_cast<int32_t>(sizeof(Real));
   // The AVX-512 kernel of this precision.
-  using FastKernel = std::conditional_t<std::is_same_v<Real, float>, Avx512FloatKernel, Avx512DoubleKernel>;
+  using FastKernel = Avx512Kernel<Real>;
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options, StepTiming timing)
@@ -120,7 +119,7 @@ class CpuBackend final : public Backend {
   }
 
   std::string name() const override { return "cpu"; }
-  // The kernel as of now: a rebuild may move a model to the generic one (sutures).
+  // The kernel as of now (a rebuild repacks it for the new model).
   // With the thread count chosen by timing, also what the re-timing during the run did.
   std::string device() const override {
     std::string retimed;
@@ -192,8 +191,9 @@ class CpuBackend final : public Backend {
                                      "the pressures per point, a barrier (avx512 kernel)"
                      : "nodal volumes and pressures, " + tets_per_vertex + ", then a barrier";
       case Pass::ShearSmoothing:
-        return "every point's stress on its node-averaged deformation gradient, " + tets_per_vertex +
-               ", then a barrier";
+        return "every point's stress on its node-averaged deformation gradient, " +
+               (fast_ ? "gathered over its spring slots, then a barrier (avx512 kernel)"
+                      : tets_per_vertex + ", then a barrier");
       case Pass::Springs:
         return std::to_string(m.nspring()) + " springs gathered from both ends (" +
                std::to_string(m.layout.springs.item.size()) + " slots)" + sutures_detail(m);
@@ -202,7 +202,7 @@ class CpuBackend final : public Backend {
       case Pass::ShearElement:
         return std::string(plan_.element == ElementTerm::SmoothedShear ? "smoothed " : "") +
                "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") +
-               "), " + tets_per_vertex;
+               "), " + (fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
       case Pass::ToolContact:
         return plan_.tool == ToolTerm::Push ? "sphere penalty contact on the points" : "grasp attachment springs";
@@ -430,7 +430,10 @@ class CpuBackend final : public Backend {
   // Sutures tighten on their schedule: rest lengths at the start of the tick,
   // constant over its substeps. The few suture slots only; nothing allocates.
   void refresh_suture_rest() {
-    for (const auto& [e, s] : suture_slots_) spring_rest_[e] = static_cast<Real>(model_->spring_rest_at(s, time_));
+    for (const auto& [e, s] : suture_slots_) {
+      spring_rest_[e] = static_cast<Real>(model_->spring_rest_at(s, time_));
+      if (fast_) fast_->set_spring_rest(e, spring_rest_[e]);
+    }
   }
 
   // The AVX-512 kernel packs its own streams from the same Model; while it
@@ -445,6 +448,7 @@ class CpuBackend final : public Backend {
     }
     if (!fast_) fast_ = std::make_unique<FastKernel>();
     fast_->pack(*model_, plan_);
+    refresh_suture_rest();
     fast_partial_.resize(fast_->nchunk());
     // The kernel reads attachment indices a register of points at a time, padding included.
     const size_t npad = static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size;

@@ -7,8 +7,8 @@
 // Two kernels, chosen at construction (and again at every rebuild):
 // - generic: portable C++ the compiler vectorises, any precision, any layout;
 //   the double-precision reference;
-// - avx512: in builds for AVX-512, float (cpu_kernel_avx512.h, 16 lanes) or
-//   double (cpu_kernel_avx512_double.h, 8 lanes), for the models that
+// - avx512: in builds for AVX-512, one template for float (16 lanes) and
+//   double (8 lanes) (cpu_kernel_avx512.h), for the layouts that
 //   avx512_kernel_unsupported() accepts; several times faster.
 // `Auto` takes avx512 where it can and says so in device() and plan().
 #include <functional>

@@ -51,7 +51,7 @@ std::vector<int32_t> batch_tets(const std::vector<int32_t>& run, const std::vect
 
 TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices) {
   std::vector<int32_t> order;
-  if (model.has_volume()) {
+  if (model.has_volume() || model.has_shear_element()) {
     order.resize(model.ntet());
     for (int32_t t = 0; t < model.ntet(); ++t) order[t] = t;
     auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };

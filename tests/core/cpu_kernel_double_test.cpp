@@ -1,7 +1,7 @@
 // The AVX-512 double kernel against the reference (the generic kernel in
 // double): forces per point on random meshes, 1000-step trajectories for
 // every scene variant, threads, the rest state, a rebuild after a cut, each
-// with the per-tet and the averaged nodal volume term, and which kernel a
+// with every per-tet term (volume per tet or nodal, shear element), and which kernel a
 // model gets. The two sum the same terms in different orders (and the
 // kernel's 1/|l| is two Newton steps from a 14-bit estimate, not a square
 // root and a division), so they agree to rounding, not bit for bit. In a
@@ -13,6 +13,7 @@
 
 #include "core/model/model_rebuild.h"
 #include "core/model/nodal_volume.h"
+#include "core/model/shear_element.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/util/error.h"
@@ -51,7 +52,7 @@ std::vector<double> force_term_magnitudes(const Model& m, const std::vector<Vec3
   }
   std::vector<double> nodal;
   if (m.has_nodal_volume()) nodal_volumes(m, x, nodal);
-  for (int32_t t = 0; t < m.ntet(); ++t) {
+  for (int32_t t = 0; t < (m.has_volume() ? m.ntet() : 0); ++t) {
     const auto& v = m.tet_points[t];
     const Vec3 e1 = x[v[1]] - x[v[0]], e2 = x[v[2]] - x[v[0]], e3 = x[v[3]] - x[v[0]];
     double pressure = 0;
@@ -63,6 +64,22 @@ std::vector<double> force_term_magnitudes(const Model& m, const std::vector<Vec3
     const Vec3 g1 = e2.cross(e3) / 6, g2 = e3.cross(e1) / 6, g3 = e1.cross(e2) / 6;
     const double grad[4] = {(g1 + g2 + g3).norm(), g1.norm(), g2.norm(), g3.norm()};
     for (int k = 0; k < 4; ++k) sum[v[k]] += pressure * grad[k];
+  }
+  if (m.has_shear_element()) {
+    // The shear element: k_t (|F| + |phi'(J)| |cof F| + its damper's
+    // (tau / (dt J_d)) 2 |G| |cof F|^2) |g_i|, G = sum_i (x_i - x_prev_i)
+    // g_i^T, the smoothed part's corner stresses bounded alike.
+    for (int32_t t = 0; t < m.ntet(); ++t) {
+      const auto& v = m.tet_points[t];
+      const Eigen::Matrix3d F = deformation_gradient(m, t, x);
+      const Eigen::Matrix3d cof = force_law::shear_cofactor(F);
+      Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
+      for (int32_t a : v) G += (x[a] - x_prev[a]) * shape_gradient_of(m, t, a).transpose();
+      const double J = F.determinant(), jd = std::max(J, force_law::kShearElementMinJ);
+      const double stress = F.norm() + std::abs(force_law::shear_barrier_slope(J)) * cof.norm();
+      const double damper = m.shear_damping_time / dt / jd * 2 * G.norm() * cof.squaredNorm();
+      for (int32_t a : v) sum[a] += m.tet_shear_k[t] * (2 * stress + damper) * shape_gradient_of(m, t, a).norm();
+    }
   }
   return sum;
 }
@@ -97,7 +114,7 @@ TEST(CpuKernelDouble, ThousandStepTrajectoriesTrackTheReferenceInEverySceneVaria
   // term. Tolerance 1e-12 of the box edge (5e-14 m), seven orders below the
   // float kernel's. The reaction sums the same per-point terms: measured
   // 7.5e-16 relative (per tet), 2.2e-15 (nodal); tolerance 1e-12.
-  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal})
+  for (VolumeTerm volume : testing::kEveryTerm)
     testing::expect_scenes_track_the_reference(fast(), 1e-12 * kSize, 1e-12, volume);
 }
 

@@ -1,7 +1,7 @@
 // The AVX-512 float kernel against the double-precision reference (the
 // generic kernel in double): forces per point on random meshes, 1000-step
 // trajectories for every scene variant, threads, the rest state, a rebuild
-// after a cut, each with the per-tet and the averaged nodal volume term,
+// after a cut, each with every per-tet term (volume per tet or nodal, shear element),
 // and which kernel a model gets. In a build without AVX-512 the kernel-specific tests are skipped and
 // the routing test checks that the fallback is taken and said.
 #include <gtest/gtest.h>
@@ -60,7 +60,7 @@ TEST(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVaria
   // deformations of 0.8-27 mm here). The reaction sums the same per-point
   // terms: measured up to 1.6e-6 relative (per tet) and 3.3e-6 (nodal);
   // tolerance 1e-4.
-  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal})
+  for (VolumeTerm volume : testing::kEveryTerm)
     testing::expect_scenes_track_the_reference(fast(), 1e-5 * kSize, 1e-4, volume);
 }
 

@@ -1,8 +1,9 @@
 #pragma once
 // Models and scenes shared by the AVX-512 kernel tests (float and double):
 // a jittered box with a fixed base, and 1000-step runs of every scene
-// variant (lean, volume + gravity, push, pull), with the per-tet or the
-// averaged nodal volume term.
+// variant (lean, volume + gravity, push, pull), with each per-tet term the
+// kernels run: the per-tet or the averaged nodal volume term, or the shear
+// element (smoothed, or per tet) at a Poisson ratio below 1/4.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -16,16 +17,26 @@ namespace organsim::testing {
 
 constexpr double kSize = 0.05;  // m, edge of the test box
 
-// Which volume term a test model has: none, per tet (volume_modulus
-// 30 kPa) or averaged nodal (poisson_ratio 0.45, where the volume term
-// is most of the stiffness).
-enum class VolumeTerm { None, PerTet, Nodal };
+// Which per-tet term a test model has: none, a volume term per tet
+// (volume_modulus 30 kPa) or averaged nodal (poisson_ratio 0.45, where the
+// volume term is most of the stiffness), or the shear element with its
+// damper, smoothed (the default formulation) at poisson_ratio 0, 0.1 and
+// 0.2, or per tet at 0.2.
+enum class VolumeTerm { None, PerTet, Nodal, Shear0, Shear01, Shear02, ShearPerTet };
+
+// The terms every kernel test runs through.
+inline constexpr VolumeTerm kEveryTerm[] = {VolumeTerm::PerTet,  VolumeTerm::Nodal,   VolumeTerm::Shear0,
+                                            VolumeTerm::Shear01, VolumeTerm::Shear02, VolumeTerm::ShearPerTet};
 
 inline const char* volume_term_name(VolumeTerm v) {
   switch (v) {
     case VolumeTerm::None: return "no volume term";
     case VolumeTerm::PerTet: return "per-tet volume term";
     case VolumeTerm::Nodal: return "nodal volume term";
+    case VolumeTerm::Shear0: return "smoothed shear element, nu 0";
+    case VolumeTerm::Shear01: return "smoothed shear element, nu 0.1";
+    case VolumeTerm::Shear02: return "smoothed shear element, nu 0.2";
+    case VolumeTerm::ShearPerTet: return "per-tet shear element, nu 0.2";
   }
   return "";
 }
@@ -41,6 +52,10 @@ inline Model random_model(unsigned seed, int cells, VolumeTerm volume, bool grav
   material.viscous_damping = 2;
   if (volume == VolumeTerm::PerTet) material.volume_modulus = 30000;
   if (volume == VolumeTerm::Nodal) material.poisson_ratio = 0.45;
+  if (volume == VolumeTerm::Shear0) material.poisson_ratio = 0;
+  if (volume == VolumeTerm::Shear01) material.poisson_ratio = 0.1;
+  if (volume == VolumeTerm::Shear02 || volume == VolumeTerm::ShearPerTet) material.poisson_ratio = 0.2;
+  if (volume == VolumeTerm::ShearPerTet) material.shear_formulation = ShearFormulation::PerTet;
   ModelOptions options;
   options.gravity = gravity ? Vec3(0.3, -1.0, -9.81) : Vec3::Zero();
   options.chunk_size = chunk;
@@ -80,14 +95,14 @@ inline std::vector<Vec3> one_step(const Model& model, const CpuBackendOptions& o
 
 // One step of dt = 1e-4 s from a deformed, moving state (moving_state) on
 // the reference (the generic double kernel) and on `options`, for each
-// volume term, seeds 1-3 and boxes of 3, 6 and 12 cells (12 cells, about
+// term, seeds 1-3 and boxes of 3, 6 and 12 cells (12 cells, about
 // 10k tets, open more tet batches at once than the packing keeps open, so
 // its closing path runs too): calls check(model, x, x_prev, dt, ref, got)
 // with the positions after the step.
 template <class Check>
 inline void for_each_one_step_against_the_reference(const CpuBackendOptions& options, Check check) {
   const double dt = 1e-4;
-  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+  for (VolumeTerm volume : kEveryTerm) {
     for (unsigned seed : {1u, 2u, 3u}) {
       for (int cells : {3, 6, 12}) {
         SCOPED_TRACE(std::string(volume_term_name(volume)) + ", seed " + std::to_string(seed) + ", " +
@@ -185,11 +200,11 @@ inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, 
 }
 
 // The avx512 kernel of `precision` on two threads against one, bitwise, in
-// the scenes with volume, push and pull, for each volume term. 200 steps:
+// the scenes with volume, push and pull, for each term. 200 steps:
 // enough for contact and motion (a loaded machine makes every two-thread
 // step slow, and bitwise equality needs no more).
 inline void expect_two_threads_bit_identical_to_one(Precision precision) {
-  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+  for (VolumeTerm volume : kEveryTerm) {
     const Model model = random_model(3, 6, volume, true);
     for (Scene scene : {Scene::Full, Scene::Push, Scene::Pull}) {
       SCOPED_TRACE(volume_term_name(volume));
@@ -204,13 +219,14 @@ inline void expect_two_threads_bit_identical_to_one(Precision precision) {
 }
 
 // The avx512 kernel of `precision` from rest without gravity, 100 steps,
-// for each volume term and, with the nodal term, after a cut (a rebuild):
-// rest lengths, tet volumes and nodal volumes come from the kernel's own
-// arithmetic on the rounded rest positions, so there is no force at rest
-// and nothing may move at all.
+// for each term and, with the nodal term and the smoothed shear element,
+// after a cut (a rebuild): rest lengths, tet volumes and nodal volumes come
+// from the kernel's own arithmetic on the rounded rest positions, and the
+// shear element reads displacements (F = I exactly), so there is no force
+// at rest and nothing may move at all.
 inline void expect_rest_state_stays_put(Precision precision) {
   const CpuBackendOptions options{precision, 1, CpuKernel::Avx512};
-  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+  for (VolumeTerm volume : kEveryTerm) {
     const Model model = random_model(5, 4, volume, false);
     auto backend = make_cpu_backend(model, {}, options);
     run_ticks(*backend, 10, 1e-4, 10);
@@ -219,25 +235,28 @@ inline void expect_rest_state_stays_put(Precision precision) {
     for (int32_t i = 0; i < model.npoint(); ++i)
       ASSERT_EQ(x[i], model.rest_position[i]) << volume_term_name(volume) << ", point " << i;
   }
-  // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
-  const Model model = random_model(5, 4, VolumeTerm::Nodal, false, kDefaultChunkSize, 0);
-  const Model cut = rebuild_model(model, split_across_plane_x(model, 0.025));
-  ASSERT_GT(cut.npoint(), model.npoint());
-  auto backend = make_cpu_backend(model, {}, options);
-  backend->rebuild(cut);
-  run_ticks(*backend, 10, 1e-4, 10);
-  std::vector<Vec3> x;
-  backend->positions(x);
-  for (int32_t i = 0; i < cut.npoint(); ++i) ASSERT_EQ(x[i], cut.rest_position[i]) << "after a cut, point " << i;
+  for (VolumeTerm volume : {VolumeTerm::Nodal, VolumeTerm::Shear01}) {
+    // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
+    const Model model = random_model(5, 4, volume, false, kDefaultChunkSize, 0);
+    const Model cut = rebuild_model(model, split_across_plane_x(model, 0.025));
+    ASSERT_GT(cut.npoint(), model.npoint());
+    auto backend = make_cpu_backend(model, {}, options);
+    backend->rebuild(cut);
+    run_ticks(*backend, 10, 1e-4, 10);
+    std::vector<Vec3> x;
+    backend->positions(x);
+    for (int32_t i = 0; i < cut.npoint(); ++i)
+      ASSERT_EQ(x[i], cut.rest_position[i]) << volume_term_name(volume) << ", after a cut, point " << i;
+  }
 }
 
 // A push into the top of a box (no jitter) that is cut through at
 // x = 0.025 after 10 ticks, then pushed 20 ticks more (600 steps), with
-// each volume term, on the generic double kernel (the reference) and on
+// each term, on the generic double kernel (the reference) and on
 // `options`: the cut's sides must part in the reference, and positions
 // must agree within `position_tol` m.
 inline void expect_cut_run_tracks_the_reference(const CpuBackendOptions& options, double position_tol) {
-  for (VolumeTerm volume : {VolumeTerm::PerTet, VolumeTerm::Nodal}) {
+  for (VolumeTerm volume : kEveryTerm) {
     SCOPED_TRACE(volume_term_name(volume));
     // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
     const Model model = random_model(4, 4, volume, true, kDefaultChunkSize, 0);
