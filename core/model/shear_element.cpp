@@ -99,7 +99,7 @@ void add_shear_element_damping_forces(const Model& model, const std::vector<Vec3
 Eigen::Matrix3d shear_element_rest_block(const Model& model, int32_t t, int i, int j) {
   const Vec3& gi = model.tet_shape_gradient[t][i];
   const Vec3& gj = model.tet_shape_gradient[t][j];
-  return model.tet_shear_k[t] * (gi.dot(gj) * Eigen::Matrix3d::Identity() + gj * gi.transpose());
+  return model.tet_shear_k[t] * force_law::shear_rest_stiffness(gi, gj);
 }
 
 std::vector<ShearPatchEntry> smoothed_shear_patch(const Model& model, int32_t a) {

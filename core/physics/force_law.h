@@ -132,6 +132,33 @@ inline Matrix3 shear_damping_stress(const Matrix3& Fdot, const Matrix3& cof, Rea
   return (tau / jd) * (a + a.transpose()) * cof;
 }
 
+// --- Rest stiffness -----------------------------------------------------------
+// The linearisation of the laws above at rest, as 3 x 3 blocks K_ij =
+// -df_i/dx_j: what the static solve assembles, the Gershgorin bound sums and
+// dt_crit's operator applies. At rest the stretch, volume change and strain
+// are zero, so only these (Gauss-Newton) parts remain.
+
+// A spring along the unit vector u: K_aa = K_bb = k u u^T, K_ab = K_ba = -k u u^T.
+template <class V3, class Real>
+inline auto spring_rest_stiffness(Real k, const V3& u) {
+  return (k * u * u.transpose()).eval();
+}
+
+// The volume term of a tet or a node with stiffness k (per volume squared)
+// and volume gradients g_i, g_j: K_ij = k g_i g_j^T.
+template <class V3, class Real>
+inline auto volume_rest_stiffness(Real k, const V3& gi, const V3& gj) {
+  return (k * gi * gj.transpose()).eval();
+}
+
+// The shear element per unit k with shape gradients g_i, g_j:
+// K_ij = (g_i . g_j) I + g_j g_i^T (shear_stress linearised at F = I).
+template <class V3>
+inline auto shear_rest_stiffness(const V3& gi, const V3& gj) {
+  using M = decltype((gj * gi.transpose()).eval());
+  return (gi.dot(gj) * M::Identity() + gj * gi.transpose()).eval();
+}
+
 // --- Tool ---------------------------------------------------------------------
 
 // Push contact of a sphere (radius R, penalty k N/m, the point's stiffness

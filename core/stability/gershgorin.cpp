@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/model/shear_element.h"
+#include "core/physics/force_law.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -59,7 +60,7 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
     const double n = l.norm();
     if (!(n > 0)) continue;  // coincident ends: no direction, no stiffness (as critical_step.cpp)
     const Vec3 u = l / n;
-    diag_springs += model.spring_k[s] * u * u.transpose();
+    diag_springs += force_law::spring_rest_stiffness(model.spring_k[s], u);
     if (free(other)) off_springs += model.spring_k[s] * weight(other);
   }
 
@@ -88,7 +89,7 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
     });
     for (const auto& [a, g] : nodes) {
       const double k = model.point_volume_k[a];
-      diag += k * g * g.transpose();
+      diag += force_law::volume_rest_stiffness(k, g, g);
       double reach = 0;
       tets_of(a, [&](int32_t t) {
         const Tet& tet = model.tet_points[t];
@@ -104,7 +105,7 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
       const Tet& tet = model.tet_points[t];
       const int corner = static_cast<int>(std::find(tet.begin(), tet.end(), i) - tet.begin());
       const Vec3 gi = volume_gradient(model, tet, corner);
-      diag += model.tet_k[t] * gi * gi.transpose();
+      diag += force_law::volume_rest_stiffness(model.tet_k[t], gi, gi);
       for (int k = 0; k < 4; ++k)
         if (k != corner && free(tet[k]))
           off += model.tet_k[t] * gi.norm() * volume_gradient(model, tet, k).norm() * weight(tet[k]);
@@ -145,7 +146,7 @@ void compute_gershgorin_row(const Model& model, int32_t i, GershgorinRows& rows)
       const auto self = std::find_if(patch.begin(), patch.end(), [&](const ShearPatchEntry& e) { return e.point == i; });
       if (self == patch.end()) continue;
       const Vec3& wi = self->w;
-      diag += k * (wi.squaredNorm() * Mat3::Identity() + wi * wi.transpose());
+      diag += k * force_law::shear_rest_stiffness(wi, wi);
       for (const ShearPatchEntry& e : patch)
         if (e.point != i && free(e.point)) off += 2 * k * wi.norm() * e.w.norm() * weight(e.point);
     }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/model/shear_element.h"
+#include "core/physics/force_law.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -28,7 +29,7 @@ Triplets rest_stiffness(const Model& model) {
   for (int32_t s = 0; s < model.nspring(); ++s) {
     const auto [a, b] = model.spring_ends[s];
     const Vec3 u = (x[b] - x[a]).normalized();
-    const Eigen::Matrix3d block = model.spring_k[s] * u * u.transpose();
+    const Eigen::Matrix3d block = force_law::spring_rest_stiffness(model.spring_k[s], u);
     add_block(t, a, a, block);
     add_block(t, b, b, block);
     add_block(t, a, b, -block);
@@ -48,7 +49,7 @@ Triplets rest_stiffness(const Model& model) {
       const std::vector<ShearPatchEntry> patch = smoothed_shear_patch(model, a);
       for (const ShearPatchEntry& p : patch)
         for (const ShearPatchEntry& q : patch)
-          add_block(t, p.point, q.point, k * (p.w.dot(q.w) * Eigen::Matrix3d::Identity() + q.w * p.w.transpose()));
+          add_block(t, p.point, q.point, k * force_law::shear_rest_stiffness(p.w, q.w));
     }
   if (!model.has_volume()) return t;
   // Nodal: the energy k_a/2 (V_a - V_a^r)^2 gives G^T diag(k_a) G with
@@ -70,7 +71,7 @@ Triplets rest_stiffness(const Model& model) {
       continue;
     }
     for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) add_block(t, tet[i], tet[j], model.tet_k[e] * g[i] * g[j].transpose());
+      for (int j = 0; j < 4; ++j) add_block(t, tet[i], tet[j], force_law::volume_rest_stiffness(model.tet_k[e], g[i], g[j]));
   }
   if (model.has_nodal_volume()) {
     const int32_t n = model.npoint();

@@ -98,5 +98,56 @@ TEST(ForceLaw, ShearBarrierSlopeIsTheBarriersDerivative) {
   }
 }
 
+// The rest stiffness blocks are the derivative of the forces at rest:
+// K_ij = -df_i/dx_j by central differences of each law at a rest state
+// (a spring at its rest length, a tet at its rest volume, F = I). The
+// forces are linear there to O(h^2): 1e-7 of the block's scale as above.
+TEST(ForceLaw, RestStiffnessIsMinusTheForcesDerivativeAtRest) {
+  const Vec3 a(0.01, 0.002, -0.003), b(0.025, 0.011, 0.004);
+  const double k = 37, rest = (b - a).norm();
+  auto spring_force_on_a = [&](const Vec3& pb) {
+    const double length = (pb - a).norm();
+    return Vec3(fl::spring_tension(k, 0.0, length, rest, 0.0) * (pb - a) / length);
+  };
+  const Eigen::Matrix3d K_spring = fl::spring_rest_stiffness(k, Vec3((b - a) / rest));
+  for (int c = 0; c < 3; ++c) {
+    Vec3 plus = b, minus = b;
+    plus[c] += kH, minus[c] -= kH;
+    const Vec3 dfa = (spring_force_on_a(plus) - spring_force_on_a(minus)) / (2 * kH);
+    EXPECT_LT((-dfa - Eigen::Vector3d(-K_spring.col(c))).norm(), kTol * K_spring.norm()) << c;  // K_ab = -K_aa
+  }
+
+  const Vec3 x0(0, 0, 0), x1(0.011, 0.001, 0), x2(0.002, 0.01, 0.001), x3(0.001, -0.001, 0.012);
+  const double kv = 3e9, v_rest = fl::tet_volume6(Vec3(x1 - x0), Vec3(x2 - x0), Vec3(x3 - x0)) / 6;
+  auto volume_force_on_1 = [&](const Vec3& p2) {
+    const Vec3 e1 = x1 - x0, e2 = p2 - x0, e3 = x3 - x0;
+    Vec3 g1, g2, g3;
+    fl::tet_volume_gradients6(e1, e2, e3, g1, g2, g3);
+    return Vec3(-fl::volume_pressure(kv, fl::tet_volume6(e1, e2, e3) / 6, v_rest) * g1 / 6);
+  };
+  Vec3 g1, g2, g3;
+  fl::tet_volume_gradients6(Vec3(x1 - x0), Vec3(x2 - x0), Vec3(x3 - x0), g1, g2, g3);
+  const Eigen::Matrix3d K_volume = fl::volume_rest_stiffness(kv, Vec3(g1 / 6), Vec3(g2 / 6));
+  const double h = kH * 0.01;
+  for (int c = 0; c < 3; ++c) {
+    Vec3 plus = x2, minus = x2;
+    plus[c] += h, minus[c] -= h;
+    const Vec3 df = (volume_force_on_1(plus) - volume_force_on_1(minus)) / (2 * h);
+    EXPECT_LT((-df - Eigen::Vector3d(K_volume.col(c))).norm(), kTol * K_volume.norm()) << c;
+  }
+
+  // Shear element per unit k: f_i = -P(F) g_i with F = I + sum_j u_j g_j^T.
+  const Vec3 gi(31.0, -4.0, 12.0), gj(-7.0, 22.0, 5.0);  // 1/m, gradients of a cm-sized tet
+  const Eigen::Matrix3d K_shear = fl::shear_rest_stiffness(gi, gj);
+  for (int c = 0; c < 3; ++c) {
+    Eigen::Matrix3d dF = Eigen::Matrix3d::Zero();
+    dF.row(c) = gj.transpose() * 1e-6;  // u_j = 1e-6 e_c
+    const Vec3 df = (-fl::shear_stress(Eigen::Matrix3d(Eigen::Matrix3d::Identity() + dF)) * gi +
+                     fl::shear_stress(Eigen::Matrix3d(Eigen::Matrix3d::Identity() - dF)) * gi) / 2e-6;
+    EXPECT_LT((-df - Eigen::Vector3d(K_shear.col(c))).norm(), 1e-6 * K_shear.norm()) << c;
+  }
+}
+
 }  // namespace
 }  // namespace organsim
+
