@@ -17,6 +17,8 @@
 #include <thread>
 
 #include "app/backend_factory.h"
+#include "app/bench_materials.h"
+#include "app/bench_timing.h"
 #include "app/command.h"
 #include "core/mesh/example_shapes.h"
 #include "core/mesh/mesh_io.h"
@@ -65,9 +67,7 @@ struct BenchArgs {
   std::vector<std::string> precisions;  // empty: double and float on cpu, float on gl
   int32_t threads = 0;
   int32_t gl_threads_per_point = 0;
-  int32_t warmup = 200;       // steps
-  int32_t repetitions = 7;
-  int32_t steps = 200;        // steps per repetition
+  BenchSteps steps;           // warm-up, repetitions, steps per repetition (bench_timing.h)
   double dt = 1e-4;           // s
   double volume_modulus = 20000;  // Pa; 0 leaves the volume pass out
   bool nodal_volume = false;      // the averaged nodal volume term instead of the per-tet one
@@ -76,6 +76,8 @@ struct BenchArgs {
   bool exude = true;
   bool frames = true;         // also measure one rendered frame per model
   std::string json;           // --json FILE: the results as JSON ("-": on stdout instead of the table)
+  bool materials = false;     // --materials: the material comparison (bench_materials.h) instead of the size table
+  std::string materials_scenario = "scenarios/liver_suture.json";  // its sutured and unsutured rows
 };
 
 struct Machine {
@@ -112,57 +114,22 @@ std::string utc_now() {
   return s.str();
 }
 
-struct Timing {
-  double median_ms = 0, min_ms = 0, max_ms = 0;  // per step
-};
-
-Timing summarise(std::vector<double> ms) {
-  std::sort(ms.begin(), ms.end());
-  Timing t;
-  t.min_ms = ms.front();
-  t.max_ms = ms.back();
-  const size_t n = ms.size();
-  t.median_ms = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
-  return t;
-}
-
-// Warm-up, then `repetitions` ticks of `steps` substeps each, each closed by
-// a position read-back (a GPU synchronisation); per-step times from each.
-Timing time_backend(Backend& backend, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
-  TickRequest request;
-  request.dt = dt;
-  request.tool_active = false;
-  request.substeps = args.warmup;
-  if (args.warmup > 0) backend.tick(request);
-  backend.positions(positions);
-  request.substeps = args.steps;
-  std::vector<double> ms;
-  for (int32_t r = 0; r < args.repetitions; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    backend.tick(request);
-    backend.positions(positions);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ms.push_back(1e3 * seconds / args.steps);
-  }
-  return summarise(std::move(ms));
-}
-
 // The plain per-spring / per-tet scatter step (one thread, no layout) on the
 // same model, precision and dt, timed the same way: the baseline of the
 // speedup, measured in the same run so that machine load cancels out.
 template <class Real>
-Timing time_scatter(const Model& model, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
+BenchTiming time_scatter(const Model& model, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
   ScatterStep<Real> scatter(model);
-  for (int32_t i = 0; i < args.warmup; ++i) scatter.step(dt);
+  for (int32_t i = 0; i < args.steps.warmup; ++i) scatter.step(dt);
   std::vector<double> ms;
-  for (int32_t r = 0; r < args.repetitions; ++r) {
+  for (int32_t r = 0; r < args.steps.repetitions; ++r) {
     const auto start = std::chrono::steady_clock::now();
-    for (int32_t i = 0; i < args.steps; ++i) scatter.step(dt);
+    for (int32_t i = 0; i < args.steps.steps; ++i) scatter.step(dt);
     scatter.positions(positions);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ms.push_back(1e3 * seconds / args.steps);
+    ms.push_back(1e3 * seconds / args.steps.steps);
   }
-  return summarise(std::move(ms));
+  return summarise_ms(std::move(ms));
 }
 
 struct Row {
@@ -171,8 +138,8 @@ struct Row {
   double mesh_seconds = 0;
   double dt = 0, dt_crit = 0;  // s: the step used and the model's critical step
   std::string backend, precision, device;
-  Timing timing;
-  Timing scatter;  // the plain scatter step, same model and precision, 1 thread
+  BenchTiming timing;
+  BenchTiming scatter;  // the plain scatter step, same model and precision, 1 thread
   Plan plan;
   double check_ms = 0;  // one blow-up check (positions read back included)
   int32_t check_interval = 10;  // the run's default ticks between checks on this backend
@@ -211,6 +178,7 @@ struct Results {
   std::vector<std::pair<int32_t, ChangeCost>> change_rows;  // points, cost of one local cut
   std::string frames_unavailable;
   std::vector<std::pair<std::string, std::string>> unavailable;  // backend, reason
+  std::vector<MaterialComparison> materials;  // --materials: one per size and precision
 };
 
 Results measure(const BenchArgs& args) {
@@ -235,6 +203,24 @@ Results measure(const BenchArgs& args) {
     mo.exude = args.exude;
     MeshReport report;
     const TetMesh mesh = mesh_surface(surface, mo, surface_name, &report);
+    if (args.materials) {
+      const std::vector<std::string> precisions = args.precisions.empty() ? std::vector<std::string>{"float"} : args.precisions;
+      for (const std::string& precision : precisions) {
+        MaterialBenchOptions mb;
+        mb.precision = precision;
+        // Every row on the same thread count (the backend's own choice would
+        // time each row on whatever count a moment of load favoured, and its
+        // probes of the other count land in the timed steps).
+        mb.threads = args.threads > 0 ? args.threads : std::max(1, static_cast<int32_t>(std::thread::hardware_concurrency()));
+        mb.steps = args.steps;
+        mb.dt = args.dt;
+        mb.exude = args.exude;
+        mb.suture_scenario = args.materials_scenario;
+        mb.quiet = quiet;
+        res.materials.push_back(measure_materials(mb, mesh, surface_name, target));
+      }
+      continue;
+    }
     Material material;
     material.young_modulus = 8000;
     material.volume_modulus = args.volume_modulus;
@@ -284,7 +270,7 @@ Results measure(const BenchArgs& args) {
       row.plan = backend->plan();
       row.dt = dt;
       row.dt_crit = dt_crit;
-      row.timing = time_backend(*backend, args, dt, positions);
+      row.timing = time_backend(*backend, args.steps, dt, positions);
       row.device = backend->device();  // after the timing: the thread count it ran on
       row.scatter = row.precision == "float" ? time_scatter<float>(model, args, dt, positions)
                                              : time_scatter<double>(model, args, dt, positions);
@@ -313,8 +299,8 @@ nlohmann::json to_json(const Results& res, const BenchArgs& args) {
   j["machine"] = {{"cpu", machine.cpu}, {"logical_cpus", machine.logical_cpus},
                   {"load_average_at_start", machine.load_average}};
   j["settings"] = {{"sizes", args.sizes}, {"threads", args.threads},
-                   {"warmup_steps", args.warmup}, {"repetitions", args.repetitions},
-                   {"steps_per_repetition", args.steps}, {"dt", args.dt},
+                   {"warmup_steps", args.steps.warmup}, {"repetitions", args.steps.repetitions},
+                   {"steps_per_repetition", args.steps.steps}, {"dt", args.dt},
                    {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
                    {"volume_formulation", args.nodal_volume ? "nodal" : "per_tet"},
                    {"poisson_ratio", args.poisson_ratio >= 0 ? nlohmann::json(args.poisson_ratio) : nlohmann::json()},
@@ -362,16 +348,41 @@ nlohmann::json to_json(const Results& res, const BenchArgs& args) {
   }
   j["unavailable"] = nlohmann::json::array();
   for (const auto& [b, why] : res.unavailable) j["unavailable"].push_back({{"backend", b}, {"reason", why}});
+  if (args.materials) {
+    j["settings"]["materials_scenario"] = args.materials_scenario;
+    j["materials"] = nlohmann::json::array();
+    for (const MaterialComparison& c : res.materials) {
+      j["materials"].push_back(to_json(c));
+    }
+  }
   return j;
 }
 
-void print_table(const Results& res, const BenchArgs& args) {
+void print_machine(const Results& res) {
   const Machine& machine = res.machine;
-  const std::vector<Row>& rows = res.rows;
-  const std::vector<FrameRow>& frame_rows = res.frame_rows;
   std::cout << "organsim bench, " << res.date << "\n";
   std::cout << "machine: " << machine.cpu << ", " << machine.logical_cpus << " logical CPUs, load average "
             << machine.load_average << " at start\n";
+}
+
+// --materials: the comparison instead of the size table.
+void print_material_comparisons(const Results& res, const BenchArgs& args) {
+  print_machine(res);
+  std::cout << "step:    springs + dampers + the material's terms + gravity + Verlet, no tool; dt " << args.dt
+            << " s or half the model's dt_crit if smaller; " << args.steps.warmup << " warm-up steps, then "
+            << args.steps.repetitions << " repetitions of " << args.steps.steps << " steps\n";
+  std::cout << "models:  " << res.surface_name << " and " << args.materials_scenario
+            << "'s surface, meshed to the same point count\n";
+  for (const MaterialComparison& c : res.materials) {
+    std::cout << "\n";
+    print_materials(std::cout, c);
+  }
+}
+
+void print_table(const Results& res, const BenchArgs& args) {
+  print_machine(res);
+  const std::vector<Row>& rows = res.rows;
+  const std::vector<FrameRow>& frame_rows = res.frame_rows;
   const std::string material_terms =
       args.poisson_ratio >= 0 ? " (poisson_ratio " + format_number(args.poisson_ratio, "%.3g") +
                                     (args.poisson_ratio < kShearElementBelowPoissonRatio ? ": + shear element)"
@@ -380,8 +391,8 @@ void print_table(const Results& res, const BenchArgs& args) {
                                 : "";
   std::cout << "step:    springs + dampers" << material_terms
             << " + gravity + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
-            << args.warmup << " warm-up steps, then "
-            << args.repetitions << " repetitions of " << args.steps << " steps; median (min..max) ms per step\n";
+            << args.steps.warmup << " warm-up steps, then "
+            << args.steps.repetitions << " repetitions of " << args.steps.steps << " steps; median (min..max) ms per step\n";
   std::cout << "models:  " << res.surface_name << " meshed to the paper's point counts"
             << (args.exude ? " (with exudation)" : "") << "\n\n";
   std::cout << std::left << std::setw(8) << "paper" << std::right << std::setw(7) << "points" << std::setw(8)
@@ -463,7 +474,7 @@ void print_table(const Results& res, const BenchArgs& args) {
 }
 
 void run_bench(const BenchArgs& args) {
-  if (args.repetitions < 1 || args.steps < 1 || args.warmup < 0) {
+  if (args.steps.repetitions < 1 || args.steps.steps < 1 || args.steps.warmup < 0) {
     throw Error(ErrorKind::Usage, "bench: --repetitions and --steps must be >= 1, --warmup >= 0");
   }
   if (!args.json.empty() && args.json != "-") {
@@ -478,7 +489,11 @@ void run_bench(const BenchArgs& args) {
     std::cout << to_json(res, args).dump(2) << "\n";
     return;
   }
-  print_table(res, args);
+  if (args.materials) {
+    print_material_comparisons(res, args);
+  } else {
+    print_table(res, args);
+  }
   // The same figures as the table, as a data file (docs/bench/ keeps one per
   // machine and date); written whole or not at all.
   if (!args.json.empty()) {
@@ -512,9 +527,9 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_option("--gl-threads-per-point", args->gl_threads_per_point,
                   "GL invocations sharing one point's gathers, 1 to 16 (0: 1 on a software renderer, 8 on a GPU)")
       ->check(CLI::Range(0, 16));
-  cmd->add_option("--warmup", args->warmup, "Warm-up steps before timing (default 200)");
-  cmd->add_option("--repetitions", args->repetitions, "Timed repetitions; the median is reported (default 7)");
-  cmd->add_option("--steps", args->steps, "Steps per repetition (default 200)");
+  cmd->add_option("--warmup", args->steps.warmup, "Warm-up steps before timing (default 200)");
+  cmd->add_option("--repetitions", args->steps.repetitions, "Timed repetitions; the median is reported (default 7)");
+  cmd->add_option("--steps", args->steps.steps, "Steps per repetition (default 200)");
   cmd->add_option("--dt", args->dt, "Integration step, s (default 1e-4; half the model's critical step if that is smaller)")->check(CLI::PositiveNumber);
   cmd->add_option("--volume-modulus", args->volume_modulus, "Pa; 0 leaves the volume pass out (default 20000)")
       ->check(CLI::NonNegativeNumber);
@@ -524,6 +539,14 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
                   "Material with this Poisson ratio instead of --volume-modulus (below 0.25 it has the shear element, "
                   "docs/physics.md)")
       ->check(CLI::Range(0.0, 0.4999));
+  cmd->add_flag("--materials", args->materials,
+                "Instead of the size table: the materials' cost side by side on the CPU (per-tet volume_modulus, "
+                "poisson_ratio 0.45 and 0.2, a scenario before and after its sutures), at --sizes (default 7750) in "
+                "--precision (default float), with the ratios of the medians");
+  cmd->add_option("--materials-scenario", args->materials_scenario,
+                  "The scenario with sutures for --materials, meshed to each size (default "
+                  "scenarios/liver_suture.json)")
+      ->type_name("FILE");
   cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");
   cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
   cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");
@@ -531,8 +554,15 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
                   "Also write the results as JSON to FILE (written whole or not at all); - prints the JSON on stdout "
                   "instead of the table")
       ->type_name("FILE");
-  cmd->callback([args, backends, precisions] {
+  CLI::Option* sizes_option = cmd->get_option("--sizes");
+  cmd->callback([args, backends, precisions, sizes_option] {
     args->backends = split_list(*backends);
+    if (args->materials) {
+      if (sizes_option->count() == 0) args->sizes = {7750};  // the paper's liver
+      for (const std::string& b : args->backends) {
+        if (b != "cpu") throw Error(ErrorKind::Usage, "bench: --materials times the CPU backend's kernels, not " + b);
+      }
+    }
     args->precisions = split_list(*precisions);
     for (const std::string& p : args->precisions) {
       if (p != "double" && p != "float") {

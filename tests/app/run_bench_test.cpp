@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "tests/app/run_cli_test_util.h"
 
@@ -144,6 +147,80 @@ TEST(RunBench, ABackendAskedForByNameRunsOrIsAnErrorNeverACpuRow) {
   } else {
     test::expect_no_gl_context_here(r);  // never a quiet CPU row, never a broken backend
   }
+}
+
+// `bench --materials`: the five rows side by side, each with the kernel it
+// ran on, and the three ratios of their medians (their values are what the
+// command is for; only their arithmetic is checked here).
+TEST(RunBench, MaterialComparisonReportsEveryRowWithItsKernelAndTheRatios) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_materials";
+  const fs::path scenario = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "liver_suture.json";
+  const auto r = test::run_organsim("bench --materials --sizes 300 --repetitions 2 --steps 3 --warmup 1 --no-exude "
+                                    "--materials-scenario '" + scenario.string() + "' --json -", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["rows"].empty());  // the comparison instead of the size table
+  ASSERT_EQ(j["materials"].size(), 1u);
+  const auto& c = j["materials"][0];
+  EXPECT_EQ(c["precision"], "float");  // the default: the fast path, as in the figures
+  ASSERT_EQ(c["rows"].size(), 5u);
+  const char* names[] = {"volume_modulus", "nu_0.45", "nu_0.2", "unsutured", "sutured"};
+  std::map<std::string, double> median;
+  for (size_t i = 0; i < 5; ++i) {
+    const auto& row = c["rows"][i];
+    EXPECT_EQ(row["name"], names[i]);
+    const std::string kernel = row["kernel"], device = row["device"];
+    // The kernel is the one the backend's device line names after the timing.
+    EXPECT_TRUE(kernel == "avx512" || kernel == "generic") << kernel;
+    EXPECT_NE(device.find(", " + kernel + " kernel"), std::string::npos) << device;
+    // Every row on the same, fixed thread count (no per-row timing choice).
+    EXPECT_NE(device.find(std::to_string(std::max(1u, std::thread::hardware_concurrency())) + " thread"),
+              std::string::npos) << device;
+    EXPECT_NEAR(row["points"].get<double>(), 300, 60) << row.dump();
+    const double lo = row["min_ms"], med = row["median_ms"], hi = row["max_ms"];
+    EXPECT_GT(lo, 0.0);
+    EXPECT_LE(lo, med);
+    EXPECT_LE(med, hi);
+    median[names[i]] = med;
+  }
+  // The material rows share one mesh; the suture rows are one model with and
+  // without its sutures (the same points, the sutures' springs added).
+  EXPECT_EQ(c["rows"][0]["points"], c["rows"][2]["points"]);
+  EXPECT_EQ(c["rows"][3]["sutures"], 0);
+  EXPECT_GT(c["rows"][4]["sutures"].get<int>(), 0);
+  EXPECT_EQ(c["rows"][3]["points"], c["rows"][4]["points"]);
+  EXPECT_EQ(c["rows"][4]["springs"].get<int>(),
+            c["rows"][3]["springs"].get<int>() + c["rows"][4]["sutures"].get<int>());
+  // Each row's step has its material's passes.
+  auto has_pass = [&](size_t row, const std::string& pass) {
+    const auto& p = c["rows"][row]["passes"];
+    return std::find(p.begin(), p.end(), pass) != p.end();
+  };
+  EXPECT_FALSE(has_pass(0, "nodal-pressure"));
+  EXPECT_TRUE(has_pass(1, "nodal-pressure"));
+  EXPECT_TRUE(has_pass(2, "shear-element"));
+  ASSERT_EQ(c["ratios"].size(), 3u);
+  const std::pair<const char*, const char*> ratios[] = {
+      {"nu_0.45", "volume_modulus"}, {"nu_0.2", "volume_modulus"}, {"sutured", "unsutured"}};
+  for (size_t i = 0; i < 3; ++i) {
+    const auto& ratio = c["ratios"][i];
+    EXPECT_EQ(ratio["of"], ratios[i].first);
+    EXPECT_EQ(ratio["over"], ratios[i].second);
+    EXPECT_DOUBLE_EQ(ratio["ratio"].get<double>(), median[ratios[i].first] / median[ratios[i].second]);
+    EXPECT_EQ(ratio["within_target"].get<bool>(), ratio["ratio"].get<double>() <= ratio["target"].get<double>());
+  }
+}
+
+TEST(RunBench, MaterialComparisonRefusesGlAndAScenarioWithoutSutures) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_materials_bad";
+  const auto gl = test::run_organsim("bench --materials --sizes 300 --backend gl --json -", dir);
+  EXPECT_EQ(gl.exit_code, 2) << gl.err;
+  EXPECT_NE(gl.err.find("--materials"), std::string::npos) << gl.err;
+  const fs::path push = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "liver_push.json";
+  const auto none = test::run_organsim("bench --materials --sizes 300 --repetitions 1 --steps 1 --warmup 0 --no-exude "
+                                       "--materials-scenario '" + push.string() + "' --json -", dir);
+  EXPECT_EQ(none.exit_code, 4) << none.err;
+  EXPECT_NE(none.err.find(push.string() + ": events"), std::string::npos) << none.err;
 }
 
 }  // namespace

@@ -83,7 +83,10 @@ TEST(Tear, BarTearScenarioComesApartInTwo) {
   EXPECT_GE(components, 2);
   EXPECT_NEAR(recorder.last->total_mass(), model.total_mass(), 1e-12 * model.total_mass());
   // Once torn the grasper pulls nothing: the force at the end of the pull is
-  // a small fraction of its peak before the tear.
+  // a small fraction of its peak before the tear. Measured 3.7 % at 0.55 s
+  // with poisson_ratio 0.45: the torn-off piece still rings along the pull
+  // (about 20 Hz, its axial mode, lightly damped), where the stiffer per-tet
+  // volume_modulus material's had died down to 0.3 %.
   double peak = 0;
   for (const Vec3& f : result.samples.force) peak = std::max(peak, f.norm());
   const size_t before_stop = static_cast<size_t>(0.55 / s.time.tick());
