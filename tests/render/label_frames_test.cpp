@@ -51,7 +51,7 @@ TEST(LabelFrames, LabelColoursAndTheirBoundaryFollowACut) {
   ASSERT_TRUE(looks_like_label_1(cv::Vec3b(0, 159, 230)));  // the palette's own colours, BGR
   ASSERT_TRUE(looks_like_label_2(cv::Vec3b(233, 180, 86)));
   const Model model = two_label_box();
-  auto backend = make_cpu_backend(model, BackendTool{});
+  auto backend = make_cpu_backend(model, BackendTool{}, {Precision::Double, 1});  // one thread: no timing at construction
   const fs::path outdir = fs::path(ORGANSIM_TEST_TMP) / ("label_frames_" + std::to_string(::getpid()));
   fs::remove_all(outdir);
 
