@@ -12,8 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <iostream>
 #include <functional>
+#include <iostream>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -291,7 +291,8 @@ void study_command(const StudyArgs& args) {
   Outcome ref, half;
   run_jobs(2, args.jobs, [&](size_t i) {
     Outcome& o = i == 0 ? ref : half;
-    o = run_configuration(s, model, "cpu", "double", (i + 1) * ref_substeps, threads, sample_every, prepared);
+    o = run_configuration(s, model, "cpu", "double", static_cast<int32_t>(i + 1) * ref_substeps, threads, sample_every,
+                          prepared);
     step("reference dt " + fmt(o.dt));
   });
   if (!ref.stable || !half.stable)
