@@ -69,6 +69,16 @@ void upload(GLuint buffer, const void* data, size_t bytes) {
   glNamedBufferData(buffer, static_cast<GLsizeiptr>(bytes), data, GL_DYNAMIC_DRAW);
 }
 
+// Colours as the shaders' vec4 array (std430: 16 bytes each, alpha 1).
+void upload_colors(GLuint buffer, const std::vector<Vec3f>& rgb) {
+  std::vector<float> rgba(rgb.size() * 4);
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    for (int k = 0; k < 3; ++k) rgba[4 * i + k] = rgb[i][k];
+    rgba[4 * i + 3] = 1.0f;
+  }
+  upload(buffer, rgba.data(), rgba.size() * sizeof(float));
+}
+
 void set_matrix(GLuint program, const char* name, const Eigen::Matrix4f& m) {
   glProgramUniformMatrix4fv(program, glGetUniformLocation(program, name), 1, GL_FALSE, m.data());
 }
@@ -252,25 +262,13 @@ void SurfaceRenderer::use_position_buffer(uint32_t buffer, int stride_floats, in
 void SurfaceRenderer::set_point_colors(const std::vector<Vec3f>& rgb) {
   Impl& s = *impl_;
   s.point_colors = !rgb.empty();
-  std::vector<float> rgba(rgb.size() * 4);
-  for (size_t i = 0; i < rgb.size(); ++i) {
-    rgba[4 * i] = rgb[i].x();
-    rgba[4 * i + 1] = rgb[i].y();
-    rgba[4 * i + 2] = rgb[i].z();
-    rgba[4 * i + 3] = 1.0f;
-  }
-  upload(s.colors, rgba.data(), rgba.size() * sizeof(float));
+  upload_colors(s.colors, rgb);
 }
 
 void SurfaceRenderer::set_face_colors(const std::vector<Vec3f>& rgb) {
   Impl& s = *impl_;
   s.per_face_colors = !rgb.empty();
-  std::vector<float> rgba(rgb.size() * 4);
-  for (size_t i = 0; i < rgb.size(); ++i) {
-    for (int k = 0; k < 3; ++k) rgba[4 * i + k] = rgb[i][k];
-    rgba[4 * i + 3] = 1.0f;
-  }
-  upload(s.face_colors, rgba.data(), rgba.size() * sizeof(float));
+  upload_colors(s.face_colors, rgb);
 }
 
 void SurfaceRenderer::set_lines(const std::vector<Edge>& edges) {
