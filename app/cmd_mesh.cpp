@@ -149,14 +149,14 @@ const bool registered = register_command("mesh", 10, [](CLI::App& root) {
       ->required();
   cmd->add_option("-o,--output", args->output, "tet mesh to write, in metres: .mesh (medit), .vtk (VTK legacy) or .vtu (VTK XML)")
       ->required();
-  auto* target = cmd->add_option("--target-points", args->options.target_points,
+  cmd->add_option("--target-points", args->options.target_points,
                                  "aim for this many points (within 10 %); searches the cell size");
-  auto* cell = cmd->add_option("--cell-size", args->cell_sizes,
+  cmd->add_option("--cell-size", args->cell_sizes,
                                "max tet circumradius and facet size h, m (default: bounding-box diagonal / 20); "
                                "for an image also LABEL:H, repeatable, for one label (e.g. --cell-size 0.004 "
-                               "--cell-size 2:0.0015)")
+                               "--cell-size 2:0.0015); with --target-points only LABEL:H, and the target sizes "
+                               "the other labels")
                    ->allow_extra_args(false);
-  target->excludes(cell);
   cmd->add_option("--facet-distance", args->options.facet_distance,
                   "max distance between the surface and the mesh boundary, m (default 0.1 h)");
   cmd->add_flag("--exude,!--no-exude", args->options.exude,

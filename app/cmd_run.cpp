@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "app/backend_factory.h"
@@ -13,6 +14,8 @@
 #include "app/progress_line.h"
 #include "app/run_observers.h"
 #include "app/scenario_mesh.h"
+#include "core/model/material_summary.h"
+#include "core/model/stiffness.h"
 #include "core/run/prepare_run.h"
 #include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
@@ -55,6 +58,22 @@ std::string human_bytes(size_t bytes) {
 }
 
 
+// "density 1000 kg/m^3, rule poisson_ratio, E 3000 Pa, nu 0.45 (springs E_s ...)".
+std::string describe_material(const Material& material) {
+  const nlohmann::json e = elasticity_json(material);
+  std::ostringstream out;
+  out << "density " << material.density << " kg/m^3, rule " << e["rule"].get<std::string>();
+  if (e.contains("young_modulus")) {
+    out << ", E " << e["young_modulus"].get<double>() << " Pa, nu " << e["poisson_ratio"].get<double>()
+        << " (springs E_s " << e["spring_modulus"].get<double>() << " Pa, volume term "
+        << e["volume_term_modulus"].get<double>() << " Pa, shear element " << e["shear_element_modulus"].get<double>()
+        << " Pa)";
+  } else {
+    out << ", " << e["spring_stiffness"].get<double>() << " N/m per spring";
+  }
+  return out.str();
+}
+
 void print_plan(std::ostream& out, const Scenario& s, const Model& model, const Backend& backend,
                 const std::vector<std::string>& observers) {
   const Plan plan = backend.plan();
@@ -63,6 +82,18 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
   out << "model:    " << model.npoint() << " points (" << nfixed << " fixed), " << model.nspring()
       << " springs, " << model.ntet() << " tets, mass " << model.total_mass() << " kg, volume "
       << model.rest_volume() << " m^3\n";
+  // What each material is, as the stiffness rules read it
+  // (core/model/stiffness.h): one line, or one per label's material.
+  if (model.materials.empty()) {
+    out << "material: " << describe_material(model.material) << "\n";
+  } else {
+    out << "materials per label:\n";
+    for (const MaterialUse& u : material_uses(model)) {
+      out << "  - label";
+      for (size_t i = 0; i < u.labels.size(); ++i) out << (i ? ", " : " ") << u.labels[i];
+      out << ": " << describe_material(*u.material) << "\n";
+    }
+  }
   out << "time:     dt " << s.time.dt << " s x " << s.time.substeps << " substeps = tick " << s.time.tick()
       << " s, " << s.time.ticks() << " ticks (" << s.time.duration << " s)\n";
   out << "backend:  " << backend.name() << " (" << backend.precision() << ", " << backend.device()

@@ -1,4 +1,4 @@
-// `organsim study SCENARIO.json --dt LIST --backend LIST --precision LIST [-o OUTDIR]`
+// `organsim study SCENARIO.json --dt LIST --backend LIST --precision LIST [--jobs N] [-o OUTDIR]`
 // Error against run time: runs the scenario once per configuration, compares
 // each with a converged double-precision CPU reference and writes study.json,
 // study.csv and study.png (error against wall time per simulated second,
@@ -7,18 +7,23 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "app/backend_factory.h"
 #include "app/command.h"
 #include "app/scenario_mesh.h"
+#include "app/sweep_runner.h"
 #include "core/run/prepare_run.h"
 #include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
@@ -48,6 +53,7 @@ struct StudyArgs {
   double ref_tolerance = 1e-4;   // max position change from halving dt_ref, relative to the bbox diagonal
   int32_t samples = 50;          // position samples per run
   int32_t threads = 0;
+  int32_t jobs = 1;              // configurations run at once
 };
 
 struct Outcome {
@@ -223,6 +229,29 @@ void progress(int done, int total, const std::string& what) {
   if (done == total) std::cerr << "\n";
 }
 
+// task(i) for i in [0, count) on up to `jobs` threads, each index once; after
+// all have finished, the first exception (by index) is rethrown, so a
+// failure reads the same as in a serial study.
+void run_jobs(size_t count, int jobs, const std::function<void(size_t)>& task) {
+  std::vector<std::exception_ptr> failed(count);
+  std::atomic<size_t> next{0};
+  const auto worker = [&] {
+    for (size_t i = next++; i < count; i = next++) {
+      try {
+        task(i);
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int k = 1; k < std::min<int>(jobs, static_cast<int>(count)); ++k) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+}
+
 void study_command(const StudyArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (args.duration > 0) s.time.duration = args.duration;
@@ -247,13 +276,25 @@ void study_command(const StudyArgs& args) {
   const int32_t ref_substeps = finest * args.ref_factor;
   const int total = 2 + static_cast<int>(substeps.size() * args.backends.size() * args.precisions.size());
   int done = 0;
+  // With --jobs N the runs share the CPUs: each gets its share of threads
+  // (results do not depend on the thread count, so they equal a serial
+  // study's; run times do, which is why one job is the default).
+  const int32_t threads = args.threads > 0 || args.jobs <= 1 ? args.threads : std::max(1, usable_cpus() / args.jobs);
+  std::mutex progress_mutex, gl_mutex;
+  const auto step = [&](const std::string& what) {
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    progress(++done, total, what);
+  };
 
   // The converged reference: double CPU at dt_ref and dt_ref / 2.
-  progress(done, total, "reference dt " + fmt(tick / ref_substeps));
-  Outcome ref = run_configuration(s, model, "cpu", "double", ref_substeps, args.threads, sample_every, prepared);
-  progress(++done, total, "reference dt " + fmt(tick / (2 * ref_substeps)));
-  Outcome half = run_configuration(s, model, "cpu", "double", 2 * ref_substeps, args.threads, sample_every, prepared);
-  progress(++done, total, "reference done");
+  progress(done, total, "reference dt " + fmt(tick / ref_substeps) + " and " + fmt(tick / (2 * ref_substeps)));
+  Outcome ref, half;
+  run_jobs(2, args.jobs, [&](size_t i) {
+    Outcome& o = i == 0 ? ref : half;
+    o = run_configuration(s, model, "cpu", "double", static_cast<int32_t>(i + 1) * ref_substeps, threads, sample_every,
+                          prepared);
+    step("reference dt " + fmt(o.dt));
+  });
   if (!ref.stable || !half.stable)
     throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + fmt(half.dt) +
                                           " s) did not complete: " + (half.stable ? ref.reason : half.reason));
@@ -264,17 +305,27 @@ void study_command(const StudyArgs& args) {
               << fmt(convergence.position_max) << " of the bbox diagonal (tolerance " << fmt(args.ref_tolerance)
               << "); use a larger --ref-factor\n";
 
-  std::vector<Outcome> runs;
+  struct Configuration {
+    std::string backend, precision;
+    int32_t substeps = 0;
+  };
+  std::vector<Configuration> configurations;
   for (const std::string& b : args.backends)
     for (const std::string& p : args.precisions)
-      for (int32_t n : substeps) {
-        progress(done, total, b + " " + p + " dt " + fmt(tick / n));
-        Outcome o = run_configuration(s, model, b, p, n, args.threads, sample_every, prepared);
-        if (o.stable) o.errors = compare_trajectories(o.trajectory, half.trajectory, diag);
-        o.trajectory = Trajectory{};  // keep memory flat
-        runs.push_back(std::move(o));
-        progress(++done, total, b + " " + p + " dt " + fmt(tick / n));
-      }
+      for (int32_t n : substeps) configurations.push_back({b, p, n});
+  std::vector<Outcome> runs(configurations.size());
+  run_jobs(configurations.size(), args.jobs, [&](size_t i) {
+    const Configuration& c = configurations[i];
+    // GL runs one at a time: each holds its own context, and they would
+    // share one device.
+    std::unique_lock<std::mutex> gl_lock(gl_mutex, std::defer_lock);
+    if (c.backend == "gl") gl_lock.lock();
+    Outcome o = run_configuration(s, model, c.backend, c.precision, c.substeps, threads, sample_every, prepared);
+    if (o.stable) o.errors = compare_trajectories(o.trajectory, half.trajectory, diag);
+    o.trajectory = Trajectory{};  // keep memory flat
+    runs[i] = std::move(o);
+    step(c.backend + " " + c.precision + " dt " + fmt(tick / c.substeps));
+  });
 
   std::vector<double> cost, error;
   for (const Outcome& o : runs) {
@@ -357,7 +408,13 @@ const bool registered = register_command("study", 40, [](CLI::App& root) {
   cmd->add_option("--ref-tolerance", args->ref_tolerance,
                   "Largest position change from halving the reference dt, relative to the bbox diagonal (default 1e-4)");
   cmd->add_option("--samples", args->samples, "Position samples per run (default 50)")->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", args->threads, "CPU threads (0: all)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threads", args->threads,
+                  "CPU threads per run (0: all, or with --jobs the CPUs shared among the jobs)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--jobs", args->jobs,
+                  "Configurations run at once (default 1: the wall times are the study's cost axis, and runs "
+                  "side by side slow each other; the errors are the same)")
+      ->check(CLI::PositiveNumber);
   cmd->callback([args] { study_command(*args); });
 });
 

@@ -64,8 +64,11 @@ void crop_to_labels(LabelImage& image) {
 TetMesh mesh_label_image(LabelImage image, const ImageMeshOptions& options, const std::string& source,
                          MeshReport* report) {
   const auto start = std::chrono::steady_clock::now();
-  if (options.target_points && (options.cell_size || !options.label_cell_size.empty())) {
-    throw Error(ErrorKind::Usage, "give either a target point count or cell sizes, not both");
+  // A target count sizes every label without a size of its own; labels given
+  // one (a tumour finer than its organ) keep it.
+  if (options.target_points && options.cell_size) {
+    throw Error(ErrorKind::Usage, "give either a target point count or a cell size for every label, not both "
+                                  "(per-label cell sizes may go with a target)");
   }
   if (options.target_points && *options.target_points < 4) {
     throw Error(ErrorKind::Usage, "target points must be at least 4, got " + std::to_string(*options.target_points));
@@ -139,8 +142,18 @@ TetMesh mesh_label_image(LabelImage image, const ImageMeshOptions& options, cons
   if (options.cell_size) {
     h = *options.cell_size;
   } else if (options.target_points) {
+    // The search varies the cell size of the labels without their own; its
+    // first guess spreads the target over their volume.
+    double free_volume = 0;
+    for (const auto& [label, n] : counts) {
+      if (label != 0 && !options.label_cell_size.count(label)) free_volume += double(n) * voxel;
+    }
+    if (!(free_volume > 0)) {
+      throw Error(ErrorKind::Usage, source + ": every meshed label has its own --cell-size, so --target-points "
+                                             "has no cell size left to choose; leave one label without a size");
+    }
     const auto points_at = [&](double cell) { return static_cast<int32_t>(mesh_at(cell, false).points.size()); };
-    h = search_cell_size(points_at, labelled_volume, *options.target_points,
+    h = search_cell_size(points_at, free_volume, *options.target_points,
                          [&](const std::string& what) { stage(options, what); }, source, notes);
   } else {
     h = diagonal / 20.0;

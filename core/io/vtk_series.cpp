@@ -78,7 +78,9 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   std::vector<Tri> triangles;
   std::vector<Tet> tets;
   std::vector<int32_t> file_index(n, -1);
-  const std::vector<Tri> faces = def_.surface_only ? extract_boundary_faces(model.tet_points) : std::vector<Tri>{};
+  std::vector<int32_t> face_tet;  // each boundary triangle's tet, for its label
+  const std::vector<Tri> faces =
+      def_.surface_only ? extract_boundary_faces(model.tet_points, &face_tet) : std::vector<Tri>{};
   if (def_.surface_only) {
     std::vector<char> on_surface(n, 0);
     for (const Tri& f : faces) for (int32_t v : f) on_surface[static_cast<size_t>(v)] = 1;
@@ -116,6 +118,13 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
     VtkArray ids{"point_id", 1, {}, false};
     for (int32_t i : order) ids.values.push_back(model.input_of_internal[static_cast<size_t>(i)]);
     attributes.point_data.push_back(std::move(ids));
+    // Each triangle's label is its tet's, so the surface colours by label as
+    // the frames do (and a cut face shows what it cut through).
+    if (!model.tet_label.empty()) {
+      std::vector<int32_t> labels;
+      for (int32_t t : face_tet) labels.push_back(model.tet_label[static_cast<size_t>(t)]);
+      attributes.cell_data.push_back(label_cell_array(labels));
+    }
     std::snprintf(name, sizeof name, "state_%05d.vtp", static_cast<int>(steps_.size()));
   } else {
     VtkArray ratio{"volume_ratio", 1, {}, false};

@@ -15,19 +15,21 @@ constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 struct FaceKey {
   std::array<int32_t, 3> sorted;  // vertex ids ascending: the face's identity
   Tri oriented;                   // as the owning tet sees it
+  int32_t tet;                    // the owning tet's index
 };
 
 }  // namespace
 
-std::vector<Tri> extract_boundary_faces(const std::vector<Tet>& tets) {
+std::vector<Tri> extract_boundary_faces(const std::vector<Tet>& tets, std::vector<int32_t>* owner) {
   std::vector<FaceKey> keys;
   keys.reserve(tets.size() * 4);
-  for (const Tet& tet : tets) {
+  for (size_t t = 0; t < tets.size(); ++t) {
+    const Tet& tet = tets[t];
     for (const auto& f : kTetFace) {
       Tri tri{tet[f[0]], tet[f[1]], tet[f[2]]};
       std::array<int32_t, 3> sorted = tri;
       std::sort(sorted.begin(), sorted.end());
-      keys.push_back({sorted, tri});
+      keys.push_back({sorted, tri, static_cast<int32_t>(t)});
     }
   }
   // Sorting groups the copies of each interior face (two tets) next to each
@@ -36,13 +38,39 @@ std::vector<Tri> extract_boundary_faces(const std::vector<Tet>& tets) {
   std::sort(keys.begin(), keys.end(),
             [](const FaceKey& a, const FaceKey& b) { return a.sorted < b.sorted; });
   std::vector<Tri> boundary;
+  if (owner) owner->clear();
   for (size_t i = 0; i < keys.size();) {
     size_t j = i + 1;
     while (j < keys.size() && keys[j].sorted == keys[i].sorted) ++j;
-    if (j - i == 1) boundary.push_back(keys[i].oriented);
+    if (j - i == 1) {
+      boundary.push_back(keys[i].oriented);
+      if (owner) owner->push_back(keys[i].tet);
+    }
     i = j;
   }
   return boundary;
+}
+
+std::vector<Edge> edges_between_face_groups(const std::vector<Tri>& faces, const std::vector<int32_t>& group) {
+  // Each face's three edges with its group; an edge whose faces are not all
+  // of one group separates two groups.
+  std::vector<std::pair<Edge, int32_t>> half;
+  half.reserve(faces.size() * 3);
+  for (size_t f = 0; f < faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int32_t a = faces[f][k], b = faces[f][(k + 1) % 3];
+      half.push_back({Edge{std::min(a, b), std::max(a, b)}, group[f]});
+    }
+  }
+  std::sort(half.begin(), half.end());
+  std::vector<Edge> between;
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i + 1;
+    while (j < half.size() && half[j].first == half[i].first) ++j;
+    if (half[j - 1].second != half[i].second) between.push_back(half[i].first);  // sorted: first != last
+    i = j;
+  }
+  return between;
 }
 
 double enclosed_volume(const std::vector<Vec3>& points, const std::vector<Tri>& faces) {

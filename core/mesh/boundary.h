@@ -11,7 +11,14 @@ namespace organsim {
 // Faces of `tets` that belong to exactly one tet, counter-clockwise seen from
 // outside, given positively oriented tets (dot(p1-p0, (p2-p0)x(p3-p0)) > 0).
 // Vertex ids are those of `tets`. Deterministic order (sorted by vertex ids).
-std::vector<Tri> extract_boundary_faces(const std::vector<Tet>& tets);
+// `owner`, when given, receives each face's tet index (the frames colour a
+// face by its tet's label).
+std::vector<Tri> extract_boundary_faces(const std::vector<Tet>& tets, std::vector<int32_t>* owner = nullptr);
+
+// Edges of a triangle surface whose faces are not all in one group (group[f]
+// per face, e.g. the owning tet's label): where two labels meet on the
+// surface. Sorted, each once.
+std::vector<Edge> edges_between_face_groups(const std::vector<Tri>& faces, const std::vector<int32_t>& group);
 
 // Volume enclosed by a closed, outward oriented triangle surface (divergence
 // theorem: sum over faces of a . (b x c) / 6), m^3.

@@ -96,6 +96,7 @@ std::string colormap_title(Colormap map) {
   switch (map) {
     case Colormap::Strain: return "strain";
     case Colormap::Displacement: return "displacement";
+    case Colormap::Label: return "label";
     case Colormap::None: break;
   }
   return "";

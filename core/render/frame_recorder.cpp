@@ -2,6 +2,7 @@
 
 #include <EGL/egl.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -12,6 +13,7 @@
 #include "core/render/colormap.h"
 #include "core/render/colormap_range.h"
 #include "core/render/frame_writer.h"
+#include "core/render/label_colors.h"
 #include "core/render/surface_renderer.h"
 #include "core/util/error.h"
 
@@ -79,11 +81,13 @@ struct FrameRecorder::Impl {
   std::vector<float> scalars;
   std::vector<Vec3f> colors;
   std::vector<Vec3> start_positions;  // positions at t = 0 (settled), internal numbering
+  std::vector<int32_t> labels;  // the model's labels, ascending, for the label key
   ColormapRange range;      // fixed for the run once known
   FrameRecorderTiming timing;
 
   void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center) {
-    const bool colormap = frames.style.colormap != Colormap::None;
+    // A scale over per-point values; labels are per face and set with the faces.
+    const bool colormap = frames.style.colormap == Colormap::Strain || frames.style.colormap == Colormap::Displacement;
     auto start = Clock::now();
     // Positions first, while the simulation's context (if any) is current:
     // a GL backend makes its own context current to read them back.
@@ -136,7 +140,9 @@ struct FrameRecorder::Impl {
 
     start = Clock::now();
     cv::Mat image = renderer->read_back();
-    if (frames.style.colormap != Colormap::None) {
+    if (frames.style.colormap == Colormap::Label) {
+      draw_label_key(image, labels);
+    } else if (colormap) {
       draw_colormap_legend(image, colormap_legend_title(frames.style.colormap, range), 0.0, colormap_max,
                            colormap_unit(frames.style.colormap));
     }
@@ -171,8 +177,23 @@ FrameRecorder::~FrameRecorder() {
 }
 
 void FrameRecorder::topology_changed(const Model& model) {
-  ContextScope scope(*impl_->context);
-  impl_->renderer->set_faces(extract_boundary_faces(model.tet_points), model.npoint());
+  Impl& s = *impl_;
+  ContextScope scope(*s.context);
+  std::vector<int32_t> face_tet;
+  const std::vector<Tri> faces = extract_boundary_faces(model.tet_points, &face_tet);
+  s.renderer->set_faces(faces, model.npoint());
+  if (s.frames.style.colormap != Colormap::Label) return;
+  // Labels follow the tets through every rebuild, so the faces a cut opens
+  // take the colour of the tets they belong to, and the lines where two
+  // labels meet on the new surface are found again.
+  const std::vector<int32_t> label_of_face = face_labels(model, face_tet);
+  std::vector<Vec3f> colors(faces.size());
+  for (size_t f = 0; f < faces.size(); ++f) colors[f] = label_rgb(label_of_face[f]);
+  s.renderer->set_face_colors(colors);
+  s.renderer->set_lines(edges_between_face_groups(faces, label_of_face));
+  s.labels = model.tet_label.empty() ? std::vector<int32_t>{0} : model.tet_label;
+  std::sort(s.labels.begin(), s.labels.end());
+  s.labels.erase(std::unique(s.labels.begin(), s.labels.end()), s.labels.end());
 }
 
 void FrameRecorder::on_topology_changed(const Model& next, Backend& /*backend*/) { topology_changed(next); }

@@ -1,6 +1,7 @@
 #include "core/render/surface_renderer.h"
 
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <opencv2/core.hpp>
@@ -68,6 +69,16 @@ void upload(GLuint buffer, const void* data, size_t bytes) {
   glNamedBufferData(buffer, static_cast<GLsizeiptr>(bytes), data, GL_DYNAMIC_DRAW);
 }
 
+// Colours as the shaders' vec4 array (std430: 16 bytes each, alpha 1).
+void upload_colors(GLuint buffer, const std::vector<Vec3f>& rgb) {
+  std::vector<float> rgba(rgb.size() * 4);
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    for (int k = 0; k < 3; ++k) rgba[4 * i + k] = rgb[i][k];
+    rgba[4 * i + 3] = 1.0f;
+  }
+  upload(buffer, rgba.data(), rgba.size() * sizeof(float));
+}
+
 void set_matrix(GLuint program, const char* name, const Eigen::Matrix4f& m) {
   glProgramUniformMatrix4fv(program, glGetUniformLocation(program, name), 1, GL_FALSE, m.data());
 }
@@ -104,7 +115,11 @@ struct SurfaceRenderer::Impl {
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
   GLuint surface_program = 0, tool_program = 0;
   GLuint surface_vao = 0, index_buffer = 0, ring_offset = 0, ring_pairs = 0, own_positions = 0, colors = 0;
+  GLuint face_colors = 0;
   GLsizei index_count = 0;
+  GLuint line_vao = 0, line_buffer = 0;
+  GLsizei line_index_count = 0;
+  bool per_face_colors = false;
   GLuint position_buffer = 0;  // own_positions or an external buffer
   int stride = 4, offset = 0;
   bool point_colors = false;
@@ -139,18 +154,23 @@ SurfaceRenderer::SurfaceRenderer(int width, int height) : impl_(std::make_unique
   s.surface_program = link("render_surface.vert", "render_shade.frag");
   s.tool_program = link("render_tool.vert", "render_shade.frag");
 
-  GLuint buffers[5];
-  glCreateBuffers(5, buffers);
+  GLuint buffers[7];
+  glCreateBuffers(7, buffers);
   s.index_buffer = buffers[0];
   s.ring_offset = buffers[1];
   s.ring_pairs = buffers[2];
   s.own_positions = buffers[3];
   s.colors = buffers[4];
+  s.face_colors = buffers[5];
+  s.line_buffer = buffers[6];
   for (GLuint b : buffers) upload(b, nullptr, 0);
   s.position_buffer = s.own_positions;
-  // Surface points are pulled from storage buffers: the VAO only holds indices.
+  // Surface points are pulled from storage buffers: the VAOs only hold indices
+  // (triangles, and the lines drawn over them).
   glCreateVertexArrays(1, &s.surface_vao);
   glVertexArrayElementBuffer(s.surface_vao, s.index_buffer);
+  glCreateVertexArrays(1, &s.line_vao);
+  glVertexArrayElementBuffer(s.line_vao, s.line_buffer);
 
   std::vector<uint32_t> sphere_indices;
   const std::vector<float> sphere = unit_sphere(32, 16, sphere_indices);
@@ -170,11 +190,11 @@ SurfaceRenderer::SurfaceRenderer(int width, int height) : impl_(std::make_unique
 
 SurfaceRenderer::~SurfaceRenderer() {
   Impl& s = *impl_;
-  const GLuint buffers[] = {s.index_buffer, s.ring_offset, s.ring_pairs, s.own_positions,
-                            s.colors,       s.tool_vertices, s.tool_indices};
-  glDeleteBuffers(7, buffers);
-  const GLuint vaos[] = {s.surface_vao, s.tool_vao};
-  glDeleteVertexArrays(2, vaos);
+  const GLuint buffers[] = {s.index_buffer, s.ring_offset,   s.ring_pairs,   s.own_positions, s.colors,
+                            s.face_colors,  s.line_buffer,   s.tool_vertices, s.tool_indices};
+  glDeleteBuffers(9, buffers);
+  const GLuint vaos[] = {s.surface_vao, s.line_vao, s.tool_vao};
+  glDeleteVertexArrays(3, vaos);
   glDeleteProgram(s.surface_program);
   glDeleteProgram(s.tool_program);
   glDeleteFramebuffers(1, &s.fbo);
@@ -242,14 +262,19 @@ void SurfaceRenderer::use_position_buffer(uint32_t buffer, int stride_floats, in
 void SurfaceRenderer::set_point_colors(const std::vector<Vec3f>& rgb) {
   Impl& s = *impl_;
   s.point_colors = !rgb.empty();
-  std::vector<float> rgba(rgb.size() * 4);
-  for (size_t i = 0; i < rgb.size(); ++i) {
-    rgba[4 * i] = rgb[i].x();
-    rgba[4 * i + 1] = rgb[i].y();
-    rgba[4 * i + 2] = rgb[i].z();
-    rgba[4 * i + 3] = 1.0f;
-  }
-  upload(s.colors, rgba.data(), rgba.size() * sizeof(float));
+  upload_colors(s.colors, rgb);
+}
+
+void SurfaceRenderer::set_face_colors(const std::vector<Vec3f>& rgb) {
+  Impl& s = *impl_;
+  s.per_face_colors = !rgb.empty();
+  upload_colors(s.face_colors, rgb);
+}
+
+void SurfaceRenderer::set_lines(const std::vector<Edge>& edges) {
+  Impl& s = *impl_;
+  upload(s.line_buffer, edges.data(), edges.size() * sizeof(Edge));
+  s.line_index_count = static_cast<GLsizei>(edges.size() * 2);
 }
 
 void SurfaceRenderer::draw(const Camera& camera, const StyleOptions& style, const ToolDraw& tool) {
@@ -270,6 +295,7 @@ void SurfaceRenderer::draw(const Camera& camera, const StyleOptions& style, cons
     set_matrix(program, "u_view", view);
     set_matrix(program, "u_projection", projection);
     glProgramUniform1i(program, glGetUniformLocation(program, "u_flat"), 0);
+    glProgramUniform1i(program, glGetUniformLocation(program, "u_face_colors"), 0);
   }
 
   if (s.index_count > 0) {
@@ -282,6 +308,8 @@ void SurfaceRenderer::draw(const Camera& camera, const StyleOptions& style, cons
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.ring_offset);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, s.ring_pairs);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, s.colors);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, s.face_colors);
+    glProgramUniform1i(p, glGetUniformLocation(p, "u_face_colors"), s.per_face_colors ? 1 : 0);
     glUseProgram(p);
     glBindVertexArray(s.surface_vao);
     // Fill pushed back slightly so the wireframe's lines win the depth test.
@@ -297,6 +325,19 @@ void SurfaceRenderer::draw(const Camera& camera, const StyleOptions& style, cons
       glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
       glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     }
+    if (s.line_index_count > 0) {
+      // Two pixels where the driver draws wide lines (llvmpipe does), so a
+      // boundary between labels stays visible on a contact sheet's tile.
+      GLfloat widths[2] = {1, 1};
+      glGetFloatv(GL_ALIASED_LINE_WIDTH_RANGE, widths);
+      glLineWidth(std::min(2.0f, widths[1]));
+      glProgramUniform1i(p, glGetUniformLocation(p, "u_flat"), 1);
+      set_vec3(p, "u_flat_color", Vec3(0.05, 0.05, 0.05));
+      glBindVertexArray(s.line_vao);
+      glDrawElements(GL_LINES, s.line_index_count, GL_UNSIGNED_INT, nullptr);
+      glLineWidth(1.0f);
+    }
+    glProgramUniform1i(p, glGetUniformLocation(p, "u_face_colors"), 0);
   }
   if (tool.visible && tool.radius > 0) {
     const GLuint p = s.tool_program;

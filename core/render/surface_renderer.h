@@ -46,6 +46,12 @@ class SurfaceRenderer {
 
   // Per-point colours (RGB in [0,1], npoint), or empty for the style's flat colour.
   void set_point_colors(const std::vector<Vec3f>& rgb);
+  // Per-face colours (RGB in [0,1], one per face of set_faces, in its order),
+  // or empty; they take precedence over point colours. Set again after set_faces.
+  void set_face_colors(const std::vector<Vec3f>& rgb);
+  // Edges drawn as dark lines over the surface (e.g. where two labels meet:
+  // edges_between_face_groups), or empty. Point ids as in set_faces.
+  void set_lines(const std::vector<Edge>& edges);
 
   // Draws into the framebuffer (no read-back); glFinish is not called.
   void draw(const Camera& camera, const StyleOptions& style, const ToolDraw& tool);

@@ -8,7 +8,7 @@
 #include <memory>
 #include <optional>
 
-#include "core/model/stiffness.h"
+#include "core/model/material_summary.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/run_events.h"
 #include "core/util/error.h"
@@ -97,7 +97,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   RunResult result;
   result.meta = initial_meta(scenario, model, backend);
   result.meta.extra = options.meta_extra;
-  result.meta.extra["elasticity"] = elasticity_json(model.material);
+  result.meta.extra["elasticity"] = model_elasticity_json(model);
   if (scenario.outputs.forces) result.forces_path = options.outdir / "forces.json";
 
   const TimeDef& time = scenario.time;

@@ -22,11 +22,11 @@ struct CameraDef {
   double fov_deg = 40.0;   // vertical field of view, degrees, in (0, 180)
 };
 
-enum class Colormap { None, Strain, Displacement };
+enum class Colormap { None, Strain, Displacement, Label };
 
 struct FrameStyle {
   bool wireframe = false;                 // edges drawn over the shaded surface
-  Colormap colormap = Colormap::None;     // spring strain or point displacement, with a legend
+  Colormap colormap = Colormap::None;     // spring strain, point displacement (with a scale) or tet label (with a key)
   std::array<double, 3> background{1.0, 1.0, 1.0};  // r, g, b in 0..1
   // Top of the colour scale, kept for the whole run (m for displacement,
   // dimensionless for strain); 0: estimated before the run from the tool's path.

@@ -106,9 +106,8 @@ MeshDef parse_mesh(const nlohmann::json& j, const JsonPath& at, const std::files
       mesh.target_points = static_cast<int32_t>(*n);
     }
     if (auto h = opt.number("cell_size")) mesh.cell_size = require_positive(*h, opt.at("cell_size"));
-    if (mesh.target_points && (mesh.cell_size || !mesh.label_cell_size.empty())) {
-      throw oat.error("give target_points or cell sizes, not both");
-    }
+    // label_cell_size may go with target_points: the target sizes the other labels.
+    if (mesh.target_points && mesh.cell_size) throw oat.error("give target_points or cell_size, not both");
     if (auto d = opt.number("facet_distance")) mesh.facet_distance = require_positive(*d, opt.at("facet_distance"));
     if (auto e = opt.boolean("exude")) mesh.exude = *e;
     opt.finish();

@@ -9,6 +9,7 @@ const char* colormap_name(Colormap c) {
   switch (c) {
     case Colormap::Strain: return "strain";
     case Colormap::Displacement: return "displacement";
+    case Colormap::Label: return "label";
     default: return "none";
   }
 }
@@ -50,9 +51,14 @@ FrameStyle parse_style(const nlohmann::json& j, const JsonPath& at) {
     if (*c == "none") s.colormap = Colormap::None;
     else if (*c == "strain") s.colormap = Colormap::Strain;
     else if (*c == "displacement") s.colormap = Colormap::Displacement;
-    else throw r.at("colormap").error("expected " + one_of({"none", "strain", "displacement"}) + " (got \"" + *c + "\")");
+    else if (*c == "label") s.colormap = Colormap::Label;
+    else throw r.at("colormap").error("expected " + one_of({"none", "strain", "displacement", "label"}) + " (got \"" + *c + "\")");
   }
-  if (auto m = r.number("colormap_max")) s.colormap_max = require_positive(*m, r.at("colormap_max"));
+  if (auto m = r.number("colormap_max")) {
+    // Labels are categories with fixed colours: a scale's top means nothing.
+    if (s.colormap == Colormap::Label) throw r.at("colormap_max").error("expected no colormap_max with colormap \"label\"");
+    s.colormap_max = require_positive(*m, r.at("colormap_max"));
+  }
   if (const auto* b = r.get("background")) {
     const auto rgb = read_numbers(*b, r.at("background"), 3);
     for (size_t i = 0; i < 3; ++i) {

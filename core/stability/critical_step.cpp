@@ -7,6 +7,7 @@
 
 #include "core/model/shear_element.h"
 #include "core/stability/gershgorin.h"
+#include "core/stability/label_shares.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -354,6 +355,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   // and the largest Gershgorin rows.
   std::vector<double> share(n);
   for (int32_t i = 0; i < n; ++i) share[i] = y[i].squaredNorm();
+  if (r.lambda_max > 0) r.label_shares = mode_share_by_label(model, share);
   auto point = [&](int32_t i) {
     LimitingPoint p;
     p.point = model.input_of_internal[i];

@@ -44,6 +44,12 @@ struct LimitingPoint {
   double row_bound = 0;    // Gershgorin row bound of M^-1 K at this point, 1/s^2
 };
 
+// How much of the top mode lies on one label's cells (labelled meshes).
+struct LabelModeShare {
+  int32_t label = 0;
+  double share = 0;  // of the top mode's kinetic energy, 0..1; the labels' shares sum to 1
+};
+
 // A badly shaped tet at a limiting point.
 struct SliverTet {
   std::array<int32_t, 4> points{};  // input numbering
@@ -86,6 +92,10 @@ struct StabilityReport {
   std::vector<LimitingPoint> mode_points;        // largest components of the top mode
   std::vector<LimitingPoint> gershgorin_points;  // largest Gershgorin rows
   std::vector<SliverTet> slivers;                // worst tets at those points
+  // Labelled meshes: the top mode's kinetic energy per label, largest first
+  // (the first label's cells limit dt_crit); a point on an interface splits
+  // its share by the mass each label's tets give it. Empty without labels.
+  std::vector<LabelModeShare> label_shares;
 };
 
 // Estimates dt_crit of `model` at rest. Deterministic (fixed start vector).

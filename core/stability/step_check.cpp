@@ -80,6 +80,10 @@ nlohmann::json to_json(const StabilityReport& r) {
   for (const auto& p : r.mode_points) j["limiting_points"].push_back(point_json(p));
   j["gershgorin_points"] = nlohmann::json::array();
   for (const auto& p : r.gershgorin_points) j["gershgorin_points"].push_back(point_json(p));
+  if (!r.label_shares.empty()) {
+    j["label_shares"] = nlohmann::json::array();
+    for (const auto& l : r.label_shares) j["label_shares"].push_back({{"label", l.label}, {"share", l.share}});
+  }
   j["slivers"] = nlohmann::json::array();
   for (const auto& s : r.slivers)
     j["slivers"].push_back({{"points", s.points},
@@ -106,6 +110,11 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
       << " points near the tool path\n";
   o << "  limiting points (input numbering): " << point_list(r.mode_points, r.mode_points.size())
     << "; largest Gershgorin rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
+  if (!r.label_shares.empty()) {
+    o << "  limited by label " << r.label_shares[0].label << "'s cells: top mode by label";
+    for (const auto& l : r.label_shares) o << " " << l.label << " " << fmt(100 * l.share, "%.0f") << " %";
+    o << "\n";
+  }
   for (const auto& s : r.slivers)
     o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3]
       << "): quality " << fmt(s.quality, "%.3f") << ", min dihedral " << fmt(s.min_dihedral_deg, "%.1f")

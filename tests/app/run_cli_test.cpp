@@ -123,6 +123,10 @@ TEST(RunCli, PlanListsThePassesTheSceneNeedsAndNoMore) {
   const auto r = run_organsim("run --plan '" + lean.string() + "' -o '" + (dir / "out").string() + "'", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("125 points"), std::string::npos) << r.out;
+  // The material as the rules read it: E 5000 Pa springs alone are a solid of nu 1/4.
+  EXPECT_NE(r.out.find("material: density 1060 kg/m^3, rule springs + volume_modulus, E 5000 Pa, nu 0.25 ("),
+            std::string::npos)
+      << r.out;
   EXPECT_NE(r.out.find("  - springs:"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("  - integrate:"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("  - volume:"), std::string::npos) << r.out;

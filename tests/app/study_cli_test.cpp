@@ -72,15 +72,21 @@ TEST(StudyCli, GentlePushStudy) {
 // tick, 1.46 x dt_crit (1.37 ms): the configuration really exceeds dt_crit.
 // (With the scenario's 1 ms tick, --dt 0.002 is rounded to the 1 ms tick,
 // which is stable, so the unstable branch above never runs.)
-TEST(StudyCli, ConfigurationAboveTheCriticalStepIsReportedUnstableWithItsReason) {
-  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_unstable";
+// gentle_push.json with a tick of 2 ms (dt 0.4 ms x 5) and `duration`, as
+// OUT/long_tick.json (OUT emptied first).
+void write_long_tick_scenario(const fs::path& out, double duration) {
   fs::remove_all(out);
   fs::create_directories(out);
   const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
   nlohmann::json scenario = nlohmann::json::parse(std::ifstream(stress / "gentle_push.json"));
   scenario["mesh"]["tet"] = (stress / "box.mesh").string();
-  scenario["time"] = {{"duration", 0.2}, {"dt", 0.0004}, {"substeps", 5}};
+  scenario["time"] = {{"duration", duration}, {"dt", 0.0004}, {"substeps", 5}};
   std::ofstream(out / "long_tick.json") << scenario.dump(2);
+}
+
+TEST(StudyCli, ConfigurationAboveTheCriticalStepIsReportedUnstableWithItsReason) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_unstable";
+  write_long_tick_scenario(out, 0.2);
   std::string output;
   const int code = run("study " + (out / "long_tick.json").string() +
                            " --dt 0.002,0.0005 --precision double --duration 0.2 --threads 1 -o " + out.string(),
@@ -98,6 +104,42 @@ TEST(StudyCli, ConfigurationAboveTheCriticalStepIsReportedUnstableWithItsReason)
   const auto& under = j["runs"][1];
   EXPECT_LT(under["dt"].get<double>(), dt_crit);
   EXPECT_TRUE(under["stable"].get<bool>()) << under.dump();
+}
+
+// --jobs 3 runs the configurations side by side, each with its share of the
+// CPUs: every error, flag and reason equals the serial one-thread study's to
+// the last bit (the runs are pure functions of their configuration and the
+// backends' results do not depend on the thread count). Wall times, and the
+// Pareto front drawn from them, differ and are not compared. The long-tick
+// scenario gives an unstable configuration too.
+TEST(StudyCli, JobsGiveTheSerialStudysResults) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_jobs";
+  write_long_tick_scenario(out, 0.05);
+  nlohmann::json study[2];
+  for (const int jobs : {1, 3}) {
+    const fs::path dir = out / ("jobs_" + std::to_string(jobs));
+    std::string output;
+    const int code = run("study " + (out / "long_tick.json").string() +
+                             " --dt 0.002,0.0005,0.00025 --precision double,float -o " + dir.string() +
+                             (jobs == 1 ? " --threads 1" : " --jobs 3"),
+                         output);
+    ASSERT_EQ(code, 0) << output;
+    study[jobs == 1 ? 0 : 1] = nlohmann::json::parse(std::ifstream(dir / "study.json"));
+  }
+  EXPECT_EQ(study[0]["reference"], study[1]["reference"]);
+  ASSERT_EQ(study[0]["runs"].size(), 6u);
+  ASSERT_EQ(study[1]["runs"].size(), 6u);
+  int unstable = 0;
+  for (size_t i = 0; i < 6; ++i) {
+    nlohmann::json a = study[0]["runs"][i], b = study[1]["runs"][i];
+    for (const char* timing : {"wall_seconds_per_simulated_second", "steps_per_second", "pareto", "device"}) {
+      a.erase(timing);
+      b.erase(timing);
+    }
+    EXPECT_EQ(a, b) << "run " << i;
+    unstable += !a["stable"].get<bool>();
+  }
+  EXPECT_EQ(unstable, 2);  // 2 ms in both precisions
 }
 
 }  // namespace

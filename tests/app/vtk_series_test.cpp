@@ -201,19 +201,78 @@ err = max(abs(g.GetPoint(i)[c] - disp.GetTuple3(i)[c] - rest.GetPoint(int(ids.Ge
           for i in range(g.GetNumberOfPoints()) for c in range(3))
 edges = vtk.vtkFeatureEdges(); edges.SetInputData(g); edges.BoundaryEdgesOn(); edges.NonManifoldEdgesOn()
 edges.FeatureEdgesOff(); edges.ManifoldEdgesOff(); edges.Update()
-print(len(files), files[-1], g.GetNumberOfPoints(), g.GetNumberOfPolys(), err, edges.GetOutput().GetNumberOfCells())
+print(len(files), files[-1], g.GetNumberOfPoints(), g.GetNumberOfPolys(), err, edges.GetOutput().GetNumberOfCells(),
+      int(g.GetCellData().GetArray('label') is None))
 )", dir);
   std::istringstream in(out);
   size_t nfiles = 0, points = 0, polys = 0, open_edges = 1;
   std::string last;
   double rest_error = 1;
-  in >> nfiles >> last >> points >> polys >> rest_error >> open_edges;
+  int no_label = 0;
+  in >> nfiles >> last >> points >> polys >> rest_error >> open_edges >> no_label;
   EXPECT_EQ(nfiles, 3u);  // t = 0, 0.01, 0.02
   EXPECT_EQ(last, "vtk/state_00002.vtp");
   EXPECT_EQ(points, 66u);   // 75 points less the 3 x 3 x 1 inside
   EXPECT_EQ(polys, 128u);   // 64 boundary squares, 2 triangles each
   EXPECT_LT(rest_error, 1e-12);  // Float64 positions: round-off only
   EXPECT_EQ(open_edges, 0u);     // VTK finds the surface closed and manifold
+  EXPECT_EQ(no_label, 1);        // an unlabelled mesh: no label array
+}
+
+TEST(VtkSeries, LabelledMeshCarriesEachTetsLabelAndEachSurfaceTrianglesTets) {
+  // The box with label 1 for x < 2 cm and label 2 beyond, as a labelled .vtu
+  // (cells of 1 cm: no tet straddles x = 2 cm, and every boundary triangle's
+  // centroid lies strictly on one side). VTK reads the series' `label`
+  // arrays, and the script compares each cell's value with its side.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "vtk_series" / "labels";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const bool surface : {false, true}) {
+    nlohmann::json extra = nlohmann::json::parse(R"({"time": {"duration": 0.01}, "outputs": {"vtk": {}}})");
+    extra["outputs"]["vtk"]["surface_only"] = surface;
+    const fs::path scene = scenario_in(dir, extra);
+    TetMesh box = read_tet_mesh(dir / "box.vtu");
+    box.labels.clear();
+    for (const Tet& t : box.tets) {
+      const double x = (box.points[t[0]] + box.points[t[1]] + box.points[t[2]] + box.points[t[3]]).x() / 4;
+      box.labels.push_back(x < 0.02 ? 1 : 2);
+    }
+    write_tet_mesh(dir / "box.vtu", box);
+    const fs::path outdir = dir / (surface ? "surface" : "tets");
+    const auto run = run_organsim("run " + scene.string() + " -o " + outdir.string(), dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const std::string out = testing::run_vtk_python(std::string(R"(
+import xml.etree.ElementTree as ET
+folder = ')") + outdir.filename().string() + R"('
+files = [ds.get('file') for ds in ET.parse(folder + '/states.pvd').getroot().iter('DataSet')]
+surface = files[-1].endswith('.vtp')
+r = vtk.vtkXMLPolyDataReader() if surface else vtk.vtkXMLUnstructuredGridReader()
+r.SetFileName(folder + '/' + files[-1]); r.Update(); g = r.GetOutput()
+label = g.GetCellData().GetArray('label')
+wrong = 0; count = {1: 0, 2: 0}
+for c in range(g.GetNumberOfCells()):
+    cell = g.GetCell(c); n = cell.GetNumberOfPoints()
+    # The rest position: the current point minus its displacement.
+    disp = g.GetPointData().GetArray('displacement')
+    x = sum(g.GetPoint(cell.GetPointId(k))[0] - disp.GetTuple3(cell.GetPointId(k))[0] for k in range(n)) / n
+    value = int(label.GetValue(c)); count[value] = count.get(value, 0) + 1
+    wrong += value != (1 if x < 0.02 else 2)
+print(int(surface), label.GetDataTypeAsString(), g.GetNumberOfCells(), count[1], count[2], wrong)
+)", dir);
+    std::istringstream in(out);
+    int is_surface = -1;
+    std::string type;
+    size_t cells = 0, label_1 = 0, label_2 = 0, wrong = 1;
+    in >> is_surface >> type >> cells >> label_1 >> label_2 >> wrong;
+    EXPECT_EQ(is_surface, surface ? 1 : 0) << out;
+    EXPECT_EQ(type, "int") << out;
+    // 4 x 4 x 2 cubes of 6 tets, half on each side; the surface: 64 squares
+    // of 2 triangles, the two halves mirror images.
+    EXPECT_EQ(cells, surface ? 128u : 192u) << out;
+    EXPECT_EQ(label_1, cells / 2) << out;
+    EXPECT_EQ(label_2, cells / 2) << out;
+    EXPECT_EQ(wrong, 0u) << out;
+  }
 }
 
 }  // namespace

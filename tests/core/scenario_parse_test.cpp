@@ -132,6 +132,22 @@ TEST(ScenarioParse, BackendShorthandAndAutoCamera) {
   EXPECT_DOUBLE_EQ(s.outputs.video->fps, 30.0);
 }
 
+TEST(ScenarioParse, LabelColormapTakesNoScaleTopAndImageMeshesMayTargetAroundALabelsSize) {
+  json j = minimal();
+  j["outputs"] = json::parse(R"({"frames": {"style": {"colormap": "label"}}})");
+  EXPECT_EQ(parse(j).outputs.frames->style.colormap, Colormap::Label);
+  j["outputs"]["frames"]["style"]["colormap_max"] = 0.01;
+  EXPECT_EQ(error_of(j), "scene.json: outputs.frames.style.colormap_max: expected no colormap_max with colormap \"label\"");
+  // A target point count with one label's own size (the target sizes the
+  // rest); with a size for every label it is refused.
+  json m = json::parse(R"({"mesh": {"image": "seg.nii", "options": {"target_points": 2000, "label_cell_size": {"2": 0.0015}}}})");
+  const Scenario s = parse(m);
+  EXPECT_EQ(s.mesh.target_points, 2000);
+  EXPECT_DOUBLE_EQ(s.mesh.label_cell_size.at(2), 0.0015);
+  m["mesh"]["options"]["cell_size"] = 0.003;
+  EXPECT_EQ(error_of(m), "scene.json: mesh.options: give target_points or cell_size, not both");
+}
+
 TEST(ScenarioParse, WrongTypeNamesTheJsonPath) {
   json j = minimal();
   j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}, {"t": 1, "position": [0,0,0]},

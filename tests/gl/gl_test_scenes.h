@@ -76,6 +76,18 @@ inline std::vector<Vec3> perturbed(const Model& model, double amplitude, unsigne
   return round_to_float(x);
 }
 
+// The free points of a box on its base moved 2 % towards its base's centre
+// (0.05, 0.05, 0), rounded to float: a uniform squeeze that springs back
+// within the first ~10 ms, so every pressure and stiffness term drives the
+// motion.
+inline std::vector<Vec3> squeezed_box(const Model& model) {
+  std::vector<Vec3> squeezed = model.rest_position;
+  const Vec3 centre(0.05, 0.05, 0.0);
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (!model.fixed[i]) squeezed[i] = centre + 0.98 * (squeezed[i] - centre);
+  return round_to_float(squeezed);
+}
+
 // A deformed state with velocities: x_t noisy by 1 mm, x_{t-1} by another
 // 1 um, both rounded to float; v = (x_t - x_{t-1}) / dt as the kernels see it.
 struct MovingState {

@@ -43,11 +43,7 @@ TEST(GlNodalVolume, ForceMatchesTheReference) {
 // millimetres).
 TEST(GlNodalVolume, TrajectoryMatchesTheCpuReference) {
   const Model model = gl_test::poisson_box(0.45, Vec3(0, 0, -9.81));
-  std::vector<Vec3> squeezed = model.rest_position;
-  const Vec3 centre(0.05, 0.05, 0.0);
-  for (int32_t i = 0; i < model.npoint(); ++i)
-    if (!model.fixed[i]) squeezed[i] = centre + 0.98 * (squeezed[i] - centre);
-  squeezed = gl_test::round_to_float(squeezed);
+  const std::vector<Vec3> squeezed = gl_test::squeezed_box(model);
   // Compared after every tick: the squeeze springs back within the first
   // ~10 ms (the dampers then settle it), so the pressures matter early.
   const gl_test::TrajectoryDifference d = gl_test::cpu_and_gl_from(model, squeezed, kDt, 100);

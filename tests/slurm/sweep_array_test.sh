@@ -6,9 +6,56 @@
 # force logs must equal the same sweep run locally.
 # Usage: sweep_array_test.sh ORGANSIM_EXE WORKDIR
 # Exit 77 (ctest: skipped) only when the Slurm or munge programs are missing.
+#
+# Nothing this test starts outlives it, however it ends: every process it
+# starts carries ORGANSIM_SLURM_TEST=<its temporary folder> in its
+# environment or runs in that folder (the script works there, so the daemons
+# and the jobs start there; slurmstepd, which slurmd detaches, overwrites the
+# start of its environment with its title but keeps the jobs' folder), and
+# stop_cluster ends exactly those. It runs on exit, on SIGINT/SIGTERM, and,
+# when the script is killed outright (SIGKILL: ctest's timeout kills the
+# test's process tree), from a watchdog started in its own session outside
+# that tree, which waits for the script's process to end. The daemons run in
+# the foreground (not forked off), so they stay in the tree too.
 set -euo pipefail
-organsim=$1
-work=$2
+
+# Ends every process marked with this run's folder (not the caller), SIGTERM
+# first, SIGKILL after 5 s (slurmstepd ignores SIGTERM), then removes the
+# folder. Pure bash while scanning, so the scan starts no process of its own.
+marked_processes() {
+  local environ pid entry
+  for environ in /proc/[0-9]*/environ; do
+    pid=${environ#/proc/}
+    pid=${pid%/environ}
+    if [ "$pid" = "$BASHPID" ] || [ "$pid" = "$$" ]; then continue; fi
+    if [ "/proc/$pid/cwd" -ef "$run" ]; then echo "$pid"; continue; fi
+    while IFS= read -r -d '' entry; do
+      if [ "$entry" = "ORGANSIM_SLURM_TEST=$run" ]; then echo "$pid"; break; fi
+    done 2>/dev/null <"$environ" || true
+  done
+}
+stop_cluster() {
+  local pids
+  pids=$(marked_processes)
+  if [ -n "$pids" ]; then kill $pids 2>/dev/null || true; fi
+  for _ in $(seq 50); do
+    pids=$(marked_processes)
+    if [ -z "$pids" ]; then break; fi
+    sleep 0.1
+  done
+  if [ -n "$pids" ]; then kill -KILL $pids 2>/dev/null || true; fi
+  rm -rf "$run"
+}
+
+if [ "${1:-}" = --watchdog ]; then  # --watchdog SCRIPT_PID RUN_FOLDER
+  run=$3
+  while kill -0 "$2" 2>/dev/null; do sleep 1; done
+  stop_cluster
+  exit 0
+fi
+
+organsim=$(realpath "$1")
+work=$(realpath -m "$2")  # absolute: the script works in its temporary folder
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 
 for program in munged mungekey slurmctld slurmd sbatch squeue sinfo; do
@@ -24,15 +71,13 @@ mkdir -p "$work"
 run=$(mktemp -d /tmp/organsim-slurm.XXXXXX)
 chmod 755 "$run"  # munged refuses a socket folder others cannot traverse
 mkdir -p "$run/munge" "$run/state" "$run/spool" "$run/log"
-pids=()
-stop_cluster() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do
-    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-  done
-  rm -rf "$run"
-}
+# The watchdog has no mark: it starts before the mark is exported.
+setsid -f bash "$0" --watchdog $$ "$run" </dev/null >/dev/null 2>&1
+export ORGANSIM_SLURM_TEST=$run
+cd "$run"
 trap stop_cluster EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 fail() {
   echo "FAILED: $*"
   for f in "$run"/log/*.log "$run"/munge/log; do [ -f "$f" ] && { echo "--- $f"; tail -n 20 "$f"; }; done
@@ -42,9 +87,10 @@ fail() {
 # munge: the credential daemon every Slurm message is signed with.
 mungekey --create --keyfile="$run/munge/munge.key"
 chmod 600 "$run/munge/munge.key"
-munged --key-file="$run/munge/munge.key" --socket="$run/munge/sock" --pid-file="$run/munge/pid" \
-  --log-file="$run/munge/log" --seed-file="$run/munge/seed" || fail "munged did not start"
-pids+=("$(cat "$run/munge/pid")")
+munged --foreground --key-file="$run/munge/munge.key" --socket="$run/munge/sock" --pid-file="$run/munge/pid" \
+  --log-file="$run/munge/log" --seed-file="$run/munge/seed" &
+for _ in $(seq 100); do [ -S "$run/munge/sock" ] && break; sleep 0.1; done
+[ -S "$run/munge/sock" ] || fail "munged did not start"
 
 free_port() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 host=$(hostname -s)
@@ -79,12 +125,8 @@ NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
 CONF
 export SLURM_CONF=$run/slurm.conf
-slurmctld || fail "slurmctld did not start"
-for _ in $(seq 50); do [ -f "$run/slurmctld.pid" ] && break; sleep 0.1; done
-pids+=("$(cat "$run/slurmctld.pid")")
-slurmd || fail "slurmd did not start"
-for _ in $(seq 50); do [ -f "$run/slurmd.pid" ] && break; sleep 0.1; done
-pids+=("$(cat "$run/slurmd.pid")")
+slurmctld -D &
+slurmd -D &
 for _ in $(seq 300); do
   [ "$(sinfo -h -o %T 2>/dev/null)" = idle ] && break
   sleep 0.1
