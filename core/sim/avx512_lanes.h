@@ -106,15 +106,4 @@ template <class Real>
   return static_cast<__mmask8>(_mm512_mask_cmp_epi32_mask(0xff, v, _mm512_setzero_si512(), _MM_CMPINT_NLT));
 }
 
-// Hardware gather of Real lanes base[idx[l] >> 2] (idx the tet streams'
-// indices, pre-scaled by 4): for the few per-point arrays read per tet.
-[[gnu::always_inline]] inline V<float> gather_quarter(const float* base, const int32_t* idx) {
-  const __m512i i = _mm512_srli_epi32(_mm512_load_si512(idx), 2);
-  return {_mm512_i32gather_ps(i, base, 4)};
-}
-[[gnu::always_inline]] inline V<double> gather_quarter(const double* base, const int32_t* idx) {
-  const __m256i i = _mm256_srli_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(idx)), 2);
-  return {_mm512_i32gather_pd(i, base, 8)};
-}
-
 }  // namespace organsim::avx512

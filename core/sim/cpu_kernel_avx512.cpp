@@ -28,8 +28,10 @@ namespace {
 // slices in order, so results do not depend on the thread count.
 constexpr int kSlices = 2;
 
-// The smoothed shear element's per-point stress, row-major.
-constexpr int kStress = 9;
+// The smoothed shear element's per-point stress record: its three rows,
+// each (P_r0, P_r1, P_r2, 0), so that the tet pass reads a row of 16 (or 8)
+// corners with the same loads and transposes as a position.
+constexpr int kStressRecord = 12;
 
 }  // namespace
 
@@ -88,7 +90,7 @@ struct Avx512KernelData {
   // -p_t / 6, its force factor), node_rest = S at rest as the kernel computes
   // it (npad); else empty.
   AlignedVector<Real> node_k, node_rest;
-  AlignedVector<Real> node_stress[kStress];      // smoothed shear: P(Fbar_p) (npad + 1, the last zero); else empty
+  AlignedVector<Real> node_stress;               // smoothed shear: P(Fbar_p) records (kStressRecord (npad + 1), the last zero); else empty
   int32_t slice_begin[kSlices + 1] = {};         // batches of each slice
   // (x, y, z, S) per point, zero between steps (4 (npad + kLanes)): the tet
   // forces, and with the nodal term the slice's part of S.
@@ -121,7 +123,8 @@ size_t Avx512Kernel<Real>::bytes() const {
   }
   add(D.spring_other), add(D.spring_rest), add(D.spring_k), add(D.spring_d);
   for (int k = 0; k < 4; ++k) add(D.tet_v[k]);
-  for (int k = 0; k < 9; ++k) add(D.tet_g[k]), add(D.node_stress[k]);
+  for (int k = 0; k < 9; ++k) add(D.tet_g[k]);
+  add(D.node_stress);
   add(D.tet_k36), add(D.tet_det_rest), add(D.tet_shear_k), add(D.node_k), add(D.node_rest);
   for (const auto& f : D.tet_force) add(f);
   return n;
@@ -403,8 +406,13 @@ void shear_stress_chunk(Data<Real>& D, int32_t c) {
     }
     V33<Real> P, C;
     shear_stress(H, P, C);
+    alignas(64) Real lanes[3][3][kLanes];
     for (int r = 0; r < 3; ++r)
-      for (int k = 0; k < 3; ++k) store(&D.node_stress[3 * r + k][p0], P[r][k]);
+      for (int k = 0; k < 3; ++k) store(lanes[r][k], P[r][k]);
+    Real* const out = D.node_stress.data() + kStressRecord * static_cast<size_t>(p0);
+    for (int l = 0; l < kLanes; ++l)
+      for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) out[kStressRecord * l + 4 * r + k] = lanes[r][k][l];
   }
 }
 
@@ -448,11 +456,14 @@ void tet_slice(Data<Real>& D, const KernelStepInputs<Real>& in, int slice) {
         for (int k = 0; k < 3; ++k) A[r][k] = splat(D.shear_per_tet) * P[r][k];
       if constexpr (Element == ElementTerm::SmoothedShear) {
         const V<Real> corners = splat(D.shear_corners);
-        for (int m = 0; m < kStress; ++m) {
-          const Real* const s = D.node_stress[m].data();
-          const V<Real> sum = gather_quarter(s, q[0]) + gather_quarter(s, q[1]) + gather_quarter(s, q[2]) +
-                              gather_quarter(s, q[3]);
-          A[m / 3][m % 3] = fmadd(corners, sum, A[m / 3][m % 3]);
+        for (int r = 0; r < 3; ++r) {
+          V3<Real> sum, row;
+          gather_x<kStressRecord / 4>(D.node_stress.data() + 4 * r, q[0], sum);
+          for (int i = 1; i < 4; ++i) {
+            gather_x<kStressRecord / 4>(D.node_stress.data() + 4 * r, q[i], row);
+            for (int k = 0; k < 3; ++k) sum[k] = sum[k] + row[k];
+          }
+          for (int k = 0; k < 3; ++k) A[r][k] = fmadd(corners, sum[k], A[r][k]);
         }
       }
       if (D.damped) {
@@ -738,7 +749,7 @@ void Avx512Kernel<Real>::pack(const Model& model, const StepPlan& plan) {
   // Smoothed shear: b of each slot, sum over the tets of (p, q) of
   // k_t g_q / K_p, and the per-point stress (zero at the padding index npad).
   for (auto& b : D.spring_b) b.assign(smoothed ? ns : 0, 0);
-  for (auto& s : D.node_stress) s.assign(smoothed ? n + 1 : 0, 0);
+  D.node_stress.assign(smoothed ? kStressRecord * (n + 1) : 0, 0);
   if (smoothed) {
     // The slot of each tet edge (p, q): every tet edge is a spring
     // (Model::first_suture()), so each has one slot at p.
