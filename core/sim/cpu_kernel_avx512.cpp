@@ -349,11 +349,8 @@ void nodal_volume_slice(Data<Real>& D, const Real* rec, int slice) {
     V3<Real> ev[3];
     for (int i = 0; i < 3; ++i)
       for (int k = 0; k < 3; ++k) ev[i][k] = x[i + 1][k] - x[0][k];
-    alignas(64) Real det[kLanes];
-    store(det, det6(ev[0], ev[1], ev[2]));
-    // One value per vertex: plain adds (the vertices of a batch are distinct).
-    for (int i = 0; i < 4; ++i)
-      for (int l = 0; l < kLanes; ++l) force[q[i][l] + 3] += det[l];
+    const V<Real> det = det6(ev[0], ev[1], ev[2]);
+    for (int i = 0; i < 4; ++i) scatter_add_w(force, q[i], det);
   }
 }
 
