@@ -106,4 +106,13 @@ template <class Real>
   return static_cast<__mmask8>(_mm512_mask_cmp_epi32_mask(0xff, v, _mm512_setzero_si512(), _MM_CMPINT_NLT));
 }
 
+// Hardware gather of base[idx[l]] for the lanes' int32 indices: for the
+// few per-point sums that read one value per slot.
+[[gnu::always_inline]] inline V<float> gather_at(const float* base, const int32_t* idx) {
+  return {_mm512_i32gather_ps(_mm512_load_si512(idx), base, 4)};
+}
+[[gnu::always_inline]] inline V<double> gather_at(const double* base, const int32_t* idx) {
+  return {_mm512_i32gather_pd(_mm256_load_si256(reinterpret_cast<const __m256i*>(idx)), base, 8)};
+}
+
 }  // namespace organsim::avx512

@@ -12,7 +12,7 @@
 //           half the bytes (the two measured the same within noise for
 //           springs at liver size).
 // w is the nodal volume term's scaled pressure, 0 without it. Force arrays
-// are (x, y, z, S) per point in both widths.
+// are (x, y, z, 0) per point in both widths.
 #include <immintrin.h>
 
 #include <cstddef>
@@ -116,11 +116,11 @@ template <int Quarter>
     sum[4 * Quarter + i] = _mm_add_ps(_mm_load_ps(force + q[4 * Quarter + i]),
                                       _mm512_extractf32x4_ps(r[i], Quarter));
 }
-[[gnu::always_inline]] inline void scatter_add(float* force, const int32_t* q, __m512 x, __m512 y, __m512 z,
-                                               __m512 w) {
-  // The inverse of gather3: quarter k of r[i] is (x, y, z, w) of lane 4k + i.
+[[gnu::always_inline]] inline void scatter_add(float* force, const int32_t* q, __m512 x, __m512 y, __m512 z) {
+  // The inverse of gather3: quarter k of r[i] is (x, y, z, 0) of lane 4k + i.
+  const __m512 zero = _mm512_setzero_ps();
   const __m512 u0 = _mm512_unpacklo_ps(x, y), u1 = _mm512_unpackhi_ps(x, y);
-  const __m512 u2 = _mm512_unpacklo_ps(z, w), u3 = _mm512_unpackhi_ps(z, w);
+  const __m512 u2 = _mm512_unpacklo_ps(z, zero), u3 = _mm512_unpackhi_ps(z, zero);
   const __m512 r[4] = {_mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u0, u2, _MM_SHUFFLE(3, 2, 3, 2)),
                   _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u1, u3, _MM_SHUFFLE(3, 2, 3, 2))};
   __m128 sum[16];
@@ -204,20 +204,18 @@ template <int Scale>
 // any is stored; padding lanes all point at npad, whose force stays zero.
 // The quads are made per 256-bit half (4 x 4 transposes), which takes fewer
 // shuffles than to_quads() and the extraction of its halves.
-[[gnu::always_inline]] inline void scatter_add(double* force, const int32_t* q, __m512d x, __m512d y, __m512d z,
-                                               __m512d w) {
+[[gnu::always_inline]] inline void scatter_add(double* force, const int32_t* q, __m512d x, __m512d y, __m512d z) {
   __m256d sum[8];
   // The halves up front: the extraction's index must be a constant (clang
   // insists even where the loop below is unrolled).
   const __m256d xs[2] = {_mm512_castpd512_pd256(x), _mm512_extractf64x4_pd(x, 1)};
   const __m256d ys[2] = {_mm512_castpd512_pd256(y), _mm512_extractf64x4_pd(y, 1)};
   const __m256d zs[2] = {_mm512_castpd512_pd256(z), _mm512_extractf64x4_pd(z, 1)};
-  const __m256d ws[2] = {_mm512_castpd512_pd256(w), _mm512_extractf64x4_pd(w, 1)};
   for (int h = 0; h < 2; ++h) {
-    const __m256d xh = xs[h], yh = ys[h], zh = zs[h], wh = ws[h];
-    // a = (x0 y0 | x2 y2), b = (x1 y1 | x3 y3), c = (z0 w0 | z2 w2), d = (z1 w1 | z3 w3)
+    const __m256d xh = xs[h], yh = ys[h], zh = zs[h], zero = _mm256_setzero_pd();
+    // a = (x0 y0 | x2 y2), b = (x1 y1 | x3 y3), c = (z0 0 | z2 0), d = (z1 0 | z3 0)
     const __m256d a = _mm256_unpacklo_pd(xh, yh), b = _mm256_unpackhi_pd(xh, yh);
-    const __m256d c = _mm256_unpacklo_pd(zh, wh), d = _mm256_unpackhi_pd(zh, wh);
+    const __m256d c = _mm256_unpacklo_pd(zh, zero), d = _mm256_unpackhi_pd(zh, zero);
     const __m256d quad[4] = {_mm256_permute2f128_pd(a, c, 0x20), _mm256_permute2f128_pd(b, d, 0x20),
                              _mm256_permute2f128_pd(a, c, 0x31), _mm256_permute2f128_pd(b, d, 0x31)};
     for (int i = 0; i < 4; ++i) sum[4 * h + i] = _mm256_add_pd(_mm256_load_pd(force + q[4 * h + i]), quad[i]);
@@ -303,13 +301,7 @@ template <int Scale, class Real>
 // clearing them.
 template <class Real>
 [[gnu::always_inline]] inline void scatter_add(Real* force, const int32_t* q, const V<Real> (&f)[3]) {
-  scatter_add(force, q, f[0].r, f[1].r, f[2].r, zero<Real>().r);
-}
-// The same for the 4th value alone (the nodal volume term's S).
-template <class Real>
-[[gnu::always_inline]] inline void scatter_add_w(Real* force, const int32_t* q, V<Real> w) {
-  const V<Real> z = zero<Real>();
-  scatter_add(force, q, z.r, z.r, z.r, w.r);
+  scatter_add(force, q, f[0].r, f[1].r, f[2].r);
 }
 template <class Real>
 [[gnu::always_inline]] inline void take_forces(Real* force, V<Real> (&f)[3]) {

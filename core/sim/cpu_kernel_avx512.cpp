@@ -90,10 +90,18 @@ struct Avx512KernelData {
   // -p_t / 6, its force factor), node_rest = S at rest as the kernel computes
   // it (npad); else empty.
   AlignedVector<Real> node_k, node_rest;
+  // Nodal term: 6 V_t of every batch lane (the first pass writes it; the
+  // entries past the lanes stay zero), and per point its tets' lanes in the
+  // layout's tet slots (padding slots: the first zero entry), so that each
+  // point sums its tets' volumes with loads instead of every tet scattering
+  // into its four points.
+  AlignedVector<Real> lane_det6;
+  AlignedVector<int32_t> node_tet_lane;
+  std::vector<int32_t> node_tet_offset, node_tet_width;  // as spring_offset and spring_width
   AlignedVector<Real> node_stress;               // smoothed shear: P(Fbar_p) records (kStressRecord (npad + 1), the last zero); else empty
   int32_t slice_begin[kSlices + 1] = {};         // batches of each slice
-  // (x, y, z, S) per point, zero between steps (4 (npad + kLanes)): the tet
-  // forces, and with the nodal term the slice's part of S.
+  // (x, y, z, 0) per point, zero between steps (4 (npad + kLanes)): the tet
+  // forces of the slice.
   AlignedVector<Real> tet_force[kSlices];
 
   Real* positions(int b) { return rec[b].data(); }
@@ -126,6 +134,7 @@ size_t Avx512Kernel<Real>::bytes() const {
   for (int k = 0; k < 9; ++k) add(D.tet_g[k]);
   add(D.node_stress);
   add(D.tet_k36), add(D.tet_det_rest), add(D.tet_shear_k), add(D.node_k), add(D.node_rest);
+  add(D.lane_det6), add(D.node_tet_lane);
   for (const auto& f : D.tet_force) add(f);
   return n;
 }
@@ -331,14 +340,12 @@ void chunk_step(Data<Real>& D, const KernelStepInputs<Real>& in, int32_t c, Chun
   }
 }
 
-// The nodal term's first pass over one slice's tets: S of each vertex (the
-// 4th value of its force in the slice's array) += 6 V_t of the tet, from
-// the records at `rec`. pack() runs it on the rest records for node_rest,
-// so the rest state gives exactly q = 0.
+// The nodal term's first pass over one slice's tets: 6 V_t of each into
+// lane_det6, from the records at `rec`. pack() runs it on the rest records
+// for node_rest, so the rest state gives exactly q = 0.
 template <class Real>
 void nodal_volume_slice(Data<Real>& D, const Real* rec, int slice) {
   constexpr int32_t kLanes = Data<Real>::kLanes, kScale = Data<Real>::kRecord / 4;
-  Real* const force = D.tet_force[slice].data();
   const int32_t end = D.slice_begin[slice + 1];
   for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
     const size_t e = static_cast<size_t>(b) * kLanes;
@@ -349,30 +356,35 @@ void nodal_volume_slice(Data<Real>& D, const Real* rec, int slice) {
     V3<Real> ev[3];
     for (int i = 0; i < 3; ++i)
       for (int k = 0; k < 3; ++k) ev[i][k] = x[i + 1][k] - x[0][k];
-    const V<Real> det = det6(ev[0], ev[1], ev[2]);
-    for (int i = 0; i < 4; ++i) scatter_add_w(force, q[i], det);
+    store(D.lane_det6.data() + e, det6(ev[0], ev[1], ev[2]));
   }
 }
 
-// S of point p: the slices' parts added in order (thread-count independent).
+// S of the points of group g of chunk c (one register): the sum of their
+// tets' 6 V_t over their tet slots, in slot order (thread-count independent).
 template <class Real>
-inline Real nodal_volume_sum(const Data<Real>& D, int32_t p) {
-  Real s = D.tet_force[0][4 * static_cast<size_t>(p) + 3];
-  for (int sl = 1; sl < kSlices; ++sl) s += D.tet_force[sl][4 * static_cast<size_t>(p) + 3];
+[[gnu::always_inline]] inline V<Real> nodal_volume_sum(const Data<Real>& D, int32_t c, int32_t g) {
+  constexpr int32_t kLanes = Data<Real>::kLanes;
+  V<Real> s = zero<Real>();
+  const int32_t width = D.node_tet_width[c * D.groups + g];
+  for (int32_t j = 0, e = D.node_tet_offset[c] + g * kLanes; j < width; ++j, e += D.chunk)
+    s = s + gather_at(D.lane_det6.data(), D.node_tet_lane.data() + e);
   return s;
 }
 
 // The nodal term's second pass, per point of chunk c: q = node_k (S - S_r)
 // (force_law::volume_pressure, scaled) into the w of its record for the
-// force pass to gather. S stays in the force arrays until take_forces()
-// clears them.
+// force pass to gather.
 template <class Real>
 void nodal_pressure_chunk(Data<Real>& D, int32_t c) {
+  constexpr int32_t kLanes = Data<Real>::kLanes;
   Real* const rec = D.positions(D.cur);
-  const int32_t first = c * D.chunk, last = first + D.chunk;
-  for (int32_t p = first; p < last; ++p)
-    rec[Data<Real>::kRecord * static_cast<size_t>(p) + 3] =
-        force_law::volume_pressure(D.node_k[p], nodal_volume_sum(D, p), D.node_rest[p]);
+  for (int32_t g = 0; g < D.groups; ++g) {
+    const int32_t p0 = c * D.chunk + g * kLanes;
+    alignas(64) Real q[kLanes];
+    store(q, force_law::volume_pressure(load(&D.node_k[p0]), nodal_volume_sum(D, c, g), load(&D.node_rest[p0])));
+    for (int32_t l = 0; l < kLanes; ++l) rec[Data<Real>::kRecord * static_cast<size_t>(p0 + l) + 3] = q[l];
+  }
 }
 
 // The smoothed shear element's first pass, per point of chunk c: its stress
@@ -731,16 +743,28 @@ void Avx512Kernel<Real>::pack(const Model& model, const StepPlan& plan) {
   }
   pack_rest_volumes(D, rec);
   for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0);
-  D.node_k.assign(D.element == ElementTerm::NodalVolume ? n : 0, 0);
+  const bool nodal = D.element == ElementTerm::NodalVolume;
+  D.node_k.assign(nodal ? n : 0, 0);
   D.node_rest.assign(D.node_k.size(), 0);
-  if (D.element == ElementTerm::NodalVolume) {
+  D.lane_det6.assign(nodal ? lanes + kLanes : 0, 0);
+  D.node_tet_lane.assign(nodal ? L.tets.item.size() : 0, static_cast<int32_t>(lanes));
+  D.node_tet_offset.assign(L.tets.chunk_offset.begin(), L.tets.chunk_offset.end());
+  D.node_tet_width.assign(static_cast<size_t>(D.nchunk) * D.groups, 0);
+  if (nodal) {
+    std::vector<int32_t> lane_of(static_cast<size_t>(model.ntet()), -1);
+    for (size_t e = 0; e < lanes; ++e)
+      if (batches.lane_tet[e] >= 0) lane_of[batches.lane_tet[e]] = static_cast<int32_t>(e);
+    for (size_t e = 0; e < L.tets.item.size(); ++e)
+      if (L.tets.item[e] >= 0) D.node_tet_lane[e] = lane_of[L.tets.item[e]];
+    for (int32_t p = 0; p < D.npoint; ++p) {
+      const size_t g = static_cast<size_t>(p / D.chunk) * D.groups + (p % D.chunk) / kLanes;
+      D.node_tet_width[g] = std::max(D.node_tet_width[g], L.tets.count[p]);
+      D.node_k[p] = static_cast<Real>(-model.point_volume_k[p] / 576);
+    }
     // S at rest by the step's own passes, so that q is exactly 0 there.
     for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, rec, sl);
-    for (int32_t p = 0; p < D.npoint; ++p) {
-      D.node_k[p] = static_cast<Real>(-model.point_volume_k[p] / 576);
-      D.node_rest[p] = nodal_volume_sum(D, p);
-    }
-    for (auto& f : D.tet_force) std::fill(f.begin(), f.end(), Real(0));
+    for (int32_t c = 0; c < D.nchunk; ++c)
+      for (int32_t g = 0; g < D.groups; ++g) store(&D.node_rest[c * D.chunk + g * kLanes], nodal_volume_sum(D, c, g));
   }
 
   // Smoothed shear: b of each slot, sum over the tets of (p, q) of
