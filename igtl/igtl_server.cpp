@@ -122,6 +122,7 @@ bool IgtlServer::read_client(Client& c) {
 }
 
 bool IgtlServer::deliver(Client& c, LivePoseSink& sink) {
+  bool asked = false;
   while (auto m = c.stream.next()) {
     if (!m->refused_kind.empty()) {
       refusals_.refuse(m->refused_kind, c.address, m->refused + " (device \"" + m->device + "\")");
@@ -132,9 +133,9 @@ bool IgtlServer::deliver(Client& c, LivePoseSink& sink) {
     pose.matrix = m->matrix;
     pose.client = c.address;
     pose.received = c.last_receipt;
-    if (sink.on_pose(pose)) return true;
+    asked = sink.on_pose(pose) || asked;
   }
-  return false;
+  return asked;
 }
 
 void IgtlServer::close_client(size_t index, const std::string& why) {
@@ -144,16 +145,18 @@ void IgtlServer::close_client(size_t index, const std::string& why) {
 }
 
 void IgtlServer::receive_until(LiveClock::time_point deadline, LivePoseSink& sink) {
-  for (bool first = true;; first = false) {
-    // Messages already buffered (left when the sink returned early) come first.
-    for (auto& c : clients_)
-      if (deliver(*c, sink)) return;
+  // Everything that has arrived is read and handed over, never only the
+  // first pose: a session behind the clock must apply the newest pose, not
+  // work through a backlog. Only the wait for more stops early when the
+  // sink asks.
+  bool asked = false;
+  for (;;) {
     const auto now = LiveClock::now();
-    if (!first && now >= deadline) return;
+    const bool last_pass = asked || now >= deadline;
     std::vector<pollfd> fds;
     fds.push_back({listen_fd_, POLLIN, 0});
     for (auto& c : clients_) fds.push_back({c->fd, POLLIN, 0});
-    const auto wait = std::max(LiveClock::duration::zero(), deadline - now);
+    const auto wait = last_pass ? LiveClock::duration::zero() : deadline - now;
     const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count();
     const timespec timeout{static_cast<time_t>(ns / 1000000000), static_cast<long>(ns % 1000000000)};
     const int ready = ppoll(fds.data(), fds.size(), &timeout, nullptr);
@@ -163,7 +166,7 @@ void IgtlServer::receive_until(LiveClock::time_point deadline, LivePoseSink& sin
       if (!fds[i].revents) continue;
       Client& c = *clients_[i - 1];
       const bool open = read_client(c);
-      const bool asked = deliver(c, sink);
+      asked = deliver(c, sink) || asked;
       if (c.stream.broken()) {
         ++closed_malformed_;
         refusals_.refuse("malformed_header", c.address, c.stream.broken_reason());
@@ -171,9 +174,10 @@ void IgtlServer::receive_until(LiveClock::time_point deadline, LivePoseSink& sin
       } else if (!open) {
         close_client(i - 1, "disconnected");
       }
-      if (asked) return;
     }
-    if (LiveClock::now() >= deadline) return;
+    // One pass without waiting once the deadline has passed or the sink
+    // asked: what arrives later belongs to the next tick.
+    if (last_pass) return;
   }
 }
 

@@ -47,7 +47,7 @@ class IgtlServer : public LiveLink {
   void accept_clients();
   // Reads what the socket holds; false when the client is gone.
   bool read_client(Client& c);
-  // Hands the client's complete messages to the sink; true when it asked to return.
+  // Hands all the client's complete messages to the sink; true when it asked to return.
   bool deliver(Client& c, LivePoseSink& sink);
   void close_client(size_t index, const std::string& why);
   // Sends a packed message to every client without blocking; returns how

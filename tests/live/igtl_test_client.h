@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "igtlMessageHeader.h"
+#include "igtl_header.h"
 #include "igtlSensorMessage.h"
 #include "igtlTransformMessage.h"
 
