@@ -40,6 +40,7 @@ struct ServeArgs {
   std::string client_units = "mm";
   std::string client_transform;
   double duration = 60;
+  bool allow_unstable = false;
 };
 
 void write_session(const fs::path& path, const ServeArgs& args, const LiveSession& session, const Backend& backend) {
@@ -70,7 +71,7 @@ void serve_command(const ServeArgs& args) {
   PrepareRunOptions prepare_options;
   prepare_options.threads = selection.threads;
   const PreparedRun prepared = prepare_run(s, model, prepare_options);
-  const std::string step_warning = check_time_step(prepared.stability, s.time.dt, s.time.substeps, false);
+  const std::string step_warning = check_time_step(prepared.stability, s.time.dt, s.time.substeps, args.allow_unstable);
   if (!step_warning.empty()) std::cerr << "organsim: " << step_warning << "\n";
   BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks());
   prepared.start(*backend);
@@ -90,6 +91,7 @@ void serve_command(const ServeArgs& args) {
 
   RunOptions options;
   options.outdir = outdir;
+  options.allow_unstable = args.allow_unstable;
   options.observers.push_back(&monitor);  // first: nothing else sees a blown-up state
   for (auto& o : observers) options.observers.push_back(o.get());
   options.observers.push_back(&session);  // last: the reply leaves once the tick is checked
@@ -153,6 +155,8 @@ const bool registered = register_command("serve", 25, [](CLI::App& root) {
       ->check(CLI::IsMember({"double", "float"}));
   cmd->add_option("--threads", args->threads, "CPU threads (0: all); overrides the scenario's backend.threads")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--allow-unstable", args->allow_unstable,
+                "Serve even when time.dt exceeds the critical step dt_crit [s] (the blow-up check will likely stop it)");
   cmd->callback([args] { serve_command(*args); });
 });
 

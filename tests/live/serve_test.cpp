@@ -191,5 +191,37 @@ TEST(Serve, AClientThatNeverReadsDoesNotStallTheLoop) {
   EXPECT_EQ(sent + dropped, 1000) << "one reply per tick to the one client, sent or dropped";
 }
 
+TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
+  // The stress box at dt = 2.5 ms, 1.6 x its critical step (tests/app/blowup_contact_test.cpp):
+  // with the tool pressed 3 mm into its top it diverges within a few hundred ticks.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_blowup";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json s = read_json(stress / "dt_over.json");
+  s["mesh"]["tet"] = (stress / "box.mesh").string();
+  s["time"] = {{"duration", 1.0}, {"dt", 0.0025}, {"substeps", 1}};
+  s["backend"] = {{"name", "cpu"}, {"precision", "double"}};
+  s["tool"] = {{"radius", 0.01}, {"contact_stiffness", 500}, {"mode", "push"},
+               {"keyframes", {{{"t", 0.0}, {"position", {0.02, 0.02, 0.055}}}}}};
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  ServeProcess serve({(dir / "scene.json").string(), "--allow-unstable", "--duration", "10", "-o", (dir / "out").string()},
+                     dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  ASSERT_TRUE(client.send_pose("Tool", {20, 20, 47}));
+  client.read_until_closed(60);
+  EXPECT_EQ(serve.wait(), 5) << serve.stderr_text();  // ErrorKind::Numerical, as organsim run
+  ASSERT_FALSE(client.replies.empty());
+  EXPECT_EQ(client.replies.back().type, "STATUS") << "the client is told why the session stopped";
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  EXPECT_FALSE(log["meta"]["completed"].get<bool>());
+  EXPECT_LT(log["samples"]["t"].size(), 4000u);
+  const nlohmann::json session = read_json(dir / "out/session.json");
+  EXPECT_EQ(session["tool"]["keyframes"].back()["position"][2], 0.047);
+}
+
 }  // namespace
 }  // namespace organsim::test
