@@ -43,10 +43,13 @@ struct ServeArgs {
   bool allow_unstable = false;
 };
 
-void write_session(const fs::path& path, const ServeArgs& args, const LiveSession& session, const Backend& backend) {
+// Writes OUTDIR/session.json; false (and nothing written) when no tick was served: there is nothing to replay.
+bool write_session(const fs::path& path, const ServeArgs& args, const LiveSession& session, const Backend& backend) {
+  if (session.ticks() == 0) return false;
   const nlohmann::json j = session_scenario(args.scenario, session.keyframes(), session.end_time(), backend.name(),
                                             backend.precision());
   write_file_atomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+  return true;
 }
 
 void serve_command(const ServeArgs& args) {
@@ -116,7 +119,10 @@ void serve_command(const ServeArgs& args) {
     std::cerr << "organsim: the record up to the failure is in " << outdir.string() << " (forces.json, session.json)\n";
     throw;
   }
-  write_session(session_path, args, session, *backend);
+  if (!write_session(session_path, args, session, *backend)) {
+    std::cout << "done:     no tick served (stopped before a client connected); nothing to replay\n";
+    return;
+  }
   const nlohmann::json& l = result.meta.extra["live"];
   std::cout << "done:     " << session.ticks() << " ticks (" << session.end_time() << " s), " << l["late_ticks"]
             << " late, real-time factor " << std::setprecision(3) << l["real_time_factor"].get<double>()
