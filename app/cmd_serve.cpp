@@ -41,6 +41,7 @@ struct ServeArgs {
   std::string client_transform;
   double duration = 60;
   bool allow_unstable = false;
+  double surface_rate = 0;
 };
 
 // Writes OUTDIR/session.json; false (and nothing written) when no tick was served: there is nothing to replay.
@@ -80,7 +81,10 @@ void serve_command(const ServeArgs& args) {
   prepared.start(*backend);
 
   StopSignals signals;  // SIGINT ends the session after the current tick, with its record written
-  IgtlServer server(args.bind, args.port, &std::cerr);
+  // With surfaces each client's send buffer holds a liver surface (about
+  // 130 KB) and its replies; without, a small one keeps replies fresh.
+  IgtlServer server(args.bind, args.port, &std::cerr,
+                    args.surface_rate > 0 ? 512 * 1024 : IgtlServer::kRepliesSendBuffer);
   LiveOptions live;
   live.frame = frame;
   live.device = args.device;
@@ -89,6 +93,7 @@ void serve_command(const ServeArgs& args) {
   live.start = s.tool->spec.position_at(0);
   live.stop = &stop_requested();
   live.log = &std::cerr;
+  live.surface_rate = args.surface_rate;
   if (stderr_is_terminal()) live.status = [](const std::string& line) { std::cerr << "organsim " << line << "\n"; };
   LiveSession session(server, live);
 
@@ -160,6 +165,10 @@ const bool registered = register_command("serve", 25, [](CLI::App& root) {
   cmd->add_option("--precision", args->precision, "double or float; overrides the scenario's precision")
       ->check(CLI::IsMember({"double", "float"}));
   cmd->add_option("--threads", args->threads, "CPU threads (0: all); overrides the scenario's backend.threads")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--surface-rate", args->surface_rate,
+                  "Send the boundary surface as POLYDATA \"OrganSurface\" this many times per second, in the "
+                  "client's frame and units (e.g. 30 for 3D Slicer; default 0: never)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "Serve even when time.dt exceeds the critical step dt_crit [s] (the blow-up check will likely stop it)");

@@ -13,6 +13,7 @@
 #include <cstring>
 
 #include "core/util/error.h"
+#include "igtlPolyDataMessage.h"
 #include "igtlSensorMessage.h"
 #include "igtlStatusMessage.h"
 #include "igtl_util.h"
@@ -20,8 +21,6 @@
 namespace organsim {
 
 namespace {
-
-constexpr int kSendBufferBytes = 8 * 1024;
 
 void set_non_blocking(int fd) { fcntl(fd, F_SETFL, fcntl(fd, F_GETFL, 0) | O_NONBLOCK); }
 
@@ -45,8 +44,8 @@ std::vector<uint8_t> packed(igtl::MessageBase& m) {
 
 }  // namespace
 
-IgtlServer::IgtlServer(const std::string& bind_address, int port, std::ostream* log)
-    : log_(log), refusals_(log) {
+IgtlServer::IgtlServer(const std::string& bind_address, int port, std::ostream* log, int send_buffer)
+    : send_buffer_(send_buffer), log_(log), refusals_(log) {
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_port = htons(static_cast<uint16_t>(port));
@@ -81,11 +80,10 @@ void IgtlServer::accept_clients() {
     set_non_blocking(fd);
     const int one = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);  // a reply per tick, not per 40 ms
-    // A small fixed send buffer (Linux doubles it: 16 KiB, ~150 replies)
-    // instead of one that grows to megabytes: a slow reader then gets recent
-    // forces, not seconds of backlog, and the rest is dropped and counted.
-    const int send_buffer = kSendBufferBytes;
-    setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &send_buffer, sizeof send_buffer);
+    // A small fixed send buffer (Linux doubles it: 16 KiB by default, ~150
+    // replies) instead of one that grows to megabytes: a slow reader then
+    // gets recent forces, not seconds of backlog, and the rest is dropped.
+    setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &send_buffer_, sizeof send_buffer_);
     auto c = std::make_unique<Client>();
     c->fd = fd;
     c->address = address_of(a);
@@ -223,6 +221,41 @@ void IgtlServer::send_reaction(int64_t /*tick*/, double t, const Vec3& force, co
   replies_dropped_ += send_all(reply_.data(), reply_.size(), &replies_sent_);
 }
 
+void IgtlServer::send_surface(double t, const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  if (clients_.empty()) return;
+  igtl::PolyDataPointArray::Pointer p = igtl::PolyDataPointArray::New();
+  p->SetNumberOfPoints(static_cast<int>(points.size()));
+  for (size_t i = 0; i < points.size(); ++i)
+    p->SetPoint(static_cast<unsigned>(i), static_cast<igtlFloat32>(points[i].x()), static_cast<igtlFloat32>(points[i].y()),
+                static_cast<igtlFloat32>(points[i].z()));
+  igtl::PolyDataCellArray::Pointer cells = igtl::PolyDataCellArray::New();
+  for (const Tri& f : triangles) {
+    igtlUint32 ids[3] = {static_cast<igtlUint32>(f[0]), static_cast<igtlUint32>(f[1]), static_cast<igtlUint32>(f[2])};
+    cells->AddCell(3, ids);
+  }
+  igtl::PolyDataMessage::Pointer m = igtl::PolyDataMessage::New();
+  m->SetDeviceName("OrganSurface");
+  m->SetPoints(p);
+  m->SetPolygons(cells);
+  set_time(*m, t);
+  const std::vector<uint8_t> bytes = packed(*m);
+  // Only to a client whose replies have all gone out: a surface never
+  // delays a force reply by more than what the socket takes at once.
+  for (auto& c : clients_) {
+    if (!c->unsent.empty()) {
+      ++surfaces_dropped_;
+      continue;
+    }
+    const ssize_t n = send(c->fd, bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+    if (n < 0) {
+      ++surfaces_dropped_;
+      continue;
+    }
+    ++surfaces_sent_;
+    if (n < static_cast<ssize_t>(bytes.size())) c->unsent.assign(bytes.begin() + n, bytes.end());
+  }
+}
+
 void IgtlServer::send_notice(const std::string& text) {
   igtl::StatusMessage::Pointer m = igtl::StatusMessage::New();
   m->SetDeviceName("organsim");
@@ -239,6 +272,8 @@ nlohmann::json IgtlServer::report() const {
           {"clients", seen_},
           {"replies_sent", replies_sent_},
           {"replies_dropped", replies_dropped_},
+          {"surfaces_sent", surfaces_sent_},
+          {"surfaces_dropped", surfaces_dropped_},
           {"connections_closed_for_malformed_headers", closed_malformed_},
           {"refused", refusals_.counts()}};
 }

@@ -7,7 +7,8 @@
 // client's axes, timestamp = the tick's simulated end time. A reply that does
 // not fit the socket's send buffer at once is dropped and counted (at most
 // the tail of one partly sent message waits per client), so a client that
-// never reads cannot stall the loop. docs/live.md.
+// never reads cannot stall the loop. With --surface-rate, POLYDATA
+// "OrganSurface" carries the boundary surface now and then. docs/live.md.
 #include <memory>
 #include <ostream>
 #include <string>
@@ -22,8 +23,11 @@ namespace organsim {
 class IgtlServer : public LiveLink {
  public:
   // Listens on bind_address:port (port 0: any free port, see port()).
-  // Error(Usage) when the address cannot be used.
-  IgtlServer(const std::string& bind_address, int port, std::ostream* log);
+  // Error(Usage) when the address cannot be used. `send_buffer` is each
+  // client's socket send buffer in bytes (Linux doubles it): small for
+  // force replies alone, room for a surface message or two with one.
+  static constexpr int kRepliesSendBuffer = 8 * 1024;
+  IgtlServer(const std::string& bind_address, int port, std::ostream* log, int send_buffer = kRepliesSendBuffer);
   ~IgtlServer() override;
   IgtlServer(const IgtlServer&) = delete;
   IgtlServer& operator=(const IgtlServer&) = delete;
@@ -33,6 +37,7 @@ class IgtlServer : public LiveLink {
   bool wait_for_client(const std::atomic<bool>& stop) override;
   void receive_until(LiveClock::time_point deadline, LivePoseSink& sink) override;
   void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque) override;
+  void send_surface(double t, const std::vector<Vec3>& points, const std::vector<Tri>& triangles) override;
   void send_notice(const std::string& text) override;
   nlohmann::json report() const override;
 
@@ -56,11 +61,13 @@ class IgtlServer : public LiveLink {
 
   int listen_fd_ = -1;
   int port_ = 0;
+  int send_buffer_;
   std::ostream* log_;
   RefusalLog refusals_;
   std::vector<std::unique_ptr<Client>> clients_;
   std::vector<std::string> seen_;  // every client address, in order of connection
   int64_t replies_sent_ = 0, replies_dropped_ = 0, closed_malformed_ = 0;
+  int64_t surfaces_sent_ = 0, surfaces_dropped_ = 0;
   std::vector<uint8_t> reply_;
 };
 

@@ -15,6 +15,11 @@ Vec3 ClientFrame::scene_position(const std::array<double, 16>& pose) const {
   return metres_per_unit * scene.head<3>();
 }
 
+Vec3 ClientFrame::client_position(const Vec3& scene) const {
+  const Vec3 p = scene / metres_per_unit;
+  return to_scene.topLeftCorner<3, 3>().transpose() * (p - to_scene.topRightCorner<3, 1>());
+}
+
 Vec3 ClientFrame::client_direction(const Vec3& scene) const {
   return to_scene.topLeftCorner<3, 3>().transpose() * scene;
 }

@@ -23,6 +23,8 @@ struct ClientFrame {
 
   // The scene position (m) of the origin of a pose matrix (row-major 4x4, translation in client units).
   Vec3 scene_position(const std::array<double, 16>& pose) const;
+  // A scene point (m) in the client's frame and units (for the surface sent back).
+  Vec3 client_position(const Vec3& scene) const;
   // A scene vector (force, torque) in the client's axes; its unit is kept (N, N m).
   Vec3 client_direction(const Vec3& scene) const;
 };

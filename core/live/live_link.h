@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <string>
 
+#include <vector>
+
 #include "core/util/vec.h"
 
 namespace organsim {
@@ -48,6 +50,10 @@ class LiveLink {
   // torque N m, in the client's axes) to every connected client, without
   // blocking: a reply that cannot go out at once is dropped and counted.
   virtual void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque) = 0;
+  // The organ's boundary surface at simulated time `t` (points in the
+  // client's frame and units, triangles by point index), at display rate,
+  // best effort: dropped for a client that has not taken the last replies.
+  virtual void send_surface(double t, const std::vector<Vec3>& points, const std::vector<Tri>& triangles) = 0;
   // A last word to the clients (why the session stopped), best effort.
   virtual void send_notice(const std::string& text) = 0;
   // Counters for the force log's meta (connections, refused messages by kind,

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "core/live/latency_stats.h"
+#include "core/mesh/boundary.h"
+#include "core/model/model.h"
 #include "core/util/format.h"
 
 namespace organsim {
@@ -102,7 +104,7 @@ void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
   pending_.reset();
 }
 
-void LiveSession::on_tick(const Model& /*model*/, Backend& /*backend*/, const TickInfo& info) {
+void LiveSession::on_tick(const Model& /*model*/, Backend& backend, const TickInfo& info) {
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque));
   const LiveClock::time_point now = LiveClock::now();
@@ -111,6 +113,41 @@ void LiveSession::on_tick(const Model& /*model*/, Backend& /*backend*/, const Ti
   if (tick_pose_received_) latencies_.push_back(seconds(now - *tick_pose_received_));
   wall_seconds_ = seconds(now - start_);
   maybe_status(now);
+  maybe_surface(backend, info.t, now);
+}
+
+void LiveSession::on_start(const Model& model, Backend& /*backend*/) { find_surface(model); }
+
+void LiveSession::on_topology_changed(const Model& next, Backend& /*backend*/) { find_surface(next); }
+
+void LiveSession::find_surface(const Model& model) {
+  surface_points_.clear();
+  surface_triangles_.clear();
+  if (o_.surface_rate <= 0) return;
+  std::vector<int32_t> index(static_cast<size_t>(model.npoint()), -1);
+  for (const Tri& f : extract_boundary_faces(model.tet_points)) {
+    Tri g;
+    for (int k = 0; k < 3; ++k) {
+      int32_t& i = index[static_cast<size_t>(f[static_cast<size_t>(k)])];
+      if (i < 0) {
+        i = static_cast<int32_t>(surface_points_.size());
+        surface_points_.push_back(f[static_cast<size_t>(k)]);
+      }
+      g[static_cast<size_t>(k)] = i;
+    }
+    surface_triangles_.push_back(g);
+  }
+}
+
+void LiveSession::maybe_surface(Backend& backend, double t, LiveClock::time_point now) {
+  if (o_.surface_rate <= 0 || surface_points_.empty() || seconds(now - last_surface_) < 1.0 / o_.surface_rate) return;
+  last_surface_ = now;
+  backend.positions(positions_);
+  surface_client_.resize(surface_points_.size());
+  for (size_t k = 0; k < surface_points_.size(); ++k)
+    surface_client_[k] = o_.frame.client_position(positions_[static_cast<size_t>(surface_points_[k])]);
+  link_.send_surface(t, surface_client_, surface_triangles_);
+  ++surfaces_;
 }
 
 void LiveSession::maybe_status(LiveClock::time_point now) {
@@ -158,6 +195,7 @@ void LiveSession::add_meta(nlohmann::json& extra) const {
       {"poses_superseded", superseded_},
       {"poses_refused", refusals_.counts()},
       {"stopped_by", stopped_by_},
+      {"surfaces_sent", surfaces_},
       {"link", link_.report()},
       {"applied_poses", poses},
   };

@@ -39,6 +39,8 @@ struct LiveOptions {
   // Called about every status_interval wall seconds with a one-line summary.
   std::function<void(const std::string&)> status;
   double status_interval = 2.0;  // s
+  // The boundary surface to the clients this many times per wall second (0: never).
+  double surface_rate = 0;  // Hz
 };
 
 // One applied pose, for the force log: the tick it was applied at, when it
@@ -56,7 +58,9 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   // ToolDriver: waits for the first client (tick 0), then for the tick's time.
   std::optional<Vec3> tool_at_end_of(int64_t tick, double t_end) override;
   void add_meta(nlohmann::json& extra) const override;
-  // RunObserver: sends the tick's reaction and keeps the timing.
+  // RunObserver: sends the tick's reaction and keeps the timing (and the surface now and then).
+  void on_start(const Model& model, Backend& backend) override;
+  void on_topology_changed(const Model& next, Backend& backend) override;
   void on_tick(const Model& model, Backend& backend, const TickInfo& info) override;
 
   // The tool path as keyframes that reproduce every tick's tool centre
@@ -74,6 +78,8 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   bool on_pose(const ClientPose& pose) override;
   void apply_pending(int64_t tick, double t_start, double t_end);
   void maybe_status(LiveClock::time_point now);
+  void find_surface(const Model& model);
+  void maybe_surface(Backend& backend, double t, LiveClock::time_point now);
 
   LiveLink& link_;
   LiveOptions o_;
@@ -101,6 +107,13 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   int64_t status_ticks_ = 0, status_late_ = 0;
   size_t status_latencies_ = 0;
   double wall_seconds_ = 0;  // start to the last reply
+
+  // The boundary surface: its points (internal ids) and triangles over them.
+  std::vector<int32_t> surface_points_;
+  std::vector<Tri> surface_triangles_;
+  std::vector<Vec3> positions_, surface_client_;
+  LiveClock::time_point last_surface_{};
+  int64_t surfaces_ = 0;
 };
 
 }  // namespace organsim

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "igtlMessageHeader.h"
+#include "igtlPolyDataMessage.h"
 #include "igtl_header.h"
 #include "igtlSensorMessage.h"
 #include "igtlTransformMessage.h"
@@ -28,6 +29,8 @@ struct Reply {
   std::string type, device;
   double t = 0;                  // the header's timestamp, s
   std::array<double, 6> values{};  // SENSOR: fx fy fz tx ty tz
+  std::vector<std::array<float, 3>> points;  // POLYDATA
+  std::vector<std::array<uint32_t, 3>> triangles;  // POLYDATA polygons of three points
 };
 
 class IgtlTestClient {
@@ -123,6 +126,30 @@ class IgtlTestClient {
       igtl::TimeStamp::Pointer ts = igtl::TimeStamp::New();
       h->GetTimeStamp(ts);
       r.t = ts->GetTimeStamp();
+      if (r.type == "POLYDATA") {
+        igtl::PolyDataMessage::Pointer s = igtl::PolyDataMessage::New();
+        s->SetMessageHeader(h);
+        s->AllocatePack();
+        std::memcpy(s->GetPackBodyPointer(), bytes_.data() + at + IGTL_HEADER_SIZE, body);
+        if (s->Unpack(1) & igtl::MessageHeader::UNPACK_BODY) {
+          igtl::PolyDataPointArray* pts = s->GetPoints();
+          for (int i = 0; pts && i < pts->GetNumberOfPoints(); ++i) {
+            std::array<float, 3> p{};
+            pts->GetPoint(static_cast<unsigned>(i), p.data());
+            r.points.push_back(p);
+          }
+          igtl::PolyDataCellArray* cells = s->GetPolygons();
+          for (igtlUint32 i = 0; cells && i < cells->GetNumberOfCells(); ++i) {
+            std::array<uint32_t, 3> t{};
+            if (cells->GetCellSize(i) == 3) {
+              cells->GetCell(i, t.data());
+              r.triangles.push_back(t);
+            }
+          }
+        } else {
+          ++bad_crc;
+        }
+      }
       if (r.type == "SENSOR") {
         igtl::SensorMessage::Pointer s = igtl::SensorMessage::New();
         s->SetMessageHeader(h);

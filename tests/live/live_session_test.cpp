@@ -39,6 +39,7 @@ class ScriptedLink : public LiveLink {
     }
   }
   void send_reaction(int64_t, double t, const Vec3& force, const Vec3&) override { replies.push_back({t, force}); }
+  void send_surface(double, const std::vector<Vec3>&, const std::vector<Tri>&) override {}
   void send_notice(const std::string&) override {}
   nlohmann::json report() const override { return nlohmann::json::object(); }
 

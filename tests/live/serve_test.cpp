@@ -242,5 +242,46 @@ TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
   EXPECT_EQ(session["tool"]["keyframes"].back()["position"][2], 0.047);
 }
 
+TEST(Serve, SendsTheBoundarySurfaceAtItsRateInTheClientsFrame) {
+  // The 4 cm box (5 x 5 x 5 grid points: 98 on the boundary, 2 x 6 x 16 = 192 triangles)
+  // at 20 surfaces per second for 1 s, the client's frame shifted by 100 mm along x.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_surface";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "shift.json") << "[[1,0,0,-100],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "1", "--surface-rate", "20",
+                      "--client-transform", (dir / "shift.json").string()},
+                     dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  client.read_until_closed(60);
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+  int surfaces = 0;
+  for (const Reply& r : client.replies) {
+    if (r.type != "POLYDATA") continue;
+    ++surfaces;
+    EXPECT_EQ(r.device, "OrganSurface");
+    ASSERT_EQ(r.points.size(), 98u);
+    ASSERT_EQ(r.triangles.size(), 192u);
+    for (const auto& t : r.triangles)
+      for (uint32_t v : t) ASSERT_LT(v, 98u);
+    for (const auto& p : r.points) {
+      // Scene x in [0, 40] mm is client x in [100, 140] mm; the box sags
+      // and bulges by about a millimetre under gravity, hence 3 mm of slack.
+      ASSERT_GE(p[0], 97.0f);
+      ASSERT_LE(p[0], 143.0f);
+      ASSERT_GE(p[2], -3.0f);
+      ASSERT_LE(p[2], 43.0f);
+    }
+  }
+  // About 20 in the second; fewer on a loaded machine, never more than the rate allows.
+  EXPECT_GE(surfaces, 5);
+  EXPECT_LE(surfaces, 21);
+  const nlohmann::json live = read_json(dir / "out/forces.json")["meta"]["live"];
+  EXPECT_EQ(live["link"]["surfaces_sent"], surfaces);
+}
+
 }  // namespace
 }  // namespace organsim::test
