@@ -76,4 +76,17 @@ std::unique_ptr<Backend> make_backend(const BackendSelection& selection, const M
   throw Error(ErrorKind::Usage, "unknown backend \"" + selection.name + "\": expected \"auto\", \"cpu\" or \"gl\"");
 }
 
+BackendSelection scenario_backend_selection(const Scenario& s, const std::string& backend,
+                                            const std::string& precision, int32_t threads) {
+  BackendSelection selection;
+  selection.name = backend.empty() ? s.backend.name : backend;
+  const bool backend_switched = !backend.empty() && backend != s.backend.name;
+  if (!precision.empty())
+    selection.precision = precision;
+  else if (!backend_switched)
+    selection.precision = s.backend.precision;
+  selection.threads = threads >= 0 ? threads : s.backend.threads;
+  return selection;
+}
+
 }  // namespace organsim::app

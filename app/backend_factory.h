@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/scenario/scenario.h"
 #include "core/sim/backend.h"
 
 namespace organsim::app {
@@ -17,6 +18,13 @@ struct BackendSelection {
   int32_t threads = 0;                   // cpu: 0 = all hardware threads
   int32_t gl_threads_per_point = 0;      // gl: invocations per point, 0 = the backend's choice
 };
+
+// The backend a scenario runs on, with the command line's --backend,
+// --precision and --threads over the scenario's (empty / negative: not given).
+// The scenario's precision belongs to the scenario's backend: switching the
+// backend on the command line takes the new backend's default precision.
+BackendSelection scenario_backend_selection(const Scenario& s, const std::string& backend,
+                                            const std::string& precision, int32_t threads);
 
 // The backend names organsim knows (whether or not this build can create them).
 const std::vector<std::string>& backend_names();

@@ -29,6 +29,23 @@ std::vector<RunObserverRegistration>& run_observer_registry() {
   return registry;
 }
 
+std::vector<std::unique_ptr<RunObserver>> make_observers(const Scenario& s, const Model& model,
+                                                         const std::filesystem::path& outdir, std::vector<std::string>* names) {
+  std::vector<std::unique_ptr<RunObserver>> out;
+  bool frames_produced = false;
+  for (const auto& r : run_observer_registry()) {
+    auto o = r.make(RunObserverContext{s, model, outdir});
+    if (!o) continue;
+    if (r.produces == "frames") frames_produced = true;
+    if (names) names->push_back(r.name);
+    out.push_back(std::move(o));
+  }
+  if (s.outputs.wants_rendering() && !frames_produced) {
+    throw Error(ErrorKind::Scenario, s.file.string() + ": outputs.frames: frame rendering is not available in this build");
+  }
+  return out;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -143,24 +160,6 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
   out << "\n";
 }
 
-// Observers for this scenario; an asked-for output that no observer produces is an error.
-std::vector<std::unique_ptr<RunObserver>> make_observers(const Scenario& s, const Model& model,
-                                                         const fs::path& outdir, std::vector<std::string>* names) {
-  std::vector<std::unique_ptr<RunObserver>> out;
-  bool frames_produced = false;
-  for (const auto& r : run_observer_registry()) {
-    auto o = r.make(RunObserverContext{s, model, outdir});
-    if (!o) continue;
-    if (r.produces == "frames") frames_produced = true;
-    if (names) names->push_back(r.name);
-    out.push_back(std::move(o));
-  }
-  if (s.outputs.wants_rendering() && !frames_produced) {
-    throw Error(ErrorKind::Scenario, s.file.string() + ": outputs.frames: frame rendering is not available in this build");
-  }
-  return out;
-}
-
 // Lists what the run wrote, so a user sees the frames, video and contact
 // sheet next to the force log without looking.
 void print_output_files(std::ostream& out, const fs::path& outdir) {
@@ -181,16 +180,7 @@ void print_output_files(std::ostream& out, const fs::path& outdir) {
 
 void run_command(const RunArgs& args) {
   Scenario s = load_scenario(args.scenario);
-  BackendSelection selection;
-  selection.name = args.backend.empty() ? s.backend.name : args.backend;
-  // The scenario's precision belongs to the scenario's backend: switching
-  // backend on the command line takes the new backend's default precision.
-  const bool backend_switched = !args.backend.empty() && args.backend != s.backend.name;
-  if (!args.precision.empty())
-    selection.precision = args.precision;
-  else if (!backend_switched)
-    selection.precision = s.backend.precision;
-  selection.threads = args.threads >= 0 ? args.threads : s.backend.threads;
+  BackendSelection selection = scenario_backend_selection(s, args.backend, args.precision, args.threads);
   const std::string backend_choice = resolve_auto_backend(selection);
   if (!backend_choice.empty()) std::cout << "backend:  " << backend_choice << "\n";
   s.backend.name = selection.name;

@@ -30,6 +30,12 @@ struct RunObserverRegistration {
 
 std::vector<RunObserverRegistration>& run_observer_registry();
 
+// The registered observers this scenario asks for (their names into `names`
+// when given); an asked-for output that no observer produces is an error.
+std::vector<std::unique_ptr<RunObserver>> make_observers(const Scenario& s, const Model& model,
+                                                         const std::filesystem::path& outdir,
+                                                         std::vector<std::string>* names);
+
 inline bool register_run_observer(RunObserverRegistration registration) {
   run_observer_registry().push_back(std::move(registration));
   return true;

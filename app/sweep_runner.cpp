@@ -15,6 +15,7 @@
 #include <map>
 #include <thread>
 
+#include "app/stop_signals.h"
 #include "core/util/error.h"
 
 extern char** environ;
@@ -24,34 +25,6 @@ namespace organsim::app {
 namespace {
 
 namespace fs = std::filesystem;
-
-volatile std::sig_atomic_t g_stop = 0;
-
-void on_stop_signal(int) { g_stop = 1; }
-
-// Installs the stop handler for SIGINT and SIGTERM and puts the previous
-// handlers back when it goes out of scope.
-class StopSignals {
- public:
-  StopSignals() {
-    g_stop = 0;
-    struct sigaction sa {};
-    sa.sa_handler = on_stop_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-  }
-  ~StopSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-
- private:
-  struct sigaction old_int_ {
-  }, old_term_{};
-};
 
 pid_t spawn(const ChildJob& job) {
   posix_spawn_file_actions_t files;
@@ -100,12 +73,12 @@ ChildRunSummary run_children(const std::vector<ChildJob>& jobs, int parallel,
   bool terminated = false;
   try {
     while (true) {
-      while (!g_stop && next < jobs.size() && static_cast<int>(running.size()) < std::max(1, parallel)) {
+      while (!stop_requested() && next < jobs.size() && static_cast<int>(running.size()) < std::max(1, parallel)) {
         on_start(next);
         running[spawn(jobs[next])] = {next, std::chrono::steady_clock::now()};
         ++next;
       }
-      if (g_stop && !terminated) {
+      if (stop_requested() && !terminated) {
         summary.interrupted = true;
         for (const auto& [pid, r] : running) kill(pid, SIGTERM);
         terminated = true;
@@ -129,7 +102,7 @@ ChildRunSummary run_children(const std::vector<ChildJob>& jobs, int parallel,
       running.erase(it);
       // After an interruption only a clean exit is a result; anything else
       // may be the interruption itself, and the case stays pending.
-      if (g_stop && (e.exit_code != 0 || e.signal != 0)) {
+      if (stop_requested() && (e.exit_code != 0 || e.signal != 0)) {
         ++summary.stopped;
         continue;
       }
@@ -141,7 +114,7 @@ ChildRunSummary run_children(const std::vector<ChildJob>& jobs, int parallel,
     for (const auto& [pid, r] : running) waitpid(pid, nullptr, 0);
     throw;
   }
-  summary.interrupted = summary.interrupted || g_stop;
+  summary.interrupted = summary.interrupted || stop_requested();
   return summary;
 }
 

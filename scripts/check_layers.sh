@@ -7,17 +7,18 @@ set -euo pipefail
 root=$(cd "${1:-$(dirname "$0")/..}" && pwd)
 cd "$root"
 
-# Lowest first. core/<folder> by folder name; meshing/ and app/ by their own.
-layers=(util mesh physics model sim scenario stability topology io validation fit run sweep gl render meshing app)
+# Lowest first. core/<folder> by folder name; meshing/, igtl/ and app/ by their own.
+layers=(util mesh physics model sim scenario stability topology io validation fit run sweep live gl render meshing igtl app)
 declare -A rank
 for i in "${!layers[@]}"; do rank[${layers[$i]}]=$i; done
 
 # The layer of a path, a source file's or an include's: core/<folder>/...,
-# meshing/..., app/...; "" for anything else.
+# meshing/..., igtl/..., app/...; "" for anything else.
 layer_of() {
   case "$1" in
     core/*/*) echo "${1#core/}" | cut -d/ -f1 ;;
     meshing/*) echo meshing ;;
+    igtl/*) echo igtl ;;
     app/*) echo app ;;
     *) echo "" ;;
   esac
@@ -46,7 +47,7 @@ while IFS= read -r file; do
       status=1
     fi
   done < <(grep -n -E '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$file" || true)
-done < <(find core meshing app -type f \( -name '*.h' -o -name '*.cpp' \) | sort)
+done < <(find core meshing igtl app -type f \( -name '*.h' -o -name '*.cpp' \) | sort)
 
 if [ "$status" -eq 0 ]; then
   echo "layers: $checked includes between project folders, all downward (${layers[*]})"

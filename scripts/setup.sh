@@ -23,6 +23,9 @@ packages=(
   # A one-node Slurm cluster for the sweep's job-array test (tests/slurm):
   # the daemons and sbatch, and munge, which signs Slurm's messages.
   slurm-wlm munge
+  # OpenIGTLink for `organsim serve` (igtl/), and the upstream example
+  # programs as source (the live tests build TrackerClient from them).
+  libopenigtlink-dev openigtlink-examples
   # Fuzzing (scripts/fuzz.sh): clang's libFuzzer runtime and its OpenMP.
   clang-14 libclang-rt-14-dev libomp-14-dev
 )

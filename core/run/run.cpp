@@ -137,8 +137,16 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       const double t0 = static_cast<double>(i) * tick;
       const double t1 = static_cast<double>(i + 1) * tick;
       if (tool) {
-        request.tool_from = tool->position_at(t0);
-        request.tool_to = tool->position_at(t1);
+        // A tick starts where the last one ended (the same double t0 as the
+        // last tick's t1, so identical to position_at(t0) for keyframes).
+        request.tool_from = i == 0 ? tool->position_at(t0) : request.tool_to;
+        if (options.tool_driver) {
+          const std::optional<Vec3> to = options.tool_driver->tool_at_end_of(i, t1);
+          if (!to) break;
+          request.tool_to = *to;
+        } else {
+          request.tool_to = tool->position_at(t1);
+        }
       }
       if (topology && topology->active(t0, t1)) {
         backend.positions(event_positions);
@@ -236,6 +244,8 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       result.meta.extra["sutures"] = suture_summary(*current, event_positions, backend.time(), suture_tension_peak);
     }
   }
+
+  if (options.tool_driver) options.tool_driver->add_meta(result.meta.extra);
 
   if (failure) {
     // Keep what was recorded, say why it stopped, then let the caller report it.

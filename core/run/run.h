@@ -12,6 +12,7 @@
 #include "core/scenario/scenario.h"
 #include "core/sim/backend.h"
 #include "core/sim/run_observer.h"
+#include "core/run/tool_driver.h"
 
 namespace organsim {
 
@@ -28,6 +29,9 @@ struct RunOptions {
   // After a topology change dt_crit is estimated again; a dt above it stops
   // the run with Error(Numerical) unless this is set (then it only warns).
   bool allow_unstable = false;
+  // The tool's centre per tick from outside (organsim serve) instead of the
+  // scenario's keyframes (which then only give the start); not owned.
+  ToolDriver* tool_driver = nullptr;
 };
 
 struct RunResult {

@@ -33,7 +33,7 @@ std::filesystem::path resolve(const std::string& path, const std::filesystem::pa
 
 const std::vector<std::string>& scenario_file_fields() {
   // Every field parse_mesh passes to resolve(); keep the two in step.
-  static const std::vector<std::string> fields{"mesh.surface", "mesh.tet"};
+  static const std::vector<std::string> fields{"mesh.surface", "mesh.image", "mesh.tet"};
   return fields;
 }
 

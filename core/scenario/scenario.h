@@ -93,7 +93,7 @@ Scenario parse_scenario_text(std::string_view text, const std::filesystem::path&
 Scenario load_scenario(const std::filesystem::path& path);
 
 // JSON paths of the fields that hold file names, resolved against the
-// scenario file's folder ("mesh.surface", "mesh.tet"): a tool that writes a
+// scenario file's folder ("mesh.surface", "mesh.image", "mesh.tet"): a tool that writes a
 // scenario elsewhere (organsim sweep) makes these absolute.
 const std::vector<std::string>& scenario_file_fields();
 

@@ -2,6 +2,8 @@
 
 #include <cctype>
 
+#include "core/scenario/scenario.h"
+#include "core/util/atomic_file.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -104,6 +106,20 @@ const nlohmann::json* find_field(const nlohmann::json& root, const std::string& 
     }
   }
   return at;
+}
+
+nlohmann::json scenario_json_with_absolute_paths(const std::filesystem::path& scenario_file) {
+  namespace fs = std::filesystem;
+  nlohmann::json base = nlohmann::json::parse(read_text_file(scenario_file));
+  const fs::path dir = scenario_file.has_parent_path() ? scenario_file.parent_path() : fs::path(".");
+  for (const std::string& field : scenario_file_fields()) {
+    const nlohmann::json* v = find_field(base, field);
+    if (!v || !v->is_string()) continue;
+    fs::path p(v->get<std::string>());
+    if (p.is_relative()) p = dir / p;
+    set_field(base, field, fs::absolute(p).lexically_normal().string());
+  }
+  return base;
 }
 
 }  // namespace organsim

@@ -4,6 +4,7 @@
 // letters, digits and '_' (every scenario key is snake_case); each key may
 // be followed by array indices.
 #include <cstddef>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -28,5 +29,10 @@ void set_field(nlohmann::json& root, const std::string& path, const nlohmann::js
 
 // The JSON value at `path`, or nullptr when any part of it is absent.
 const nlohmann::json* find_field(const nlohmann::json& root, const std::string& path);
+
+// A scenario file's JSON with its own file names (scenario_file_fields) made
+// absolute, so a scenario built from it can be written anywhere (a sweep's
+// cases, a live session's session.json).
+nlohmann::json scenario_json_with_absolute_paths(const std::filesystem::path& scenario_file);
 
 }  // namespace organsim

@@ -138,21 +138,6 @@ void resolve_file_fields(nlohmann::json& scenario, const std::vector<CaseOverrid
   }
 }
 
-// The base scenario with its own file names made absolute, so the case's
-// scenario can be written anywhere.
-nlohmann::json absolute_base(const fs::path& scenario_file) {
-  nlohmann::json base = nlohmann::json::parse(read_text_file(scenario_file));
-  const fs::path dir = scenario_file.has_parent_path() ? scenario_file.parent_path() : fs::path(".");
-  for (const std::string& field : scenario_file_fields()) {
-    const nlohmann::json* v = find_field(base, field);
-    if (!v || !v->is_string()) continue;
-    fs::path p(v->get<std::string>());
-    if (p.is_relative()) p = dir / p;
-    set_field(base, field, fs::absolute(p).lexically_normal().string());
-  }
-  return base;
-}
-
 std::string describe_origins(const std::vector<CaseOverride>& overrides) {
   std::string s;
   for (const CaseOverride& o : overrides) {
@@ -294,7 +279,7 @@ Sweep parse_sweep(const nlohmann::ordered_json& j, const fs::path& file) {
 
   // The base must parse alone (its own errors name its file), then each case.
   load_scenario(sweep.scenario);
-  const nlohmann::json base = absolute_base(sweep.scenario);
+  const nlohmann::json base = scenario_json_with_absolute_paths(sweep.scenario);
   for (SweepCase& c : sweep.cases) build_case_scenario(c, base, sweep.fixed, dir, r, file);
   return sweep;
 }

@@ -7,7 +7,9 @@
 // returns what it read) or throws the organsim::Error that refuses it.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/mesh_io_detail.h"
@@ -25,6 +28,7 @@
 #include "core/stability/critical_step.h"
 #include "core/sweep/case_names.h"
 #include "core/sweep/sweep_spec.h"
+#include "igtl/igtl_stream.h"
 #include "meshing/label_image.h"
 #include "meshing/surface_check.h"
 #include "tests/fuzz/fuzz_check.h"
@@ -170,6 +174,38 @@ inline LabelImage label_image_input(std::string_view bytes, const std::string& s
   require(image.axes.allFinite() && image.origin.allFinite() && image.axes.determinant() != 0,
           "image accepted with a degenerate placement");
   return image;
+}
+
+// kind igtl: the OpenIGTLink byte stream a client sends to `organsim serve`
+// (IgtlStream). Any bytes give messages, refusals or a broken stream, never
+// an exception or a crash; the same bytes cut into 7-byte pieces (as TCP may
+// deliver them) give the same messages; an accepted TRANSFORM has the last
+// row of a transform.
+inline std::vector<IgtlMessage> igtl_input(std::string_view bytes) {
+  const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
+  IgtlStream whole;
+  whole.append(data, bytes.size());
+  std::vector<IgtlMessage> once;
+  while (auto m = whole.next()) once.push_back(*m);
+  IgtlStream pieces;
+  std::vector<IgtlMessage> cut;
+  for (size_t at = 0; at < bytes.size(); at += 7) {
+    pieces.append(data + at, std::min<size_t>(7, bytes.size() - at));
+    while (auto m = pieces.next()) cut.push_back(*m);
+  }
+  require(once.size() == cut.size() && whole.broken() == pieces.broken(),
+          "the stream read whole and in pieces gave different messages");
+  for (size_t i = 0; i < once.size(); ++i) {
+    const IgtlMessage &a = once[i], &b = cut[i];
+    require(a.transform == b.transform && a.refused_kind == b.refused_kind && a.type == b.type &&
+                a.device == b.device && std::memcmp(a.matrix.data(), b.matrix.data(), sizeof a.matrix) == 0,
+            "message " + std::to_string(i) + " differs read whole and in pieces");
+    require(a.transform == a.refused_kind.empty(), "a message is neither or both of accepted and refused");
+    if (a.transform)
+      require(a.matrix[12] == 0 && a.matrix[13] == 0 && a.matrix[14] == 0 && a.matrix[15] == 1,
+              "accepted TRANSFORM without the last row 0 0 0 1");
+  }
+  return once;
 }
 
 }  // namespace organsim::fuzz

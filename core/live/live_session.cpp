@@ -1,0 +1,204 @@
+#include "core/live/live_session.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "core/live/latency_stats.h"
+#include "core/mesh/boundary.h"
+#include "core/model/model.h"
+#include "core/util/format.h"
+
+namespace organsim {
+
+namespace {
+
+double seconds(LiveClock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+LiveClock::duration from_seconds(double s) {
+  return std::chrono::duration_cast<LiveClock::duration>(std::chrono::duration<double>(s));
+}
+
+std::string format_vec(const Vec3& v) {
+  std::string s("[");  // appended, not "[" + ...: gcc 12 warns falsely (-Wrestrict) on that
+  s.append(format_number(v.x())).append(", ").append(format_number(v.y())).append(", ").append(format_number(v.z()));
+  return s.append("]");
+}
+
+std::string ms(double s) { return format_number(s * 1e3, "%.3g") + " ms"; }
+
+}  // namespace
+
+LiveSession::LiveSession(LiveLink& link, LiveOptions options)
+    : link_(link), o_(std::move(options)), refusals_(o_.log), device_(o_.device), current_(o_.start) {
+  keyframes_.push_back({0.0, o_.start});
+}
+
+std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
+  const auto stopped = [&] {
+    if (o_.stop && o_.stop->load()) stopped_by_ = "SIGINT";
+    return !stopped_by_.empty();
+  };
+  if (stopped()) return std::nullopt;
+  if (tick == 0) {
+    static const std::atomic<bool> never{false};
+    if (!link_.wait_for_client(o_.stop ? *o_.stop : never)) {
+      stopped_by_ = "SIGINT";
+      return std::nullopt;
+    }
+    start_ = last_status_ = LiveClock::now();
+  }
+  // The run loop's t0 for this tick is the last tick's t1, the same double.
+  const double t_start = tick == 0 ? 0.0 : end_time_;
+  const LiveClock::time_point scheduled = start_ + from_seconds(t_start);
+  early_ = scheduled - from_seconds(o_.tick);
+  link_.receive_until(early_, *this);
+  if (!pending_) link_.receive_until(scheduled, *this);
+  if (stopped()) return std::nullopt;
+  apply_pending(tick, t_start, t_end);
+  end_time_ = t_end;
+  return current_;
+}
+
+bool LiveSession::on_pose(const ClientPose& pose) {
+  ++poses_received_;
+  if (device_.empty()) {
+    device_ = pose.device;
+    if (o_.log) *o_.log << "organsim serve: following device \"" << device_ << "\" from " << pose.client << "\n";
+  }
+  if (pose.device != device_) {
+    refusals_.refuse("other_device", pose.client,
+                     "TRANSFORM of device \"" + pose.device + "\" (following \"" + device_ + "\"; --device picks one)");
+    return false;
+  }
+  for (double v : pose.matrix) {
+    if (!std::isfinite(v)) {
+      refusals_.refuse("not_finite", pose.client, "TRANSFORM with a NaN or infinite entry");
+      return false;
+    }
+  }
+  const Vec3 p = o_.frame.scene_position(pose.matrix);
+  if (!o_.scene.contains(p)) {
+    refusals_.refuse("outside_scene", pose.client,
+                     "pose at " + format_vec(p) + " m in the scene, outside the box " + format_vec(o_.scene.lo) +
+                         " .. " + format_vec(o_.scene.hi) + " m (check --client-units and --client-transform)");
+    return false;
+  }
+  if (pending_) ++superseded_;
+  pending_ = pose;
+  pending_position_ = p;
+  return LiveClock::now() >= early_;
+}
+
+void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
+  tick_pose_received_.reset();
+  if (!pending_) return;
+  tick_pose_received_ = pending_->received;
+  applied_.push_back({tick, seconds(pending_->received - start_), *pending_});
+  if (pending_position_ != current_) {
+    // Hold the last pose to the start of this tick, then move to the new one
+    // at its end: exactly what this tick stepped (tool_from, tool_to).
+    if (keyframes_.back().t < t_start) keyframes_.push_back({t_start, current_});
+    keyframes_.push_back({t_end, pending_position_});
+    current_ = pending_position_;
+  }
+  pending_.reset();
+}
+
+void LiveSession::on_tick(const Model& /*model*/, Backend& backend, const TickInfo& info) {
+  link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
+                      o_.frame.client_direction(info.reaction.torque));
+  const LiveClock::time_point now = LiveClock::now();
+  ++ticks_;
+  if (now > start_ + from_seconds(info.t)) ++late_;
+  if (tick_pose_received_) latencies_.push_back(seconds(now - *tick_pose_received_));
+  wall_seconds_ = seconds(now - start_);
+  maybe_status(now);
+  maybe_surface(backend, info.t, now);
+}
+
+void LiveSession::on_start(const Model& model, Backend& /*backend*/) { find_surface(model); }
+
+void LiveSession::on_topology_changed(const Model& next, Backend& /*backend*/) { find_surface(next); }
+
+void LiveSession::find_surface(const Model& model) {
+  surface_points_.clear();
+  surface_triangles_.clear();
+  if (o_.surface_rate <= 0) return;
+  std::vector<int32_t> index(static_cast<size_t>(model.npoint()), -1);
+  for (const Tri& f : extract_boundary_faces(model.tet_points)) {
+    Tri g;
+    for (int k = 0; k < 3; ++k) {
+      int32_t& i = index[static_cast<size_t>(f[static_cast<size_t>(k)])];
+      if (i < 0) {
+        i = static_cast<int32_t>(surface_points_.size());
+        surface_points_.push_back(f[static_cast<size_t>(k)]);
+      }
+      g[static_cast<size_t>(k)] = i;
+    }
+    surface_triangles_.push_back(g);
+  }
+}
+
+void LiveSession::maybe_surface(Backend& backend, double t, LiveClock::time_point now) {
+  if (o_.surface_rate <= 0 || surface_points_.empty() || seconds(now - last_surface_) < 1.0 / o_.surface_rate) return;
+  last_surface_ = now;
+  backend.positions(positions_);
+  surface_client_.resize(surface_points_.size());
+  for (size_t k = 0; k < surface_points_.size(); ++k)
+    surface_client_[k] = o_.frame.client_position(positions_[static_cast<size_t>(surface_points_[k])]);
+  link_.send_surface(t, surface_client_, surface_triangles_);
+  ++surfaces_;
+}
+
+void LiveSession::maybe_status(LiveClock::time_point now) {
+  if (!o_.status || seconds(now - last_status_) < o_.status_interval) return;
+  std::vector<double> window(latencies_.begin() + static_cast<std::ptrdiff_t>(status_latencies_), latencies_.end());
+  const LatencySummary l = summarise_latency(window);
+  std::string line = "serve: t = " + format_number(end_time_, "%.1f") + " s, " + std::to_string(ticks_) + " ticks (" +
+                     std::to_string(late_ - status_late_) + " of the last " + std::to_string(ticks_ - status_ticks_) +
+                     " late), real-time factor " + format_number(end_time_ / wall_seconds_, "%.2f");
+  if (l.count > 0)
+    line += ", latency median " + ms(l.median) + ", p99 " + ms(l.p99) + ", max " + ms(l.max);
+  else
+    line += ", no poses";
+  line += ", " + std::to_string(refusals_.total()) + " refused";
+  o_.status(line);
+  last_status_ = now;
+  status_ticks_ = ticks_;
+  status_late_ = late_;
+  status_latencies_ = latencies_.size();
+}
+
+void LiveSession::add_meta(nlohmann::json& extra) const {
+  std::vector<double> all = latencies_;
+  nlohmann::json poses = nlohmann::json::array();
+  for (const AppliedPose& a : applied_) {
+    poses.push_back({{"tick", a.tick},
+                     {"received_s", a.received},
+                     {"client", a.pose.client},
+                     {"device", a.pose.device},
+                     {"matrix", a.pose.matrix}});
+  }
+  nlohmann::json m = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) m.push_back({o_.frame.to_scene(r, 0), o_.frame.to_scene(r, 1), o_.frame.to_scene(r, 2), o_.frame.to_scene(r, 3)});
+  extra["live"] = {
+      {"ticks", ticks_},
+      {"late_ticks", late_},
+      {"latency", latency_json(summarise_latency(all))},
+      {"real_time_factor", wall_seconds_ > 0 ? end_time_ / wall_seconds_ : 0.0},
+      {"wall_seconds", wall_seconds_},
+      {"device", device_},
+      {"client_metres_per_unit", o_.frame.metres_per_unit},
+      {"client_transform", m},
+      {"poses_received", poses_received_},
+      {"poses_applied", applied_.size()},
+      {"poses_superseded", superseded_},
+      {"poses_refused", refusals_.counts()},
+      {"stopped_by", stopped_by_},
+      {"surfaces_sent", surfaces_},
+      {"link", link_.report()},
+      {"applied_poses", poses},
+  };
+}
+
+}  // namespace organsim

@@ -1,0 +1,119 @@
+#pragma once
+// `organsim serve`'s session, apart from the protocol: it paces the ordinary
+// run loop (core/run, through ToolDriver) to the wall clock, applies each
+// client pose at the tick it arrives in (the last pose holds in between and
+// while no client is connected), replies with every tick's reaction, keeps
+// the timing figures, and records the tool path so that the session replays
+// as an ordinary scenario (session_scenario.h).
+//
+// Tick i (simulated [t0, t1]) starts at wall time start + t0, or up to one
+// tick earlier as soon as a new pose arrives: a client that sends at the tick
+// rate then gets its force without waiting for the clock, and the simulation
+// never runs more than one tick ahead of it. A tick is late when its reply
+// leaves after start + t1.
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "core/live/client_frame.h"
+#include "core/live/live_link.h"
+#include "core/live/refusal_log.h"
+#include "core/run/tool_driver.h"
+#include "core/scenario/tool_spec.h"
+#include "core/sim/run_observer.h"
+
+namespace organsim {
+
+struct LiveOptions {
+  ClientFrame frame;
+  std::string device;        // the tool's device name; empty: whichever sends first
+  SceneBox scene;            // poses outside are refused
+  double tick = 1e-3;        // s, the scenario's dt * substeps
+  Vec3 start{0, 0, 0};       // the tool centre until the first pose (the scenario's at t = 0), m
+  const std::atomic<bool>* stop = nullptr;  // set (by SIGINT) to end the session after the current tick
+  std::ostream* log = nullptr;              // refusals, connections
+  // Called about every status_interval wall seconds with a one-line summary.
+  std::function<void(const std::string&)> status;
+  double status_interval = 2.0;  // s
+  // The boundary surface to the clients this many times per wall second (0: never).
+  double surface_rate = 0;  // Hz
+};
+
+// One applied pose, for the force log: the tick it was applied at, when it
+// arrived (s after the session started), who sent it and the matrix as sent.
+struct AppliedPose {
+  int64_t tick = 0;
+  double received = 0;
+  ClientPose pose;
+};
+
+class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink {
+ public:
+  LiveSession(LiveLink& link, LiveOptions options);
+
+  // ToolDriver: waits for the first client (tick 0), then for the tick's time.
+  std::optional<Vec3> tool_at_end_of(int64_t tick, double t_end) override;
+  void add_meta(nlohmann::json& extra) const override;
+  // RunObserver: sends the tick's reaction and keeps the timing (and the surface now and then).
+  void on_start(const Model& model, Backend& backend) override;
+  void on_topology_changed(const Model& next, Backend& backend) override;
+  void on_tick(const Model& model, Backend& backend, const TickInfo& info) override;
+
+  // The tool path as keyframes that reproduce every tick's tool centre
+  // exactly with ToolSpec::position_at (a hold, then the step to the new
+  // pose at the end of the tick that applied it).
+  const std::vector<Keyframe>& keyframes() const { return keyframes_; }
+  // Simulated time at the end of the last tick served, s (0 before any).
+  double end_time() const { return end_time_; }
+  int64_t ticks() const { return ticks_; }
+  const std::vector<AppliedPose>& applied() const { return applied_; }
+  // Why the session ended early ("SIGINT"), empty otherwise.
+  const std::string& stopped_by() const { return stopped_by_; }
+
+ private:
+  bool on_pose(const ClientPose& pose) override;
+  void apply_pending(int64_t tick, double t_start, double t_end);
+  void maybe_status(LiveClock::time_point now);
+  void find_surface(const Model& model);
+  void maybe_surface(Backend& backend, double t, LiveClock::time_point now);
+
+  LiveLink& link_;
+  LiveOptions o_;
+  RefusalLog refusals_;
+  std::string device_;  // the device followed (o_.device or the first sender)
+
+  LiveClock::time_point start_{};
+  LiveClock::time_point early_{};  // a new pose from here on starts the tick
+  std::optional<ClientPose> pending_;  // the newest pose not yet applied
+  Vec3 pending_position_{0, 0, 0};
+  int64_t superseded_ = 0;   // poses replaced by a newer one before a tick applied them
+  int64_t poses_received_ = 0;
+
+  Vec3 current_;
+  std::vector<Keyframe> keyframes_;
+  std::vector<AppliedPose> applied_;
+  std::optional<LiveClock::time_point> tick_pose_received_;  // of the pose this tick applied
+  double end_time_ = 0;
+  int64_t ticks_ = 0;
+  int64_t late_ = 0;
+  std::vector<double> latencies_;  // s, one per tick that applied a pose
+  std::string stopped_by_;
+
+  LiveClock::time_point last_status_{};
+  int64_t status_ticks_ = 0, status_late_ = 0;
+  size_t status_latencies_ = 0;
+  double wall_seconds_ = 0;  // start to the last reply
+
+  // The boundary surface: its points (internal ids) and triangles over them.
+  std::vector<int32_t> surface_points_;
+  std::vector<Tri> surface_triangles_;
+  std::vector<Vec3> positions_, surface_client_;
+  LiveClock::time_point last_surface_{};
+  int64_t surfaces_ = 0;
+};
+
+}  // namespace organsim

@@ -1,0 +1,44 @@
+// IgtlServer in-process on loopback: what one receive hands to the session.
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "core/util/error.h"
+#include "igtl/igtl_server.h"
+#include "tests/live/igtl_test_client.h"
+
+namespace organsim {
+namespace {
+
+struct CountingSink : LivePoseSink {
+  std::vector<ClientPose> poses;
+  bool on_pose(const ClientPose& p) override {
+    poses.push_back(p);
+    return true;  // as the session does once its tick may start
+  }
+};
+
+// A session behind the clock must get the newest pose, so one receive takes
+// every pose that has arrived even though the sink asks to return at the first.
+TEST(IgtlServer, OneReceiveHandsOverEveryPoseThatHasArrived) {
+  IgtlServer server("127.0.0.1", 0, nullptr);
+  test::IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(server.port()));
+  const std::atomic<bool> stop{false};
+  ASSERT_TRUE(server.wait_for_client(stop));
+  for (float z : {50.0f, 49.0f, 48.0f}) ASSERT_TRUE(client.send_pose("Tool", {20, 20, z}));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // all three in the server's socket
+  CountingSink sink;
+  server.receive_until(LiveClock::now() - std::chrono::seconds(1), sink);
+  ASSERT_EQ(sink.poses.size(), 3u);
+  EXPECT_EQ(sink.poses.back().matrix[11], 48.0);
+  EXPECT_EQ(sink.poses.back().device, "Tool");
+  EXPECT_EQ(sink.poses.back().client.rfind("127.0.0.1:", 0), 0u);
+}
+
+TEST(IgtlServer, RefusesAnAddressItCannotUse) {
+  EXPECT_THROW(IgtlServer("not-an-address", 0, nullptr), Error);
+}
+
+}  // namespace
+}  // namespace organsim

@@ -1,0 +1,204 @@
+// LiveSession without sockets: a scripted link hands poses to the ordinary
+// run loop through the session; the session's keyframes must then replay the
+// same ticks bit for bit, and refused poses must change nothing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+
+#include "core/live/live_session.h"
+#include "core/mesh/tet_mesh.h"
+#include "core/run/run.h"
+#include "core/sim/cpu_backend.h"
+
+namespace organsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Delivers the poses scripted for a tick when the session waits before it,
+// without waiting for any clock; raises `stop` before tick `stop_at`.
+class ScriptedLink : public LiveLink {
+ public:
+  std::map<int64_t, std::vector<ClientPose>> script;
+  std::vector<std::pair<double, Vec3>> replies;  // (t, force)
+  int64_t stop_at = -1;
+  std::atomic<bool> stop{false};
+
+  bool wait_for_client(const std::atomic<bool>&) override { return true; }
+  void receive_until(LiveClock::time_point, LivePoseSink& sink) override {
+    const int64_t tick = static_cast<int64_t>(replies.size());
+    if (tick == stop_at) stop = true;
+    if (delivered_ > tick) return;
+    delivered_ = tick + 1;
+    for (ClientPose p : script[tick]) {
+      p.received = LiveClock::now();
+      sink.on_pose(p);
+    }
+  }
+  void send_reaction(int64_t, double t, const Vec3& force, const Vec3&) override { replies.push_back({t, force}); }
+  void send_surface(double, const std::vector<Vec3>&, const std::vector<Tri>&) override {}
+  void send_notice(const std::string&) override {}
+  nlohmann::json report() const override { return nlohmann::json::object(); }
+
+ private:
+  int64_t delivered_ = 0;
+};
+
+ClientPose pose_mm(const std::string& device, double x, double y, double z) {
+  ClientPose p;
+  p.device = device;
+  p.client = "test";
+  p.matrix = {1, 0, 0, x, 0, 1, 0, y, 0, 0, 1, z, 0, 0, 0, 1};
+  return p;
+}
+
+// A 4 cm soft cube fixed at its bottom, the tool starting 1 mm above its top.
+Scenario cube() {
+  Scenario s;
+  s.file = "cube.json";
+  s.material.young_modulus = 5000;
+  s.material.volume_modulus = 10000;
+  s.gravity = Vec3::Zero();
+  FixedSelector bottom;
+  bottom.kind = FixedSelector::Kind::Box;
+  bottom.min = Vec3(-1, -1, -1);
+  bottom.max = Vec3(1, 1, 1e-6);
+  s.fixed = {bottom};
+  s.time.duration = 0.08;
+  s.time.dt = 2e-4;
+  s.time.substeps = 5;
+  ToolDef tool;
+  tool.spec.radius = 0.01;
+  tool.spec.contact_stiffness = 500;
+  tool.spec.keyframes = {{0.0, Vec3(0.02, 0.02, 0.051)}};
+  s.tool = tool;
+  return s;
+}
+
+struct Served {
+  RunResult result;
+  std::vector<Keyframe> keyframes;
+  double end_time = 0;
+  nlohmann::json live;
+};
+
+Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
+  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  LiveOptions o;
+  o.tick = s.time.tick();
+  o.start = s.tool->spec.position_at(0);
+  o.scene = scene_box(model.rest_position);
+  o.stop = &link.stop;
+  LiveSession session(link, o);
+  RunOptions r;
+  r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session";
+  r.observers = {&session};
+  r.tool_driver = &session;
+  Served out;
+  out.result = run_scenario(s, model, *backend, r);
+  out.keyframes = session.keyframes();
+  out.end_time = session.end_time();
+  out.live = out.result.meta.extra["live"];
+  return out;
+}
+
+RunResult replay(Scenario s, const Model& model, const Served& served) {
+  s.tool->spec.keyframes = served.keyframes;
+  s.time.duration = served.end_time;
+  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  RunOptions r;
+  r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session_replay";
+  return run_scenario(s, model, *backend, r);
+}
+
+void expect_same_samples(const ForceSamples& a, const ForceSamples& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.t[i], b.t[i]) << i;
+    ASSERT_EQ(a.tool_position[i], b.tool_position[i]) << i;
+    ASSERT_EQ(a.force[i], b.force[i]) << i;
+    ASSERT_EQ(a.torque[i], b.torque[i]) << i;
+    ASSERT_EQ(a.contacts[i], b.contacts[i]) << i;
+  }
+}
+
+Model cube_model(const Scenario& s) {
+  return build_model(make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.04, 0.04, 0.04), 4, 4, 4), s.material, model_options(s),
+                     "cube");
+}
+
+// A replayed session needs the tool exactly at each keyframe at its time;
+// a + 1 * (b - a) is not b for these two numbers.
+TEST(LiveSession, KeyframesGiveTheirExactPositionAtTheirTime) {
+  ToolSpec tool;
+  const Vec3 a(0.00938595867742349, 0, 0), b(0.002834747652200631, 0, 0);
+  ASSERT_NE((a + 1.0 * (b - a)).x(), b.x());
+  tool.keyframes = {{0.0, a}, {0.001, b}, {0.002, a}};
+  EXPECT_EQ(tool.position_at(0.001), b);
+  EXPECT_EQ(tool.position_at(0.002), a);
+  EXPECT_EQ(tool.position_at(0.0005).x(), a.x() + 0.5 * (b.x() - a.x()));
+}
+
+TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  // Irregular poses in mm pressing into the top (z = 40 mm): some ticks get
+  // none (the pose holds), tick 30 gets two (the newer wins), tick 50
+  // repeats the pose it holds.
+  for (int64_t k = 3; k < 70; k += 1 + k % 3) link.script[k] = {pose_mm("Tool", 20 + 0.01 * k, 20, 51 - 0.2 * k)};
+  link.script[30].push_back(pose_mm("Tool", 21.234567, 19.5, 44.5));
+  link.script[50] = {pose_mm("Tool", 20.5, 20, 45)};
+  link.script[51] = {pose_mm("Tool", 20.5, 20, 45)};
+  const Served served = serve(s, model, link);
+
+  const ForceSamples& f = served.result.samples;
+  ASSERT_EQ(f.size(), 80u);
+  EXPECT_EQ(link.replies.size(), 80u);
+  Vec3 held = s.tool->spec.position_at(0);
+  for (int64_t k = 0; k < 80; ++k) {
+    if (link.script.count(k) && !link.script[k].empty()) {
+      const auto& m = link.script[k].back().matrix;
+      held = 1e-3 * Vec3(m[3], m[7], m[11]);
+    }
+    EXPECT_EQ(f.tool_position[static_cast<size_t>(k)], held) << "tick " << k;
+    EXPECT_EQ(link.replies[static_cast<size_t>(k)].second, f.force[static_cast<size_t>(k)]) << "tick " << k;
+  }
+  double peak = 0;
+  for (const Vec3& v : f.force) peak = std::max(peak, v.norm());
+  EXPECT_GT(peak, 0.01) << "the path should press into the cube";
+  EXPECT_EQ(served.live["poses_superseded"], 1);
+  EXPECT_EQ(served.live["ticks"], 80);
+
+  expect_same_samples(replay(s, model, served).samples, f);
+}
+
+TEST(LiveSession, RefusedPosesChangeNothingAndAStopEndsTheRunWithAReplayableRecord) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  link.script[2] = {pose_mm("Tool", 20, 20, 48)};
+  link.script[5] = {pose_mm("Tool", 20, nan, 48)};           // not finite
+  link.script[6] = {pose_mm("Tool", 20, 20, 48000)};         // 48 m: metres sent as mm
+  link.script[7] = {pose_mm("Other", 20, 20, 44)};           // not the followed device
+  link.script[9] = {pose_mm("Tool", 20, 20, 46)};
+  link.stop_at = 40;
+  const Served served = serve(s, model, link);
+
+  const ForceSamples& f = served.result.samples;
+  EXPECT_EQ(f.size(), 40u) << "the stop ends the run before tick 40";
+  EXPECT_TRUE(served.result.meta.completed);
+  EXPECT_EQ(served.live["stopped_by"], "SIGINT");
+  EXPECT_EQ(served.live["poses_refused"], (nlohmann::json{{"not_finite", 1}, {"other_device", 1}, {"outside_scene", 1}}));
+  for (size_t k = 2; k < 9; ++k) EXPECT_EQ(f.tool_position[k], Vec3(0.02, 0.02, 0.048)) << k;
+  EXPECT_EQ(f.tool_position[9], Vec3(0.02, 0.02, 0.046));
+  EXPECT_EQ(served.end_time, f.t.back());
+  expect_same_samples(replay(s, model, served).samples, f);
+}
+
+}  // namespace
+}  // namespace organsim

@@ -1,0 +1,287 @@
+// `organsim serve` end to end on the loopback address: a client of ours
+// (packing and unpacking with the OpenIGTLink library) streams a path, sends
+// malformed messages, disconnects, reconnects, never reads; the recorded
+// session replays bit for bit with `organsim run`. Every wait is bounded and
+// every session is 2 s of simulated time or less.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <thread>
+
+#include "igtlStatusMessage.h"
+#include "igtl_header.h"
+#include "igtl_util.h"
+#include "tests/live/igtl_test_client.h"
+#include "tests/live/serve_process.h"
+
+namespace organsim::test {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const std::string kScenario = std::string(ORGANSIM_SOURCE_DIR) + "/scenarios/stress/gentle_push.json";
+
+nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(slurp(p)); }
+
+// `organsim run OUTDIR/session.json` gives exactly the served samples.
+void expect_replay_identical(const fs::path& dir) {
+  const CliResult r = run_organsim("run '" + (dir / "out/session.json").string() + "' -o '" +
+                                       (dir / "replay").string() + "'",
+                                   dir / "replay_log");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json served = read_json(dir / "out/forces.json");
+  const nlohmann::json replayed = read_json(dir / "replay/forces.json");
+  ASSERT_EQ(served["samples"]["t"].size(), replayed["samples"]["t"].size());
+  EXPECT_TRUE(served["samples"] == replayed["samples"]) << "the replay's samples differ from the session's";
+}
+
+TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
+  // 2 s at 1 kHz, the stream: 2000 poses pressing 5 mm into the box top.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_stream";
+  fs::remove_all(dir);
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "2", "--device", "Probe"}, dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  const int n = 2000;
+  const auto start = Clock::now();
+  // The session's clock starts at the connection and the client's a little
+  // later, so its last poses may come after the session's 2000 ticks (the
+  // server has then closed: sending stops).
+  int sent = 0;
+  for (int k = 0; k < n; ++k, ++sent) {
+    std::this_thread::sleep_until(start + std::chrono::microseconds(1000 * k));
+    const float z = 50.0f - 5.0f * static_cast<float>(k) / n;
+    if (!client.send_pose("Probe", {20.0f, 20.0f, z}) || !client.read_replies(0)) break;
+  }
+  client.read_until_closed(60);
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  const nlohmann::json& live = log["meta"]["live"];
+  const nlohmann::json& samples = log["samples"];
+  EXPECT_EQ(live["ticks"], 2000);
+  ASSERT_EQ(samples["t"].size(), 2000u);
+  // Count: every pose the server read was applied or superseded, none
+  // refused, and nearly all that were sent arrived within the session.
+  const int received = live["poses_received"];
+  EXPECT_LE(received, sent);
+  EXPECT_GE(received, 0.9 * n);
+  EXPECT_EQ(live["poses_applied"].get<int>() + live["poses_superseded"].get<int>(), received);
+  EXPECT_TRUE(live["poses_refused"].empty()) << live["poses_refused"];
+  // Every reply sent arrived (none is ever cut), the library read it with
+  // its CRC, in tick order, carrying its tick's end time and that tick's
+  // logged force and torque. On a loaded machine a client that is not
+  // scheduled for a while misses replies: those were dropped and counted.
+  const int64_t replies_sent = live["link"]["replies_sent"], dropped = live["link"]["replies_dropped"];
+  EXPECT_EQ(replies_sent + dropped, 2000);
+  ASSERT_EQ(static_cast<int64_t>(client.replies.size()), replies_sent);
+  EXPECT_GT(replies_sent, 1000);
+  EXPECT_EQ(client.bad_crc, 0);
+  int64_t previous = -1;
+  for (const Reply& r : client.replies) {
+    ASSERT_EQ(r.type, "SENSOR");
+    ASSERT_EQ(r.device, "ToolReaction");
+    // The header's time is a 32-bit fraction of a second: the tick is exact after rounding.
+    const int64_t i = std::llround(r.t / 1e-3) - 1;
+    ASSERT_GT(i, previous);
+    previous = i;
+    ASSERT_NEAR(r.t, samples["t"][i].get<double>(), 1e-6) << i;
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(r.values[static_cast<size_t>(c)], samples["force"][i][c].get<double>()) << i;
+      ASSERT_EQ(r.values[static_cast<size_t>(c + 3)], samples["torque"][i][c].get<double>()) << i;
+    }
+  }
+  // Units and order: each applied pose (mm, as sent) is the tool centre in
+  // metres from its tick on; ticks only grow.
+  int64_t last_tick = -1;
+  for (const auto& p : live["applied_poses"]) {
+    const int64_t tick = p["tick"];
+    EXPECT_GT(tick, last_tick);
+    last_tick = tick;
+    for (int c = 0; c < 3; ++c)
+      ASSERT_EQ(samples["tool_position"][tick][c].get<double>(), 1e-3 * p["matrix"][4 * c + 3].get<double>()) << tick;
+  }
+  // Poses that arrive within one tick supersede each other (many, when the
+  // machine is loaded and the session falls behind); still the path moves.
+  EXPECT_GT(live["poses_applied"].get<int>(), 100);
+  double peak = 0;
+  for (const auto& f : samples["force"]) peak = std::max(peak, std::hypot(f[0].get<double>(), f[1].get<double>(), f[2].get<double>()));
+  EXPECT_GT(peak, 0.01) << "the path presses into the box";
+  expect_replay_identical(dir);
+}
+
+// Header fields rewritten in a packed message, its CRC that of the body that follows.
+std::vector<uint8_t> with_header(std::vector<uint8_t> bytes, void (*edit)(igtl_header&)) {
+  igtl_header h;
+  std::memcpy(&h, bytes.data(), IGTL_HEADER_SIZE);
+  igtl_header_convert_byte_order(&h);
+  edit(h);
+  h.crc = crc64(bytes.data() + IGTL_HEADER_SIZE, bytes.size() - IGTL_HEADER_SIZE, 0);
+  igtl_header_convert_byte_order(&h);
+  std::memcpy(bytes.data(), &h, IGTL_HEADER_SIZE);
+  return bytes;
+}
+
+TEST(Serve, MalformedMessagesAreRefusedAClientMayReconnectAndSigintEndsCleanly) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_malformed";
+  fs::remove_all(dir);
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "30"}, dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  {
+    IgtlTestClient first;
+    ASSERT_TRUE(first.connect_to(port));
+    ASSERT_TRUE(first.send_pose("Tool", {20, 20, 49}));
+    std::vector<uint8_t> bad_crc = IgtlTestClient::transform("Tool", {20, 20, 44});
+    bad_crc.back() ^= 0x40;
+    ASSERT_TRUE(first.send_bytes(bad_crc));
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    ASSERT_TRUE(first.send_pose("Tool", {20, nan, 44}));
+    igtl::StatusMessage::Pointer status = igtl::StatusMessage::New();
+    status->SetDeviceName("Tool");
+    status->Pack();
+    const auto* sp = static_cast<const uint8_t*>(status->GetPackPointer());
+    ASSERT_TRUE(first.send_bytes(std::vector<uint8_t>(sp, sp + status->GetPackSize())));
+    std::vector<uint8_t> short_body = IgtlTestClient::transform("Tool", {20, 20, 44});
+    short_body.resize(IGTL_HEADER_SIZE + 40);
+    ASSERT_TRUE(first.send_bytes(with_header(short_body, [](igtl_header& h) { h.body_size = 40; })));
+    ASSERT_TRUE(first.send_pose("Tool", {20, 20, 44000}));  // 44 m
+    ASSERT_TRUE(first.send_pose("Tool", {20, 20, 48}));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    ASSERT_TRUE(first.send_bytes(std::vector<uint8_t>(IGTL_HEADER_SIZE, 0xff)));  // no header at all
+    first.read_until_closed(30);  // the server closes this connection
+  }
+  IgtlTestClient second;
+  ASSERT_TRUE(second.connect_to(port));
+  ASSERT_TRUE(second.send_pose("Tool", {20, 20, 46.5f}));
+  const auto until = Clock::now() + std::chrono::seconds(30);
+  while (second.replies.size() < 200 && Clock::now() < until) second.read_replies(10);
+  EXPECT_GE(second.replies.size(), 200u) << "the reconnected client is answered";
+  serve.interrupt();
+  second.read_until_closed(30);
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  const nlohmann::json& live = log["meta"]["live"];
+  EXPECT_EQ(live["stopped_by"], "SIGINT");
+  EXPECT_TRUE(log["meta"]["completed"]);
+  const nlohmann::json refused = {{"bad_crc", 1}, {"malformed_body", 1}, {"malformed_header", 1}, {"unknown_type", 1}};
+  EXPECT_EQ(live["link"]["refused"], refused);
+  EXPECT_EQ(live["poses_refused"], (nlohmann::json{{"not_finite", 1}, {"outside_scene", 1}}));
+  EXPECT_EQ(live["link"]["clients"].size(), 2u);
+  // Accepted: 49 and 48 mm (49 superseded when both arrive within one tick),
+  // then 46.5 mm from the second client, which holds to the end.
+  const auto& applied = live["applied_poses"];
+  EXPECT_EQ(live["poses_applied"].get<int>() + live["poses_superseded"].get<int>(), 3);
+  ASSERT_GE(applied.size(), 2u);
+  EXPECT_EQ(applied[applied.size() - 2]["matrix"][11], 48);
+  EXPECT_EQ(applied.back()["matrix"][11], 46.5);
+  EXPECT_EQ(log["samples"]["tool_position"].back()[2], 1e-3 * 46.5);
+  const std::string err = serve.stderr_text();
+  EXPECT_NE(err.find("refused from 127.0.0.1:"), std::string::npos) << "refusals name the client's address:\n" << err;
+  expect_replay_identical(dir);
+}
+
+TEST(Serve, AClientThatNeverReadsDoesNotStallTheLoop) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_never_reads";
+  fs::remove_all(dir);
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "1"}, dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  client.shrink_receive_buffer(4096);  // a few dozen replies fill it
+  ASSERT_TRUE(client.connect_to(port));
+  const auto start = Clock::now();
+  for (int k = 0; k < 1000 && client.send_pose("Tool", {20, 20, 50.0f - 0.004f * static_cast<float>(k)}); ++k)
+    std::this_thread::sleep_until(start + std::chrono::microseconds(1000 * (k + 1)));
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+  const nlohmann::json live = read_json(dir / "out/forces.json")["meta"]["live"];
+  EXPECT_EQ(live["ticks"], 1000);
+  const int64_t sent = live["link"]["replies_sent"], dropped = live["link"]["replies_dropped"];
+  EXPECT_GT(dropped, 0) << "replies that do not fit must be dropped";
+  EXPECT_EQ(sent + dropped, 1000) << "one reply per tick to the one client, sent or dropped";
+}
+
+TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
+  // The stress box at dt = 2.5 ms, 1.6 x its critical step (tests/app/blowup_contact_test.cpp):
+  // with the tool pressed 3 mm into its top it diverges within a few hundred ticks.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_blowup";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json s = read_json(stress / "dt_over.json");
+  s["mesh"]["tet"] = (stress / "box.mesh").string();
+  s["time"] = {{"duration", 1.0}, {"dt", 0.0025}, {"substeps", 1}};
+  s["backend"] = {{"name", "cpu"}, {"precision", "double"}};
+  s["tool"] = {{"radius", 0.01}, {"contact_stiffness", 500}, {"mode", "push"},
+               {"keyframes", {{{"t", 0.0}, {"position", {0.02, 0.02, 0.055}}}}}};
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  ServeProcess serve({(dir / "scene.json").string(), "--allow-unstable", "--duration", "10", "-o", (dir / "out").string()},
+                     dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  ASSERT_TRUE(client.send_pose("Tool", {20, 20, 47}));
+  client.read_until_closed(60);
+  EXPECT_EQ(serve.wait(), 5) << serve.stderr_text();  // ErrorKind::Numerical, as organsim run
+  ASSERT_FALSE(client.replies.empty());
+  EXPECT_EQ(client.replies.back().type, "STATUS") << "the client is told why the session stopped";
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  EXPECT_FALSE(log["meta"]["completed"].get<bool>());
+  EXPECT_LT(log["samples"]["t"].size(), 4000u);
+  const nlohmann::json session = read_json(dir / "out/session.json");
+  EXPECT_EQ(session["tool"]["keyframes"].back()["position"][2], 0.047);
+}
+
+TEST(Serve, SendsTheBoundarySurfaceAtItsRateInTheClientsFrame) {
+  // The 4 cm box (5 x 5 x 5 grid points: 98 on the boundary, 2 x 6 x 16 = 192 triangles)
+  // at 20 surfaces per second for 1 s, the client's frame shifted by 100 mm along x.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_surface";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "shift.json") << "[[1,0,0,-100],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "1", "--surface-rate", "20",
+                      "--client-transform", (dir / "shift.json").string()},
+                     dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  client.read_until_closed(60);
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+  int surfaces = 0;
+  for (const Reply& r : client.replies) {
+    if (r.type != "POLYDATA") continue;
+    ++surfaces;
+    EXPECT_EQ(r.device, "OrganSurface");
+    ASSERT_EQ(r.points.size(), 98u);
+    ASSERT_EQ(r.triangles.size(), 192u);
+    for (const auto& t : r.triangles)
+      for (uint32_t v : t) ASSERT_LT(v, 98u);
+    for (const auto& p : r.points) {
+      // Scene x in [0, 40] mm is client x in [100, 140] mm; the box sags
+      // and bulges by about a millimetre under gravity, hence 3 mm of slack.
+      ASSERT_GE(p[0], 97.0f);
+      ASSERT_LE(p[0], 143.0f);
+      ASSERT_GE(p[2], -3.0f);
+      ASSERT_LE(p[2], 43.0f);
+    }
+  }
+  // About 20 in the second; fewer on a loaded machine, never more than the rate allows.
+  EXPECT_GE(surfaces, 5);
+  EXPECT_LE(surfaces, 21);
+  const nlohmann::json live = read_json(dir / "out/forces.json")["meta"]["live"];
+  EXPECT_EQ(live["link"]["surfaces_sent"], surfaces);
+}
+
+}  // namespace
+}  // namespace organsim::test
