@@ -306,7 +306,7 @@ void chunk_step(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int32_t c
         const float r = in.tool_radius * 1.001f;
         touching = _mm512_cmp_ps_mask(dist2, _mm512_set1_ps(r * r), _CMP_LT_OQ);
       } else {
-        const __m512i a = _mm512_loadu_si512(in.attached + p0);
+        const __m512i a = _mm512_loadu_si512(tool_lane_flags<Tool>(in) + p0);
         touching = _mm512_cmp_epi32_mask(a, _mm512_setzero_si512(), _MM_CMPINT_NLT);
       }
       if (touching) {
@@ -477,6 +477,7 @@ void step_tool(Avx512FloatKernel::Data& D, const FloatStepInputs& in, int thread
   switch (in.tool) {
     case ToolTerm::Push: return step_all<Volume, Gravity, ToolTerm::Push>(D, in, threads, partial);
     case ToolTerm::Pull: return step_all<Volume, Gravity, ToolTerm::Pull>(D, in, threads, partial);
+    case ToolTerm::Surface: return step_all<Volume, Gravity, ToolTerm::Surface>(D, in, threads, partial);
     default: return step_all<Volume, Gravity, ToolTerm::None>(D, in, threads, partial);
   }
 }

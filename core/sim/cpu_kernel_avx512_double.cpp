@@ -316,7 +316,7 @@ void chunk_step(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int32_t
         const double r = in.tool_radius * 1.001;
         touching = _mm512_cmp_pd_mask(dist2, _mm512_set1_pd(r * r), _CMP_LT_OQ);
       } else {
-        const __m512i a = _mm512_castsi256_si512(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(in.attached + p0)));
+        const __m512i a = _mm512_castsi256_si512(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(tool_lane_flags<Tool>(in) + p0)));
         touching = static_cast<__mmask8>(_mm512_mask_cmp_epi32_mask(0xff, a, _mm512_setzero_si512(), _MM_CMPINT_NLT));
       }
       if (touching) {
@@ -466,6 +466,7 @@ void step_tool(Avx512DoubleKernel::Data& D, const DoubleStepInputs& in, int thre
   switch (in.tool) {
     case ToolTerm::Push: return step_all<Volume, Gravity, ToolTerm::Push>(D, in, threads, partial);
     case ToolTerm::Pull: return step_all<Volume, Gravity, ToolTerm::Pull>(D, in, threads, partial);
+    case ToolTerm::Surface: return step_all<Volume, Gravity, ToolTerm::Surface>(D, in, threads, partial);
     default: return step_all<Volume, Gravity, ToolTerm::None>(D, in, threads, partial);
   }
 }
