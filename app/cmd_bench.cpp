@@ -76,7 +76,20 @@ struct BenchArgs {
   bool exude = true;
   bool frames = true;         // also measure one rendered frame per model
   std::string json;           // --json FILE: the results as JSON ("-": on stdout instead of the table)
+  std::string tool = "none";  // none, or a pushing sphere touching the model: "surface" or "points" contact
 };
+
+// The bench's tool: a 2 cm sphere pressed 5 mm into the model's lowest
+// point from below, moved with it as the model falls (--tool).
+constexpr double kBenchToolRadius = 0.02, kBenchToolDepth = 0.005;  // m
+
+BackendTool bench_tool(const BenchArgs& args) {
+  BackendTool tool;
+  if (args.tool == "none") return tool;
+  tool = {true, ToolMode::Push, kBenchToolRadius, 500.0,
+          args.tool == "points" ? ToolContact::Points : ToolContact::Surface};
+  return tool;
+}
 
 struct Machine {
   std::string cpu = "unknown CPU";
@@ -131,13 +144,23 @@ Timing summarise(std::vector<double> ms) {
 Timing time_backend(Backend& backend, const BenchArgs& args, double dt, std::vector<Vec3>& positions) {
   TickRequest request;
   request.dt = dt;
-  request.tool_active = false;
+  request.tool_active = args.tool != "none";
+  // With a tool: under the lowest point of the positions, pressed in by kBenchToolDepth.
+  auto place_tool = [&] {
+    if (!request.tool_active || positions.empty()) return;
+    const Vec3 low = *std::min_element(positions.begin(), positions.end(),
+                                       [](const Vec3& a, const Vec3& b) { return a.z() < b.z(); });
+    request.tool_from = request.tool_to = low - Vec3(0, 0, kBenchToolRadius - kBenchToolDepth);
+  };
+  backend.positions(positions);
+  place_tool();
   request.substeps = args.warmup;
   if (args.warmup > 0) backend.tick(request);
   backend.positions(positions);
   request.substeps = args.steps;
   std::vector<double> ms;
   for (int32_t r = 0; r < args.repetitions; ++r) {
+    place_tool();
     const auto start = std::chrono::steady_clock::now();
     backend.tick(request);
     backend.positions(positions);
@@ -262,7 +285,7 @@ Results measure(const BenchArgs& args) {
       sel.gl_threads_per_point = args.gl_threads_per_point;
       std::unique_ptr<Backend> backend;
       try {
-        backend = make_backend(sel, model, BackendTool{});
+        backend = make_backend(sel, model, bench_tool(args));
       } catch (const Error& e) {
         // Asked for by name: fail. Tried by default (gl, or a precision it
         // does not offer): report why there is no row.
@@ -318,7 +341,7 @@ nlohmann::json to_json(const Results& res, const BenchArgs& args) {
                    {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
                    {"volume_formulation", args.nodal_volume ? "nodal" : "per_tet"},
                    {"poisson_ratio", args.poisson_ratio >= 0 ? nlohmann::json(args.poisson_ratio) : nlohmann::json()},
-                   {"gravity", true}, {"tool", false}, {"exude", args.exude}, {"surface", res.surface_name}};
+                   {"gravity", true}, {"tool", args.tool}, {"exude", args.exude}, {"surface", res.surface_name}};
   j["rows"] = nlohmann::json::array();
   for (const Row& r : res.rows) {
     nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
@@ -379,7 +402,10 @@ void print_table(const Results& res, const BenchArgs& args) {
       : args.volume_modulus > 0 ? (args.nodal_volume ? " + nodal volume" : " + volume")
                                 : "";
   std::cout << "step:    springs + dampers" << material_terms
-            << " + gravity + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
+            << " + gravity"
+            << (args.tool == "none" ? ""
+                                    : " + a 2 cm sphere 5 mm into the lowest point (" + args.tool + " contact)")
+            << " + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
             << args.warmup << " warm-up steps, then "
             << args.repetitions << " repetitions of " << args.steps << " steps; median (min..max) ms per step\n";
   std::cout << "models:  " << res.surface_name << " meshed to the paper's point counts"
@@ -525,6 +551,10 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
                   "docs/physics.md)")
       ->check(CLI::Range(0.0, 0.4999));
   cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");
+  cmd->add_option("--tool", args->tool,
+                  "A pushing tool touching the model during the timing: 'none' (default), 'surface' or 'points' "
+                  "contact (a 2 cm sphere 5 mm into the lowest point, following it)")
+      ->check(CLI::IsMember({"none", "surface", "points"}));
   cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
   cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");
   cmd->add_option("--json", args->json,

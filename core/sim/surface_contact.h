@@ -37,8 +37,10 @@ class SurfaceContact {
         points_.push_back(p);
       }
     tris_.resize(model.surface.size());
+    for (auto& v : corner_) v.resize(tris_.size());
+    near_.assign(tris_.size(), 0);
     for (size_t t = 0; t < tris_.size(); ++t)
-      for (int k = 0; k < 3; ++k) tris_[t][k] = local_of_point_[model.surface[t][k]];
+      for (int k = 0; k < 3; ++k) corner_[k][t] = tris_[t][k] = local_of_point_[model.surface[t][k]];
     share_.resize(points_.size());
     for (size_t i = 0; i < points_.size(); ++i)
       share_[i] = scale[points_[i]] / static_cast<Real>(model.surface_count(points_[i]));
@@ -64,17 +66,31 @@ class SurfaceContact {
     using V3 = Eigen::Matrix<Real, 3, 1>;
     const V3 c(center[0], center[1], center[2]);
     const Real r2 = radius * radius;
-    for (const auto& t : tris_) {
-      // Broad phase: squared distance from the centre to the triangle's box.
-      Real d2 = 0;
-      for (const auto* axis : {&x_, &y_, &z_}) {
-        const std::vector<Real>& a = *axis;
-        const Real lo = std::min({a[t[0]], a[t[1]], a[t[2]]}), hi = std::max({a[t[0]], a[t[1]], a[t[2]]});
-        const Real cc = axis == &x_ ? c[0] : axis == &y_ ? c[1] : c[2];
-        const Real out = cc < lo ? lo - cc : cc > hi ? cc - hi : Real(0);
-        d2 += out * out;
-      }
-      if (!(d2 < r2)) continue;
+    // Broad phase, vectorised over triangles: the squared distance from the
+    // centre to each triangle's box.
+    const int32_t ntri = static_cast<int32_t>(tris_.size());
+    const int32_t* __restrict ta = corner_[0].data();
+    const int32_t* __restrict tb = corner_[1].data();
+    const int32_t* __restrict tc = corner_[2].data();
+    uint8_t* __restrict near = near_.data();
+    const Real* __restrict X = x_.data();
+    const Real* __restrict Y = y_.data();
+    const Real* __restrict Z = z_.data();
+    const Real cx = c[0], cy = c[1], cz = c[2];
+#pragma omp simd
+    for (int32_t t = 0; t < ntri; ++t) {
+      auto gap = [](Real p, Real u, Real v, Real w) {
+        const Real lo = u < v ? (u < w ? u : w) : (v < w ? v : w), hi = u > v ? (u > w ? u : w) : (v > w ? v : w);
+        return p < lo ? lo - p : p > hi ? p - hi : Real(0);
+      };
+      const Real gx = gap(cx, X[ta[t]], X[tb[t]], X[tc[t]]);
+      const Real gy = gap(cy, Y[ta[t]], Y[tb[t]], Y[tc[t]]);
+      const Real gz = gap(cz, Z[ta[t]], Z[tb[t]], Z[tc[t]]);
+      near[t] = gx * gx + gy * gy + gz * gz < r2;
+    }
+    for (int32_t i = 0; i < ntri; ++i) {
+      if (!near[i]) continue;
+      const auto& t = tris_[i];
       const V3 a(x_[t[0]], y_[t[0]], z_[t[0]]), b(x_[t[1]], y_[t[1]], z_[t[1]]), e(x_[t[2]], y_[t[2]], z_[t[2]]);
       const Real share[3] = {share_[t[0]], share_[t[1]], share_[t[2]]};
       V3 f;
@@ -103,6 +119,8 @@ class SurfaceContact {
   std::vector<int32_t> points_;          // surface points' internal ids, ascending
   std::vector<int32_t> local_of_point_;  // index into points_ or -1 (npoint)
   std::vector<std::array<int32_t, 3>> tris_;  // corners as indices into points_
+  std::array<std::vector<int32_t>, 3> corner_;  // the same, one array per corner (the broad phase's gathers)
+  std::vector<uint8_t> near_;                  // per triangle: its box reaches into the sphere
   std::vector<Real> share_;              // s_p / n_p per surface point (force_law::sphere_triangle_penalty)
   std::vector<Real> x_, y_, z_;          // surface points' positions this substep
   std::vector<int32_t> slot_;            // per lane
