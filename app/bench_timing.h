@@ -24,12 +24,20 @@ struct BenchSteps {
 // Median (mean of the two middle ones for an even count), min and max of `ms`.
 BenchTiming summarise_ms(std::vector<double> ms);
 
-// One tick of `steps` substeps at `dt` (s) without a tool, closed by a
-// position read-back: ms per step.
-double time_steps(Backend& backend, int32_t steps, double dt, std::vector<Vec3>& positions);
+// A pushing sphere of `radius` m placed under the lowest of the positions
+// and pressed `depth` m into it before every tick (radius 0: no tool).
+struct BenchToolPlacement {
+  double radius = 0, depth = 0;
+};
 
-// Warm-up, then `repetitions` ticks of `steps` substeps at `dt` (s) without a
-// tool, each closed by a position read-back; per-step times from each.
-BenchTiming time_backend(Backend& backend, const BenchSteps& steps, double dt, std::vector<Vec3>& positions);
+// One tick of `steps` substeps at `dt` (s), closed by a position read-back
+// into `positions` (which place the tool): ms per step.
+double time_steps(Backend& backend, int32_t steps, double dt, std::vector<Vec3>& positions,
+                  const BenchToolPlacement& tool = {});
+
+// Warm-up, then `repetitions` ticks of `steps` substeps at `dt` (s), each
+// closed by a position read-back; per-step times from each.
+BenchTiming time_backend(Backend& backend, const BenchSteps& steps, double dt, std::vector<Vec3>& positions,
+                         const BenchToolPlacement& tool = {});
 
 }  // namespace organsim::app

@@ -78,7 +78,25 @@ struct BenchArgs {
   std::string json;           // --json FILE: the results as JSON ("-": on stdout instead of the table)
   bool materials = false;     // --materials: the material comparison (bench_materials.h) instead of the size table
   std::string materials_scenario = "scenarios/liver_suture.json";  // its sutured and unsutured rows
+  std::string tool = "none";  // none, or a pushing sphere touching the model: "surface" or "points" contact
 };
+
+// The bench's tool: a 2 cm sphere pressed 5 mm into the model's lowest
+// point from below, moved with it as the model falls (--tool).
+constexpr double kBenchToolRadius = 0.02, kBenchToolDepth = 0.005;  // m
+
+BenchToolPlacement bench_tool_placement(const BenchArgs& args) {
+  if (args.tool == "none") return {};
+  return {kBenchToolRadius, kBenchToolDepth};
+}
+
+BackendTool bench_tool(const BenchArgs& args) {
+  BackendTool tool;
+  if (args.tool == "none") return tool;
+  tool = {true, ToolMode::Push, kBenchToolRadius, 500.0,
+          args.tool == "points" ? ToolContact::Points : ToolContact::Surface};
+  return tool;
+}
 
 struct Machine {
   std::string cpu = "unknown CPU";
@@ -248,7 +266,7 @@ Results measure(const BenchArgs& args) {
       sel.gl_threads_per_point = args.gl_threads_per_point;
       std::unique_ptr<Backend> backend;
       try {
-        backend = make_backend(sel, model, BackendTool{});
+        backend = make_backend(sel, model, bench_tool(args));
       } catch (const Error& e) {
         // Asked for by name: fail. Tried by default (gl, or a precision it
         // does not offer): report why there is no row.
@@ -270,7 +288,7 @@ Results measure(const BenchArgs& args) {
       row.plan = backend->plan();
       row.dt = dt;
       row.dt_crit = dt_crit;
-      row.timing = time_backend(*backend, args.steps, dt, positions);
+      row.timing = time_backend(*backend, args.steps, dt, positions, bench_tool_placement(args));
       row.device = backend->device();  // after the timing: the thread count it ran on
       row.scatter = row.precision == "float" ? time_scatter<float>(model, args, dt, positions)
                                              : time_scatter<double>(model, args, dt, positions);
@@ -304,7 +322,7 @@ nlohmann::json to_json(const Results& res, const BenchArgs& args) {
                    {"volume_modulus", args.volume_modulus}, {"young_modulus", 8000},
                    {"volume_formulation", args.nodal_volume ? "nodal" : "per_tet"},
                    {"poisson_ratio", args.poisson_ratio >= 0 ? nlohmann::json(args.poisson_ratio) : nlohmann::json()},
-                   {"gravity", true}, {"tool", false}, {"exude", args.exude}, {"surface", res.surface_name}};
+                   {"gravity", true}, {"tool", args.tool}, {"exude", args.exude}, {"surface", res.surface_name}};
   j["rows"] = nlohmann::json::array();
   for (const Row& r : res.rows) {
     nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
@@ -390,7 +408,10 @@ void print_table(const Results& res, const BenchArgs& args) {
       : args.volume_modulus > 0 ? (args.nodal_volume ? " + nodal volume" : " + volume")
                                 : "";
   std::cout << "step:    springs + dampers" << material_terms
-            << " + gravity + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
+            << " + gravity"
+            << (args.tool == "none" ? ""
+                                    : " + a 2 cm sphere 5 mm into the lowest point (" + args.tool + " contact)")
+            << " + Verlet, dt " << args.dt << " s or half the model's dt_crit if smaller; "
             << args.steps.warmup << " warm-up steps, then "
             << args.steps.repetitions << " repetitions of " << args.steps.steps << " steps; median (min..max) ms per step\n";
   std::cout << "models:  " << res.surface_name << " meshed to the paper's point counts"
@@ -548,6 +569,10 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
                   "scenarios/liver_suture.json)")
       ->type_name("FILE");
   cmd->add_flag("!--no-frames", args->frames, "Skip the per-frame rendering cost");
+  cmd->add_option("--tool", args->tool,
+                  "A pushing tool touching the model during the timing: 'none' (default), 'surface' or 'points' "
+                  "contact (a 2 cm sphere 5 mm into the lowest point, following it)")
+      ->check(CLI::IsMember({"none", "surface", "points"}));
   cmd->add_option("--surface", args->surface, "Closed surface to mesh (default: the built-in liver-like surface)");
   cmd->add_flag("--exude,!--no-exude", args->exude, "Sliver exudation when meshing (default on)");
   cmd->add_option("--json", args->json,

@@ -31,6 +31,7 @@ struct ValidateArgs {
   std::vector<std::string> poisson_ratios;
   double young_modulus = 10e3;
   std::string volume_formulation;
+  std::string contact = "surface";
 };
 
 std::string fmt(double v, const char* spec = "%.4g") {
@@ -61,6 +62,10 @@ void validate_command(const ValidateArgs& args) {
   }
   if (!(args.young_modulus > 0)) throw Error(ErrorKind::Usage, "--young-modulus: expected a positive number (Pa)");
   options.young_modulus = args.young_modulus;
+  if (args.contact == "points")
+    options.contact = ToolContact::Points;
+  else if (args.contact != "surface")
+    throw Error(ErrorKind::Usage, "--contact: expected 'surface' or 'points', got '" + args.contact + "'");
   if (args.volume_formulation == "nodal")
     options.volume_formulation = VolumeFormulation::Nodal;
   else if (args.volume_formulation == "per_tet")
@@ -81,6 +86,8 @@ void validate_command(const ValidateArgs& args) {
   j["units"] = "SI: cell_size m; measured and theory in Pa (E), N/m (beams), N (hertz), 1 (nu)";
   j["young_modulus"] = options.young_modulus;
   j["indenter_radius"] = options.indenter_radius;
+  j["probe_radius"] = options.probe_radius;
+  j["contact"] = args.contact;
   j["method"] = "small-strain static equilibrium of the model's force law (core/validation/static_solve.h)";
   j["rows"] = nlohmann::json::array();
   for (const SuiteRow& r : rows) j["rows"].push_back(to_json(r));
@@ -139,6 +146,9 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
   cmd->add_option("--volume-formulation", args->volume_formulation,
                   "Volume term of the Poisson-ratio materials: 'nodal' or 'per_tet' (default: the material's "
                   "default, docs/scenarios.md)");
+  cmd->add_option("--contact", args->contact,
+                  "The indenters' contact, as a scenario's tool.contact: 'surface' (the boundary triangles, "
+                  "default) or 'points'");
   cmd->callback([args] { validate_command(*args); });
 });
 

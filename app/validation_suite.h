@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/model/material.h"
+#include "core/sim/tool.h"
 
 namespace organsim::app {
 
@@ -23,11 +24,14 @@ struct SuiteOptions {
   std::optional<VolumeFormulation> volume_formulation;
   double young_modulus = 10e3;   // Pa
   double indenter_radius = 0.02; // m
+  double probe_radius = 0.005;   // m: the small probe, pressed to d/R = 0.2
+  ToolContact contact = ToolContact::Surface;  // the indenters' contact, as a scenario's tool.contact
 };
 
 // One measured quantity against its theory.
 struct SuiteRow {
-  std::string test;       // "uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"
+  std::string test;       // "uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1",
+                          // "hertz probe d/R=0.2" (the small probe)
   std::string material;   // "springs (nu 1/4)" or "nu 0.30"
   double cell_size = 0;   // m
   int32_t points = 0;

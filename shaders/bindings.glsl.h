@@ -20,7 +20,7 @@
 #define ORGANSIM_GL_B_D_CUR 1     // vec4 d_t = x_t - x_{t-1}, m (npad)
 #define ORGANSIM_GL_B_X_NEXT 2    // vec4 x_{t+1}, m (npad); written by the step
 #define ORGANSIM_GL_B_D_NEXT 3    // vec4 d_{t+1}, m (npad); written by the step
-#define ORGANSIM_GL_B_MASS 4      // vec4 {1/m (0 = fixed or padding), m (kg), tool k scale, 0} (npad)
+#define ORGANSIM_GL_B_MASS 4      // vec4 {1/m (0 = fixed or padding), m (kg), tool k scale, its share s/n per surface triangle} (npad)
 #define ORGANSIM_GL_B_CHUNKS 5    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk)
 #define ORGANSIM_GL_B_SPRINGS 6   // {int other; float rest, k, d} per (chunk, slot, lane) (nspring_entry)
 #define ORGANSIM_GL_B_TETS 7      // {int a, b, c; float k_v, V_r} per (chunk, slot, lane) (ntet_entry)
@@ -34,6 +34,8 @@
 #define ORGANSIM_GL_B_REST 15     // vec4 rest positions X, m (npad); the shear element's displacements x - X
 #define ORGANSIM_GL_B_SHEAR 16    // {vec4 g_a k_t, g_b d_t, g_c k_t/K_p} shear element per tet entry (ntet_entry)
 #define ORGANSIM_GL_B_SHEAR_STRESS 17  // vec4 x 3 per point: P(Fbar_p)'s columns (npad x 3); shear_smoothing.comp
+#define ORGANSIM_GL_B_SURFACE 18  // ivec2 {first entry, count} of each point's surface triangles (npad); surface contact
+#define ORGANSIM_GL_B_SURFACE_TRIS 19  // ivec4 {corners 0, 1, 2, the point's corner} per (point, triangle), ascending
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s

@@ -7,6 +7,8 @@
 // nodal term, pressures from nodal_pressure.comp), SHEAR_ELEMENT (the per-tet
 // shear element of nu < 1/4; with SMOOTHED_SHEAR s its node-smoothed share s,
 // stresses from shear_smoothing.comp), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
+// TOOL_SURFACE (the push tool against the surface triangles: each surface
+// point sums w_p f over its triangles, each recomputed by its three corners),
 // and RECORD_FORCE (tests: also store each point's total force).
 // THREADS_PER_POINT T (default 1): T invocations share a point's gathers, slot
 // j going to invocation j mod T, and invocation 0 adds the T partial sums in a
@@ -61,7 +63,11 @@ layout(std430, binding = ORGANSIM_GL_B_PRESSURE) readonly buffer Pressure { floa
 #ifdef TOOL_PULL
 layout(std430, binding = ORGANSIM_GL_B_ATTACH) readonly buffer Attach { vec4 attach[]; };
 #endif
-#if defined(TOOL_PUSH) || defined(TOOL_PULL)
+#ifdef TOOL_SURFACE
+layout(std430, binding = ORGANSIM_GL_B_SURFACE) readonly buffer Surface { ivec2 surface_range[]; };
+layout(std430, binding = ORGANSIM_GL_B_SURFACE_TRIS) readonly buffer SurfaceTris { ivec4 surface_tris[]; };
+#endif
+#if defined(TOOL_PUSH) || defined(TOOL_PULL) || defined(TOOL_SURFACE)
 layout(std430, binding = ORGANSIM_GL_B_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
 #endif
 // Fail fast on blow-up without a readback per step: the lowest point whose new
@@ -83,7 +89,7 @@ layout(location = ORGANSIM_GL_U_DT2) uniform float u_dt2;           // dt^2
 #ifdef HAS_GRAVITY
 layout(location = ORGANSIM_GL_U_GRAVITY) uniform vec3 u_gravity;
 #endif
-#if defined(TOOL_PUSH) || defined(TOOL_PULL)
+#if defined(TOOL_PUSH) || defined(TOOL_PULL) || defined(TOOL_SURFACE)
 layout(location = ORGANSIM_GL_U_TOOL_CENTER) uniform vec3 u_tool_center;
 layout(location = ORGANSIM_GL_U_TOOL_ACTIVE) uniform int u_tool_active;
 layout(location = ORGANSIM_GL_U_TOOL_RADIUS) uniform float u_tool_radius;
@@ -197,16 +203,43 @@ void main() {
   f += m.y * u_gravity;
 #endif
 
-#if defined(TOOL_PUSH) || defined(TOOL_PULL)
+#if defined(TOOL_PUSH) || defined(TOOL_PULL) || defined(TOOL_SURFACE)
   vec4 contact_force = vec4(0.0);   // reaction on the tool {-f.xyz, 1}
   vec4 contact_torque = vec4(0.0);  // (x - c) x (-f)
   // Padding lanes (m = 0) sit on a real point's position: they must not touch the tool.
   if (owner && u_tool_active != 0 && m.y > 0.0) {
     const vec3 d = xi - u_tool_center;
-#ifdef TOOL_PUSH
+#if defined(TOOL_PUSH)
     // Penalty contact inside the sphere, the point's share m.z of k_c.
     vec3 fc;
     if (push_penalty(d, u_tool_radius, u_tool_k * m.z, fc)) {
+      f += fc;
+      contact_force = vec4(-fc, 1.0);
+      contact_torque = vec4(cross(d, -fc), 0.0);
+    }
+#elif defined(TOOL_SURFACE)
+    // Surface contact: w_p(t) f(t) over the point's triangles in ascending
+    // order (the CPU's surface-contact pass sums them in the same order),
+    // after the broad phase (the sphere against the triangle's box).
+    const ivec2 range = surface_range[p];
+    vec3 fc = vec3(0.0);
+    bool touching = false;
+    const float r2 = u_tool_radius * u_tool_radius;
+    for (int j = 0; j < range.y; ++j) {
+      const ivec4 t = surface_tris[range.x + j];
+      const vec3 a = x_cur[t.x].xyz, b = x_cur[t.y].xyz, c = x_cur[t.z].xyz;
+      const vec3 out_lo = max(min(min(a, b), c) - u_tool_center, vec3(0.0));
+      const vec3 out_hi = max(u_tool_center - max(max(a, b), c), vec3(0.0));
+      const vec3 gap = out_lo + out_hi;
+      if (!(dot(gap, gap) < r2)) continue;
+      vec3 ft, w;
+      if (sphere_triangle_penalty(u_tool_center, u_tool_radius, a, b, c, u_tool_k,
+                                  vec3(mass[t.x].w, mass[t.y].w, mass[t.z].w), ft, w)) {
+        fc += w[t.w] * ft;
+        touching = true;
+      }
+    }
+    if (touching) {
       f += fc;
       contact_force = vec4(-fc, 1.0);
       contact_torque = vec4(cross(d, -fc), 0.0);

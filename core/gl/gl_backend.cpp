@@ -47,6 +47,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (plan_.has(Pass::Gravity)) defines.push_back("HAS_GRAVITY");
   if (plan_.tool == ToolTerm::Push) defines.push_back("TOOL_PUSH");
   if (plan_.tool == ToolTerm::Pull) defines.push_back("TOOL_PULL");
+  if (plan_.tool == ToolTerm::Surface) defines.push_back("TOOL_SURFACE");
   if (options.record_forces) defines.push_back("RECORD_FORCE");
   if (options.threads_per_point < 0 || options.threads_per_point > 16) {
     // 16 x 64 = 1024 invocations, the largest workgroup every GL 4.5 driver must run.
@@ -145,6 +146,15 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
     attach_ = create_buffer("attachments {offset, attached}", attach_upload_.size() * sizeof(float),
                             attach_upload_.data(), GL_DYNAMIC_STORAGE_BIT);
   }
+  if (plan_.tool == ToolTerm::Surface) {
+    surface_range_ = create_buffer("surface triangles per point {first, count}",
+                                   packed.surface_range.size() * sizeof(int32_t), packed.surface_range.data(), 0);
+    // An empty surface still needs a buffer to bind: one unused entry.
+    const std::vector<int32_t> none(4, 0);
+    const auto& entries = packed.surface_entries.empty() ? none : packed.surface_entries;
+    surface_tris_ = create_buffer("surface triangle entries {corners, which}", entries.size() * sizeof(int32_t),
+                                  entries.data(), 0);
+  }
   if (tool_.present) {
     partials_ = create_buffer("reaction partials per workgroup", static_cast<size_t>(nchunk_) * 8 * sizeof(float),
                               nullptr, 0);
@@ -167,12 +177,14 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   if (shear_params_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR, shear_params_);
   if (shear_stress_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SHEAR_STRESS, shear_stress_);
   if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
+  if (surface_range_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SURFACE, surface_range_);
+  if (surface_tris_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SURFACE_TRIS, surface_tris_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
 }
 
 void GlBackend::delete_model_buffers() {
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -284,8 +296,15 @@ Plan GlBackend::plan() const {
                  (m.shear_damping_time > 0 ? " and its damper" : "") + " of " + tets + in_step;
         break;
       case Pass::Gravity: detail = "m g on every free point" + in_step; break;
+      case Pass::SurfaceContact:
+        detail = "sphere against " + std::to_string(m.nsurface()) +
+                 " surface triangles, each surface point recomputing its own triangles (broad phase: the sphere "
+                 "against each triangle's box), w_p f summed in triangle order" + in_step;
+        break;
       case Pass::ToolContact:
-        detail = (plan_.tool == ToolTerm::Push ? "sphere penalty contact on the points" : "grasp attachment springs") +
+        detail = (plan_.tool == ToolTerm::Push      ? "sphere penalty contact on the points"
+                  : plan_.tool == ToolTerm::Surface ? "the surface contact's force on each surface point"
+                                                    : "grasp attachment springs") +
                  in_step + ", partial reaction per workgroup";
         break;
       case Pass::Integrate: detail = "position Verlet with drag, step.comp: " + grid; break;

@@ -97,7 +97,7 @@ class GlBackend final : public Backend {
   std::array<GLuint, 2> x_{}, d_{};
   int cur_ = 0;
   GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, nodal_params_ = 0, pressure_ = 0, rest_ = 0, shear_params_ = 0,
-         shear_stress_ = 0, attach_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
+         shear_stress_ = 0, attach_ = 0, surface_range_ = 0, surface_tris_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;

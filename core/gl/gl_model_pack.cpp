@@ -35,6 +35,18 @@ PackedModel pack_model(const Model& model) {
     p.mass[4 * i] = static_cast<float>(model.inv_mass[i]);
     p.mass[4 * i + 1] = static_cast<float>(model.mass[i]);
     p.mass[4 * i + 2] = static_cast<float>(model.tool_scale(i));
+    const int32_t n = model.surface_count(i);
+    p.mass[4 * i + 3] = n > 0 ? static_cast<float>(model.tool_scale(i) / n) : 0.0f;
+  }
+  p.surface_range.assign(static_cast<size_t>(p.npad) * 2, 0);
+  for (int32_t i = 0; i < p.npoint; ++i) {
+    p.surface_range[2 * i] = model.surface_offset[i];
+    p.surface_range[2 * i + 1] = model.surface_count(i);
+    for (int32_t e = model.surface_offset[i]; e < model.surface_offset[i + 1]; ++e) {
+      const Tri& t = model.surface[model.surface_tri[e]];
+      const int32_t corner = t[0] == i ? 0 : t[1] == i ? 1 : 2;
+      p.surface_entries.insert(p.surface_entries.end(), {t[0], t[1], t[2], corner});
+    }
   }
 
   p.chunks.assign(static_cast<size_t>(p.nchunk) * 4, 0);

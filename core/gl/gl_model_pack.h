@@ -41,7 +41,9 @@ static_assert(sizeof(ShearEntry) == 48);
 struct PackedModel {
   int32_t npoint = 0, nchunk = 0, npad = 0;  // npad = nchunk * C
   std::vector<float> rest;        // vec4 rest positions, m, w = 1 (npad x 4); padding copies the last point
-  std::vector<float> mass;        // vec4 {1/m (0 = fixed or padding), m (kg), tool stiffness scale, 0} (npad x 4)
+  // vec4 {1/m (0 = fixed or padding), m (kg), tool stiffness scale s, s / n
+  // with n the point's surface triangles (0 off the surface)} (npad x 4)
+  std::vector<float> mass;
   std::vector<int32_t> chunks;    // ivec4 {spring offset, spring slots, tet offset, tet slots} (nchunk x 4)
   std::vector<SpringEntry> springs;  // per (chunk, slot, lane) (nspring_entry)
   std::vector<TetEntry> tets;        // per (chunk, slot, lane), empty without volume or shear element (ntet_entry)
@@ -50,6 +52,11 @@ struct PackedModel {
   // Nodal volume term: vec2 {k_a (N/m^5), V_a^r (m^3)} per point, zero for
   // padding (npad x 2); empty unless the model has it.
   std::vector<float> nodal;
+  // Surface contact: each point's triangles (Model::surface_offset,
+  // surface_tri) as ivec2 {first entry, count} (npad x 2; padding: none) and
+  // per entry ivec4 {corner ids, which corner the point is}.
+  std::vector<int32_t> surface_range;
+  std::vector<int32_t> surface_entries;
 };
 
 // Padding entries point at the lane's own point with zero parameters: a

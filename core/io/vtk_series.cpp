@@ -104,8 +104,12 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   attributes.point_data.push_back(std::move(fixed));
   if (tool_ && tool_->mode == ToolMode::Push) {
     // The push contact as the backends apply it (the reference's evaluation
-    // of force_law::push_penalty, each point's stiffness share included).
-    reference_push_forces(positions_, tool_center, tool_->radius, tool_->contact_stiffness, force, model.tool_k_scale);
+    // of force_law::sphere_triangle_penalty or push_penalty, each point's
+    // stiffness share included).
+    if (tool_->contact == ToolContact::Surface)
+      reference_surface_forces(model, positions_, tool_center, tool_->radius, tool_->contact_stiffness, force);
+    else
+      reference_push_forces(positions_, tool_center, tool_->radius, tool_->contact_stiffness, force, model.tool_k_scale);
     attributes.point_data.push_back(point_array("tool_force", order, force));
   }
 

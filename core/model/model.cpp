@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "core/mesh/boundary.h"
 #include "core/model/label_materials.h"
 #include "core/model/layout_build.h"
 #include "core/model/model_assembly.h"
@@ -262,6 +263,18 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   }
 
   model.tool_k_scale = tool_stiffness_scale(model.mass, model.fixed);
+
+  // The boundary surface and each point's triangles on it, for the tool's
+  // surface contact; a cut or tear changes it, so every version re-extracts it.
+  model.surface = extract_boundary_faces(model.tet_points);
+  model.surface_offset.assign(npoint + 1, 0);
+  for (const Tri& t : model.surface)
+    for (int32_t p : t) ++model.surface_offset[p + 1];
+  for (int32_t p = 0; p < npoint; ++p) model.surface_offset[p + 1] += model.surface_offset[p];
+  model.surface_tri.resize(model.surface_offset[npoint]);
+  std::vector<int32_t> fill(model.surface_offset.begin(), model.surface_offset.end() - 1);
+  for (int32_t t = 0; t < model.nsurface(); ++t)
+    for (int32_t p : model.surface[t]) model.surface_tri[fill[p]++] = t;
 
   // Springs: one per unique tet edge, sorted.
   TetEdges edges = tet_edges(model.tet_points, npoint, model.tet_rest_volume);

@@ -88,6 +88,14 @@ struct Model {
   std::vector<int32_t> tet_material;  // (ntet) or empty
   std::vector<int32_t> tet_label;     // each tet's mesh label (ntet); empty for an unlabelled mesh
 
+  // The boundary surface (core/mesh/boundary.h: the faces owned by one tet,
+  // counter-clockwise seen from outside), re-extracted by every rebuild, and
+  // for each point the surface triangles it belongs to, ascending (CSR:
+  // those of point p are surface_tri[surface_offset[p] .. surface_offset[p + 1])).
+  // The tool's surface contact gathers them (docs/physics.md, "Tool").
+  std::vector<Tri> surface;
+  std::vector<int32_t> surface_offset;  // (npoint + 1)
+  std::vector<int32_t> surface_tri;     // triangle ids (3 nsurface)
   // Per-point gather layout (springs and tets gathered per point, no atomics).
   GatherLayout layout;
 
@@ -102,6 +110,11 @@ struct Model {
     return s < first_suture() ? spring_rest[s] : suture_of_spring(s).rest_at(t);
   }
   int32_t ntet() const { return static_cast<int32_t>(tet_points.size()); }
+  int32_t nsurface() const { return static_cast<int32_t>(surface.size()); }
+  // Surface triangles point p belongs to (0 for an inner point).
+  int32_t surface_count(int32_t p) const {
+    return surface_offset.empty() ? 0 : surface_offset[p + 1] - surface_offset[p];
+  }
   bool has_volume() const { return !tet_k.empty() || !point_volume_k.empty(); }
   bool has_nodal_volume() const { return !point_volume_k.empty(); }
   bool has_shear_element() const { return !tet_shear_k.empty(); }

@@ -10,8 +10,8 @@
 namespace organsim {
 
 // Fills masses, inverse masses and fixed flags, springs (ends, rest length,
-// stiffness, damper), the volume term (per tet or nodal) and the gather
-// layout of `model`, whose rest_position, tet_points, tet_rest_volume,
+// stiffness, damper), the volume term (per tet or nodal), the boundary
+// surface with each point's triangles and the gather layout of `model`, whose rest_position, tet_points, tet_rest_volume,
 // sutures, material, gravity and viscous_damping are set (sutures become the
 // last springs). `held` (npoint) marks points the scene holds fixed; points
 // used by no tet have no mass and are held too.

@@ -179,6 +179,93 @@ inline Real push_penalty_energy(Real k, Real radius, Real dist) {
   return dist < radius ? k * (radius - dist) * (radius - dist) / 2 : Real(0);
 }
 
+// Closest point of the triangle (a, b, c) to p as barycentric weights w
+// (q = w0 a + w1 b + w2 c, each in [0, 1], summing to 1), by the triangle's
+// Voronoi regions (vertex, edge, face; Ericson, Real-Time Collision
+// Detection 5.1.5). The weights are continuous in p, so anything spread by
+// them is continuous as p crosses an edge or a vertex. A degenerate edge
+// falls to its first end.
+template <class V3, class Real>
+inline void triangle_closest_weights(const V3& p, const V3& a, const V3& b, const V3& c, Real w[3]) {
+  auto set = [&](Real w0, Real w1, Real w2) { w[0] = w0, w[1] = w1, w[2] = w2; };
+  const V3 ab = b - a, ac = c - a, ap = p - a;
+  const Real d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= Real(0) && d2 <= Real(0)) return set(1, 0, 0);
+  const V3 bp = p - b;
+  const Real d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= Real(0) && d4 <= d3) return set(0, 1, 0);
+  const Real vc = d1 * d4 - d3 * d2;
+  if (vc <= Real(0) && d1 >= Real(0) && d3 <= Real(0)) {
+    const Real v = d1 - d3 > Real(0) ? d1 / (d1 - d3) : Real(0);
+    return set(1 - v, v, 0);
+  }
+  const V3 cp = p - c;
+  const Real d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= Real(0) && d5 <= d6) return set(0, 0, 1);
+  const Real vb = d5 * d2 - d1 * d6;
+  if (vb <= Real(0) && d2 >= Real(0) && d6 <= Real(0)) {
+    const Real v = d2 - d6 > Real(0) ? d2 / (d2 - d6) : Real(0);
+    return set(1 - v, 0, v);
+  }
+  const Real va = d3 * d6 - d5 * d4;
+  if (va <= Real(0) && d4 - d3 >= Real(0) && d5 - d6 >= Real(0)) {
+    const Real den = (d4 - d3) + (d5 - d6);
+    const Real v = den > Real(0) ? (d4 - d3) / den : Real(0);
+    return set(0, 1 - v, v);
+  }
+  const Real sum = va + vb + vc;
+  if (!(sum > Real(0))) return set(1, 0, 0);  // a flat triangle outside every edge region
+  const Real v = vb / sum, u = vc / sum;
+  return set(1 - v - u, v, u);
+}
+
+// The surface contact's stiffness factor of a triangle: the smallest of its
+// corners' shares (sphere_triangle_penalty says why).
+template <class Real>
+inline Real triangle_penalty_scale(const Real share[3]) {
+  const Real a = share[0] < share[1] ? share[0] : share[1];
+  return a < share[2] ? a : share[2];
+}
+
+// Surface contact of a sphere (centre c, radius R, penalty k N/m) with one
+// boundary triangle (x0, x1, x2, counter-clockwise seen from outside): the
+// penalty acts at the triangle's closest point q = sum w_i x_i,
+//   f = k_t (R - |q - c|) n,  n = (q - c) / |q - c|
+// (the inward normal when c lies on the triangle), and corner i receives
+// w_i f, so the total is f and the torque about c is (q - c) x f. Its
+// stiffness k_t = k min_i share_i with share_i = s_i / n_i (s_i the point's
+// stiffness share, Model::tool_k_scale; n_i its number of surface
+// triangles) keeps every point's contact stiffness, the sum over its
+// triangles of w_i^2 k_t, at most k s_i: the bound dt_crit counts, the same
+// as the point penalty's; a vertex pressed by all its triangles feels up to
+// k s_i, as with point contact. k_t is a constant of the triangle, so the
+// force is minus the gradient of k_t/2 (R - |q - c|)^2 (the distance to a
+// triangle has the gradient w_i n in its corner i): the contact stores and
+// returns energy and cannot pump it into the tissue (a k_t that followed
+// the weights did, by its missing gradient term). Returns false (f, w
+// untouched) when the triangle is outside the sphere.
+template <class V3, class Real>
+inline bool sphere_triangle_penalty(const V3& center, Real radius, const V3& x0, const V3& x1, const V3& x2, Real k,
+                                    const Real share[3], V3& f, Real w[3]) {
+  Real wt[3];
+  triangle_closest_weights(center, x0, x1, x2, wt);
+  const V3 q = wt[0] * x0 + wt[1] * x1 + wt[2] * x2;
+  const V3 offset = q - center;
+  const Real dist = offset.norm();
+  if (!(dist < radius)) return false;
+  V3 n;
+  if (dist > Real(0)) {
+    n = offset / dist;
+  } else {
+    const V3 outward = (x1 - x0).cross(x2 - x0);
+    const Real len = outward.norm();
+    n = len > Real(0) ? V3(-outward / len) : V3(Real(0), Real(0), Real(-1));
+  }
+  f = k * triangle_penalty_scale(share) * (radius - dist) * n;
+  for (int i = 0; i < 3; ++i) w[i] = wt[i];
+  return true;
+}
+
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o
 // (the point's offset from the centre at grasp time).
 template <class V3, class Real>

@@ -31,6 +31,7 @@ BackendTool backend_tool(const Scenario& scenario) {
   t.mode = scenario.tool->spec.mode;
   t.radius = scenario.tool->spec.radius;
   t.contact_stiffness = scenario.tool->spec.contact_stiffness;
+  t.contact = scenario.tool->spec.contact;
   return t;
 }
 

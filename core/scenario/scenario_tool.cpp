@@ -46,6 +46,16 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
       throw r.at("mode").error("expected " + one_of({"push", "pull"}) + " (got \"" + *mode + "\")");
     }
   }
+  if (auto contact = r.string("contact")) {
+    if (s.mode != ToolMode::Push) throw r.at("contact").error("only used with \"mode\": \"push\"");
+    if (*contact == "surface") {
+      s.contact = ToolContact::Surface;
+    } else if (*contact == "points") {
+      s.contact = ToolContact::Points;
+    } else {
+      throw r.at("contact").error("expected " + one_of({"surface", "points"}) + " (got \"" + *contact + "\")");
+    }
+  }
   // Grasp settings mean nothing to a pushing tool: say so instead of ignoring them.
   for (const char* key : {"grasp_radius", "grasp_time", "release_time"}) {
     if (s.mode != ToolMode::Pull && r.has(key)) throw r.at(key).error("only used with \"mode\": \"pull\"");

@@ -19,6 +19,7 @@ struct ToolSpec {
   double radius = 0.01;                 // sphere radius, m
   double contact_stiffness = 200.0;     // push: penalty N/m per m of penetration; pull: attachment springs N/m
   ToolMode mode = ToolMode::Push;
+  ToolContact contact = ToolContact::Surface;  // push: penalty on the surface triangles or on the points
   double grasp_radius = 0.015;          // pull: points within this distance of the centre are grasped, m
   double grasp_time = 0;                // pull: s
   std::optional<double> release_time;   // pull: s; held to the end when absent

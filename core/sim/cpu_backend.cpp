@@ -17,6 +17,7 @@
 #include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/kernel_inputs.h"
 #include "core/sim/step_plan.h"
+#include "core/sim/surface_contact.h"
 #include "core/sim/thread_choice.h"
 #include "core/util/error.h"
 
@@ -204,8 +205,14 @@ class CpuBackend final : public Backend {
                "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") +
                "), " + (fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
+      case Pass::SurfaceContact:
+        return "sphere against " + std::to_string(m.nsurface()) +
+               " surface triangles, broad phase: the sphere against each triangle's box; each touching "
+               "triangle's penalty at its closest point, spread to its corners (one thread, triangle order)";
       case Pass::ToolContact:
-        return plan_.tool == ToolTerm::Push ? "sphere penalty contact on the points" : "grasp attachment springs";
+        return plan_.tool == ToolTerm::Push      ? "sphere penalty contact on the points"
+               : plan_.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
+                                                 : "grasp attachment springs";
       case Pass::Integrate:
         return "position Verlet with drag, fused with the force passes (" + lanes +
                (fast_ ? ", avx512 kernel)" : ", generic kernel)");
@@ -277,6 +284,7 @@ class CpuBackend final : public Backend {
       const double f = static_cast<double>(s) / request.substeps;
       const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
       for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
+      if (ctx.tool == ToolTerm::Surface) surface_contact(ctx);
       reaction = fast_ ? fast_step(ctx) : step(ctx);
       time_ += request.dt;
     };
@@ -425,6 +433,29 @@ class CpuBackend final : public Backend {
     }
     smoothed_share_ = static_cast<Real>(model.shear_smoothed_share);
     pack_fast();
+    if (plan_.tool == ToolTerm::Surface) surface_.pack(model, tool_scale_, tool_scale_.size());
+  }
+
+  // The surface-contact pass at this substep's positions (X + u): the
+  // kernels' tool pass then adds its per-point forces.
+  void surface_contact(KernelStepInputs<Real>& ctx) {
+    if (fast_) {
+      surface_.evaluate(
+          [&](int32_t p, Real x[3]) {
+            Real u[3], d[3];
+            fast_->get_point(p, u, d);
+            x[0] = rest_.x[p] + u[0], x[1] = rest_.y[p] + u[1], x[2] = rest_.z[p] + u[2];
+          },
+          ctx.tool_center, ctx.tool_radius, ctx.tool_k);
+    } else {
+      surface_.evaluate(
+          [&](int32_t p, Real x[3]) {
+            x[0] = rest_.x[p] + u_.x[p], x[1] = rest_.y[p] + u_.y[p], x[2] = rest_.z[p] + u_.z[p];
+          },
+          ctx.tool_center, ctx.tool_radius, ctx.tool_k);
+    }
+    ctx.contact_slot = surface_.slot();
+    ctx.contact_force = surface_.force();
   }
 
   // Sutures tighten on their schedule: rest lengths at the start of the tick,
@@ -569,6 +600,7 @@ class CpuBackend final : public Backend {
     switch (ctx.tool) {
       case ToolTerm::Push: return run<Volume, Gravity, ToolTerm::Push>(ctx);
       case ToolTerm::Pull: return run<Volume, Gravity, ToolTerm::Pull>(ctx);
+      case ToolTerm::Surface: return run<Volume, Gravity, ToolTerm::Surface>(ctx);
       case ToolTerm::None: break;
     }
     return run<Volume, Gravity, ToolTerm::None>(ctx);
@@ -964,6 +996,7 @@ class CpuBackend final : public Backend {
   std::vector<int32_t> attached_points_;
   std::vector<Real> attach_offset_;  // pull: x_i - c at grasp time, 3 per attachment
   std::vector<ChunkReaction> partial_;   // tool reaction per chunk (nchunk)
+  SurfaceContact<Real> surface_;         // the surface-contact pass (a pushing tool on the surface)
 };
 
 }  // namespace

@@ -321,7 +321,7 @@ void chunk_step(Data<Real>& D, const KernelStepInputs<Real>& in, int32_t c, Chun
         const Real r = in.tool_radius * Real(1.001);
         touching = dist2 < splat(r * r);
       } else {
-        touching = nonnegative(in.attached + p0, Real(0));
+        touching = nonnegative(tool_lane_flags<Tool>(in) + p0, Real(0));
       }
       if (touching) {
         alignas(64) Real fl[3][kLanes], xl[3][kLanes];
@@ -561,6 +561,7 @@ void step_tool(Data<Real>& D, const KernelStepInputs<Real>& in, int threads, std
   switch (in.tool) {
     case ToolTerm::Push: return step_sutures<Real, Element, Gravity, ToolTerm::Push>(D, in, threads, partial);
     case ToolTerm::Pull: return step_sutures<Real, Element, Gravity, ToolTerm::Pull>(D, in, threads, partial);
+    case ToolTerm::Surface: return step_sutures<Real, Element, Gravity, ToolTerm::Surface>(D, in, threads, partial);
     case ToolTerm::None: break;
   }
   step_sutures<Real, Element, Gravity, ToolTerm::None>(D, in, threads, partial);

@@ -21,7 +21,20 @@ struct KernelStepInputs {
   const int32_t* attached = nullptr;    // pull: attachment index per point or -1
   const Real* attach_offset = nullptr;  // pull: 3 per attachment
   const Real* tool_scale = nullptr;     // tool stiffness multiplier per point, Model::tool_k_scale
+  // Surface contact: the surface-contact pass's force per point (3 per
+  // touched point) and each point's index into it or -1 (padding included).
+  const int32_t* contact_slot = nullptr;
+  const Real* contact_force = nullptr;
 };
+
+// Per point, >= 0 for the lanes the tool pass may touch: the attachment
+// index (pull) or the surface contact's slot (surface). The AVX-512 kernels
+// find their tool lanes with one compare on it.
+template <ToolTerm Tool, class Real>
+const int32_t* tool_lane_flags(const KernelStepInputs<Real>& in) {
+  static_assert(Tool == ToolTerm::Pull || Tool == ToolTerm::Surface);
+  return Tool == ToolTerm::Pull ? in.attached : in.contact_slot;
+}
 
 // Tool reaction of one chunk (summed by the caller in chunk order, so the
 // total is the same for any thread count).
@@ -31,8 +44,9 @@ struct ChunkReaction {
 };
 
 // The tool's force on point p at x (force_law::push_penalty or
-// pull_attachment), added to f and (negated) to the chunk's reaction; false
-// when p does not touch the tool. One lane at a time: few points touch the
+// pull_attachment, or the surface contact's force on p from its triangles'
+// force_law::sphere_triangle_penalty), added to f and (negated) to the
+// chunk's reaction; false when p does not touch the tool. One lane at a time: few points touch the
 // tool, and the kernels call this only for lanes that may.
 template <class Real, ToolTerm Tool>
 bool add_tool_force(const KernelStepInputs<Real>& in, int32_t p, const Real x[3], Real f[3], ChunkReaction& partial) {
@@ -42,6 +56,11 @@ bool add_tool_force(const KernelStepInputs<Real>& in, int32_t p, const Real x[3]
   V3 fc;
   if constexpr (Tool == ToolTerm::Push) {
     if (!force_law::push_penalty(V3(xl - ctr), in.tool_radius, k, fc)) return false;
+  } else if constexpr (Tool == ToolTerm::Surface) {
+    const int32_t slot = in.contact_slot[p];
+    if (slot < 0) return false;
+    const Real* fs = in.contact_force + 3 * slot;
+    fc = V3(fs[0], fs[1], fs[2]);
   } else {
     static_assert(Tool == ToolTerm::Pull);
     const int32_t a = in.attached[p];

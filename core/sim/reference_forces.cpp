@@ -65,6 +65,29 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
   return reaction;
 }
 
+Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
+                                  double radius, double stiffness, std::vector<Vec3>& force) {
+  Reaction reaction;
+  std::vector<uint8_t> touched(x.size(), 0);
+  for (const Tri& t : model.surface) {
+    double share[3];
+    for (int i = 0; i < 3; ++i) share[i] = model.tool_scale(t[i]) / model.surface_count(t[i]);
+    Vec3 f;
+    double w[3];
+    if (!force_law::sphere_triangle_penalty(center, radius, x[t[0]], x[t[1]], x[t[2]], stiffness, share, f, w))
+      continue;
+    const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
+    for (int i = 0; i < 3; ++i) {
+      force[t[i]] += w[i] * f;
+      touched[t[i]] = 1;
+    }
+    reaction.force -= f;
+    reaction.torque += (q - center).cross(-f);
+  }
+  for (uint8_t b : touched) reaction.contacts += b;
+  return reaction;
+}
+
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment, const Vec3& center,
                                double stiffness, std::vector<Vec3>& force, const std::vector<double>& scale) {
   Reaction reaction;

@@ -25,6 +25,15 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x,
 Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius,
                                double stiffness, std::vector<Vec3>& force, const std::vector<double>& scale = {});
 
+// Surface contact of a sphere tool with the Model's boundary triangles
+// (force_law::sphere_triangle_penalty): each touching triangle's penalty f_t
+// at its closest point, w_i f_t to its corner i, with share_i =
+// s_i / (surface triangles of i). Adds into force and returns the reaction
+// (F = -sum f_t, T = sum (q_t - c) x (-f_t)); contacts counts the points that
+// received a force.
+Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
+                                  double radius, double stiffness, std::vector<Vec3>& force);
+
 // Pull attachments: f_i = k s_i (c + o_i - x_i). Adds into force, returns reaction.
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment,
                                const Vec3& center, double stiffness, std::vector<Vec3>& force,

@@ -14,12 +14,17 @@ StepPlan make_step_plan(const Model& model, const BackendTool& tool) {
                  : model.has_shear_element() ? ElementTerm::ShearElement
                                              : ElementTerm::None;
   plan.gravity = model.has_gravity();
-  plan.tool = !tool.present ? ToolTerm::None : tool.mode == ToolMode::Push ? ToolTerm::Push : ToolTerm::Pull;
+  plan.tool = !tool.present                        ? ToolTerm::None
+              : tool.mode == ToolMode::Pull           ? ToolTerm::Pull
+              : tool.contact == ToolContact::Surface ? ToolTerm::Surface
+                                                     : ToolTerm::Push;
   plan.sutures = model.nsuture();
   // Per-point passes whose results the force passes read come first, each
   // ending at a barrier; the force passes and the integration then run fused.
   if (plan.element == ElementTerm::NodalVolume) plan.passes.push_back(Pass::NodalPressure);
   if (plan.element == ElementTerm::SmoothedShear) plan.passes.push_back(Pass::ShearSmoothing);
+  // The surface contact's per-point forces, which the tool pass adds.
+  if (plan.tool == ToolTerm::Surface) plan.passes.push_back(Pass::SurfaceContact);
   plan.passes.push_back(Pass::Springs);
   if (plan.volume()) plan.passes.push_back(Pass::Volume);
   if (plan.shear()) plan.passes.push_back(Pass::ShearElement);
@@ -37,6 +42,7 @@ const char* pass_name(Pass pass) {
     case Pass::Volume: return "volume";
     case Pass::ShearElement: return "shear-element";
     case Pass::Gravity: return "gravity";
+    case Pass::SurfaceContact: return "surface-contact";
     case Pass::ToolContact: return "tool-contact";
     case Pass::Integrate: return "integrate";
   }

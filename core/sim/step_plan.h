@@ -22,14 +22,16 @@ enum class Pass : uint8_t {
   Volume,          // the volume term's tet forces (per tet, or from the nodal pressures)
   ShearElement,    // the shear element's tet forces and its damper (nu < 1/4)
   Gravity,         // m g on every free point
+  SurfaceContact,  // the tool against the surface triangles (broad phase, then each touching triangle's penalty)
   ToolContact,     // the tool's push penalty or pull attachments, and its reaction
   Integrate,       // position Verlet with drag
 };
 
 // The per-tet term of a model: at most one of these (core/model/stiffness.h).
 enum class ElementTerm : uint8_t { None, TetVolume, NodalVolume, ShearElement, SmoothedShear };
-// The tool pass of a step: absent, or the tool's mode.
-enum class ToolTerm : uint8_t { None, Push, Pull };
+// The tool pass of a step: absent, or the tool's mode (a pushing tool's
+// penalty on the points, or its surface contact's forces on them).
+enum class ToolTerm : uint8_t { None, Push, Pull, Surface };
 
 struct StepPlan {
   ElementTerm element = ElementTerm::None;
@@ -46,7 +48,7 @@ struct StepPlan {
 StepPlan make_step_plan(const Model& model, const BackendTool& tool);
 
 // "nodal-pressure", "shear-smoothing", "springs", "volume", "shear-element",
-// "gravity", "tool-contact", "integrate".
+// "gravity", "surface-contact", "tool-contact", "integrate".
 const char* pass_name(Pass pass);
 
 }  // namespace organsim

@@ -10,6 +10,9 @@
 namespace organsim {
 
 enum class ToolMode { Push, Pull };
+// Where a pushing tool's penalty acts: on the boundary surface's triangles
+// (at each one's closest point, spread to its corners) or on the points alone.
+enum class ToolContact { Surface, Points };
 
 // Tool state given to a backend for one step.
 struct ToolPose {
@@ -36,6 +39,7 @@ struct BackendTool {
   ToolMode mode = ToolMode::Push;
   double radius = 0;             // m
   double contact_stiffness = 0;  // N/m
+  ToolContact contact = ToolContact::Surface;  // push only
 };
 
 }  // namespace organsim

@@ -397,6 +397,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
 std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool) {
   const double reach = 2 * std::max(tool.radius, tool.mode == ToolMode::Pull ? tool.grasp_radius : 0.0);
   std::vector<uint8_t> near(model.npoint(), 0);
+  std::vector<double> path_distance(model.npoint());
   const auto& kf = tool.keyframes;
   for (int32_t i = 0; i < model.npoint(); ++i) {
     const Vec3& x = model.rest_position[i];
@@ -408,6 +409,22 @@ std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& t
       d = std::min(d, (x - (a + s * ab)).norm());
     }
     near[i] = d <= reach;
+    path_distance[i] = d;
+  }
+  if (tool.mode == ToolMode::Push && tool.contact == ToolContact::Surface) {
+    // Surface contact pushes every corner of a triangle the sphere reaches,
+    // however far the corner: a triangle may come within reach when a
+    // corner is within reach plus its longest edge (every point of it is
+    // that close to each corner), and then all three corners may be touched.
+    for (const Tri& t : model.surface) {
+      double longest = 0, closest = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k) {
+        longest = std::max(longest, (model.rest_position[t[(k + 1) % 3]] - model.rest_position[t[k]]).norm());
+        closest = std::min(closest, path_distance[t[k]]);
+      }
+      if (closest <= reach + longest)
+        for (int32_t p : t) near[p] = 1;
+    }
   }
   return near;
 }

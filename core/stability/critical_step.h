@@ -23,8 +23,10 @@ namespace organsim {
 struct CriticalStepOptions {
   // Tool contact adds at most k_c (push penalty along the normal, pull
   // attachment springs isotropically) to the diagonal block of each point it
-  // touches. We add k_c I to every point that *may* be touched: an upper
-  // bound on K, so dt_crit stays on the safe side.
+  // touches (surface contact: the sum over a point's triangles of w_i^2 k_t,
+  // which force_law::triangle_penalty_scale keeps within k_c s_i). We add
+  // k_c I to every point that *may* be touched: an upper bound on K, so
+  // dt_crit stays on the safe side.
   double tool_contact_stiffness = 0;      // N/m; 0 = no tool term
   std::vector<uint8_t> tool_may_touch;    // internal numbering (npoint); empty = every free point
   int32_t max_iterations = 3000;
@@ -117,7 +119,8 @@ double critical_step_for_mode(double omega2, double damping_rate);
 
 // Points whose rest position lies within reach of the tool's path (keyframe
 // polyline), internal numbering: radius (or grasp radius for pull) plus one
-// more radius of margin for the material the tool drags along.
+// more radius of margin for the material the tool drags along; with surface
+// contact also every corner of a surface triangle that may come that close.
 std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool);
 
 // Options for a scene: the tool's contact stiffness on the points near its

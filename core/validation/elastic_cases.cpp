@@ -5,6 +5,7 @@
 
 #include "core/model/model.h"
 #include "core/model/stiffness.h"
+#include "core/physics/force_law.h"
 #include "core/util/error.h"
 #include "core/validation/static_solve.h"
 
@@ -129,8 +130,141 @@ BeamResult cantilever(const TetMesh& beam, const Material& material, BeamEnd end
   return r;
 }
 
+namespace {
+
+// The surface contact's static response at one depth: every triangle the
+// sphere reaches gets the penalty of force_law::sphere_triangle_penalty as
+// a SurfaceSpring at its closest point and normal; solve; release the
+// triangles whose spring pulls, add those now inside, and move each
+// spring's weights and normal to the new closest point, until the set is
+// the same twice and the force changed by less than 1e-5. Returns the push
+// along -z (N) and the triangles pushing.
+std::pair<double, int32_t> surface_indentation(const Model& m, const std::vector<int32_t>& bottom, const Vec3& centre,
+                                               double radius, double k_contact) {
+  std::vector<Vec3> u(m.npoint(), Vec3::Zero());
+  std::vector<uint8_t> active(m.nsurface(), 0);
+  // The closest point's weights and the penalty's direction and depth from the current displacements.
+  auto contact = [&](int32_t t, SurfaceSpring& s) {
+    const Tri& tri = m.surface[t];
+    Vec3 x[3];
+    double share[3];
+    for (int i = 0; i < 3; ++i) {
+      x[i] = m.rest_position[tri[i]] + u[tri[i]];
+      share[i] = m.tool_scale(tri[i]) / m.surface_count(tri[i]);
+    }
+    double w[3];
+    force_law::triangle_closest_weights(centre, x[0], x[1], x[2], w);
+    const Vec3 q = w[0] * x[0] + w[1] * x[1] + w[2] * x[2];
+    const double dist = (q - centre).norm();
+    s.points = {tri[0], tri[1], tri[2]};
+    s.weights = {w[0], w[1], w[2]};
+    s.direction = dist > 0 ? Vec3((q - centre) / dist) : Vec3(0, 0, -1);
+    s.k = k_contact * force_law::triangle_penalty_scale(share);
+    Vec3 rest_q = Vec3::Zero();
+    for (int i = 0; i < 3; ++i) rest_q += w[i] * m.rest_position[tri[i]];
+    s.target = radius - s.direction.dot(rest_q - centre);
+    return dist < radius;
+  };
+  // The displacement of a spring's contact point.
+  auto weighted = [](const SurfaceSpring& s, const std::vector<Vec3>& d) {
+    Vec3 uq = Vec3::Zero();
+    for (int i = 0; i < 3; ++i) uq += s.weights[i] * d[s.points[i]];
+    return uq;
+  };
+  SurfaceSpring probe;
+  for (int32_t t = 0; t < m.nsurface(); ++t) active[t] = contact(t, probe);
+  double force = 0, last = 0;
+  int32_t touching = 0;
+  for (int iteration = 0;; ++iteration) {
+    if (iteration == 100) throw Error(ErrorKind::Numerical, "sphere_indentation: surface contact did not settle");
+    StaticProblem problem;
+    clamp(problem, bottom, Vec3::Zero());
+    std::vector<int32_t> springs_of;
+    for (int32_t t = 0; t < m.nsurface(); ++t) {
+      if (!active[t]) continue;
+      SurfaceSpring s;
+      contact(t, s);
+      problem.surface_springs.push_back(s);
+      springs_of.push_back(t);
+    }
+    const StaticSolution sol = solve_static(m, problem);
+    force = 0;
+    touching = 0;
+    std::vector<uint8_t> pushing(m.nsurface(), 0);
+    for (size_t k = 0; k < springs_of.size(); ++k) {
+      const SurfaceSpring& s = problem.surface_springs[k];
+      const double push = s.k * (s.target - s.direction.dot(weighted(s, sol.displacement)));
+      if (push <= 0) continue;
+      pushing[springs_of[k]] = 1;
+      force += push * s.direction.z();
+      ++touching;
+    }
+    // The closest points and normals move half way to the solution's: a
+    // full step makes the force alternate about its limit.
+    for (int32_t p = 0; p < m.npoint(); ++p) u[p] = 0.5 * (u[p] + sol.displacement[p]);
+    // Next set: the triangles that push, and those inside the sphere now.
+    bool changed = false;
+    for (int32_t t = 0; t < m.nsurface(); ++t) {
+      SurfaceSpring s;
+      const uint8_t next = pushing[t] || (contact(t, s) && s.target - s.direction.dot(weighted(s, u)) > 1e-9 * radius);
+      changed |= next != active[t];
+      active[t] = next;
+    }
+    const double change = std::abs(force - last);
+    if ((!changed && change <= 1e-5 * std::abs(force)) || (iteration >= 30 && change <= 1e-4 * std::abs(force))) break;
+    last = force;
+  }
+  return {-force, touching};
+}
+
+// The point contact's static response at one depth: a stiff penalty spring
+// on every point inside the sphere; solve; release the points pulled (not
+// pushed) by their spring, add those now inside, until the set settles.
+// Returns the push along -z (N) and the points touching.
+std::pair<double, int32_t> point_indentation(const Model& m, const std::vector<int32_t>& bottom, const Vec3& centre,
+                                             double radius, double k_contact) {
+  std::vector<uint8_t> touching(m.npoint(), 0);
+  auto penetration = [&](int32_t p, const Vec3& u) { return radius - (m.rest_position[p] + u - centre).norm(); };
+  for (int32_t p = 0; p < m.npoint(); ++p) touching[p] = penetration(p, Vec3::Zero()) > 0;
+  double force = 0;
+  int32_t contacts = 0;
+  for (int iteration = 0;; ++iteration) {
+    if (iteration == 100) throw Error(ErrorKind::Numerical, "sphere_indentation: contact set did not settle");
+    StaticProblem problem;
+    clamp(problem, bottom, Vec3::Zero());
+    for (int32_t p = 0; p < m.npoint(); ++p) {
+      if (!touching[p]) continue;
+      const Vec3 offset = m.rest_position[p] - centre;
+      problem.point_springs.push_back({p, offset.normalized(), k_contact, radius - offset.norm()});
+    }
+    const StaticSolution s = solve_static(m, problem);
+    bool changed = false;
+    force = 0;
+    contacts = 0;
+    for (const PointSpring& c : problem.point_springs) {
+      const double push = c.k * (c.target - c.direction.dot(s.displacement[c.point]));
+      if (push <= 0) {
+        touching[c.point] = 0;
+        changed = true;
+      } else {
+        force += push * c.direction.z();
+        ++contacts;
+      }
+    }
+    for (int32_t p = 0; p < m.npoint(); ++p)
+      if (!touching[p] && penetration(p, s.displacement[p]) > 1e-9 * radius) {
+        touching[p] = 1;
+        changed = true;
+      }
+    if (!changed) break;
+  }
+  return {-force, contacts};
+}
+
+}  // namespace
+
 IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
-                                     const std::vector<double>& depths) {
+                                     const std::vector<double>& depths, ToolContact contact) {
   const Model m = free_model(block, material);
   const Box box = bounding_box(m);
   const auto bottom = face(m, box, 2, -1);
@@ -145,47 +279,13 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
   for (double depth : depths) {
     const Vec3 centre(0.5 * (box.min.x() + box.max.x()), 0.5 * (box.min.y() + box.max.y()),
                       box.max.z() + radius - depth);
-    std::vector<uint8_t> touching(m.npoint(), 0);
-    auto penetration = [&](int32_t p, const Vec3& u) { return radius - (m.rest_position[p] + u - centre).norm(); };
-    for (int32_t p = 0; p < m.npoint(); ++p) touching[p] = penetration(p, Vec3::Zero()) > 0;
-    StaticSolution s;
-    double force = 0;
-    int32_t contacts = 0;
-    for (int iteration = 0;; ++iteration) {
-      if (iteration == 100) throw Error(ErrorKind::Numerical, "sphere_indentation: contact set did not settle");
-      StaticProblem problem;
-      clamp(problem, bottom, Vec3::Zero());
-      for (int32_t p = 0; p < m.npoint(); ++p) {
-        if (!touching[p]) continue;
-        const Vec3 offset = m.rest_position[p] - centre;
-        problem.point_springs.push_back({p, offset.normalized(), k_contact, radius - offset.norm()});
-      }
-      s = solve_static(m, problem);
-      // Release points pulled (not pushed) by their spring; add points now inside.
-      bool changed = false;
-      force = 0;
-      contacts = 0;
-      for (const PointSpring& c : problem.point_springs) {
-        const double push = c.k * (c.target - c.direction.dot(s.displacement[c.point]));
-        if (push <= 0) {
-          touching[c.point] = 0;
-          changed = true;
-        } else {
-          force += push * c.direction.z();
-          ++contacts;
-        }
-      }
-      for (int32_t p = 0; p < m.npoint(); ++p)
-        if (!touching[p] && penetration(p, s.displacement[p]) > 1e-9 * radius) {
-          touching[p] = 1;
-          changed = true;
-        }
-      if (!changed) break;
-    }
+    const auto [force, touching] = contact == ToolContact::Surface
+                                       ? surface_indentation(m, bottom, centre, radius, k_contact)
+                                       : point_indentation(m, bottom, centre, radius, k_contact);
     r.depth.push_back(depth);
-    r.force.push_back(-force);
+    r.force.push_back(force);
     r.hertz.push_back(4.0 / 3.0 * e_star * std::sqrt(radius) * std::pow(depth, 1.5));
-    r.contacts.push_back(contacts);
+    r.contacts.push_back(touching);
   }
   return r;
 }

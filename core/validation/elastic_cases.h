@@ -14,6 +14,7 @@
 
 #include "core/mesh/tet_mesh.h"
 #include "core/model/material.h"
+#include "core/sim/tool.h"
 
 namespace organsim {
 
@@ -45,17 +46,20 @@ BeamResult cantilever(const TetMesh& beam, const Material& material, BeamEnd end
 
 // A rigid frictionless sphere of `radius` pressed `depth` into the middle of
 // the block's top face (bottom face clamped), for each depth. Contact is a
-// stiff penalty on the points the sphere reaches, iterated until the set of
-// touching points settles. Theory: Hertz, F = 4/3 E / (1 - nu^2) sqrt(R) d^1.5
+// stiff penalty, as the tool applies it (`contact`): on the boundary
+// triangles the sphere reaches (force_law::sphere_triangle_penalty,
+// linearised at each triangle's closest point and normal), or on the points
+// it reaches; iterated until the touching set and the closest points settle. Theory: Hertz, F = 4/3 E / (1 - nu^2) sqrt(R) d^1.5
 // (a half-space, d << R).
 struct IndentationResult {
   std::vector<double> depth;   // m
   std::vector<double> force;   // measured, N
   std::vector<double> hertz;   // N
-  std::vector<int32_t> contacts;  // points touching at each depth
+  std::vector<int32_t> contacts;  // points (or with surface contact, triangles) touching at each depth
   int32_t points = 0;
 };
 IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
-                                     const std::vector<double>& depths);
+                                     const std::vector<double>& depths,
+                                     ToolContact contact = ToolContact::Surface);
 
 }  // namespace organsim

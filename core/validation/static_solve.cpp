@@ -115,6 +115,13 @@ StaticSolution solve_static(const Model& model, const StaticProblem& problem) {
     add_block(triplets, s.point, s.point, s.k * s.direction * s.direction.transpose());
     f.segment<3>(3 * s.point) += s.k * s.target * s.direction;
   }
+  for (const SurfaceSpring& s : problem.surface_springs) {
+    const Eigen::Matrix3d nn = s.k * s.direction * s.direction.transpose();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) add_block(triplets, s.points[i], s.points[j], s.weights[i] * s.weights[j] * nn);
+      f.segment<3>(3 * s.points[i]) += s.weights[i] * s.k * s.target * s.direction;
+    }
+  }
   Eigen::SparseMatrix<double> K(ndof, ndof);
   K.setFromTriplets(triplets.begin(), triplets.end());
 

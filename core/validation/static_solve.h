@@ -5,6 +5,7 @@
 // solved directly. This is the response every backend converges to under a
 // slow (quasi-static) load, without the dynamics: the validation suite uses it to
 // compare the force law with elasticity theory in milliseconds.
+#include <array>
 #include <vector>
 
 #include "core/model/model.h"
@@ -28,10 +29,24 @@ struct PointSpring {
   double target = 0;        // m
 };
 
+// The same spring on a point of a surface triangle: energy
+// k/2 (n . sum_i w_i u_i - target)^2, i.e. force w_i k (target - n . u_q) n on
+// corner i, u_q the displacement of the point with barycentric weights w.
+// Models the surface contact (force_law::sphere_triangle_penalty) linearised
+// at fixed weights and normal.
+struct SurfaceSpring {
+  std::array<int32_t, 3> points{};
+  std::array<double, 3> weights{};
+  Vec3 direction{0, 0, 1};  // unit
+  double k = 0;             // N/m
+  double target = 0;        // m
+};
+
 struct StaticProblem {
   std::vector<PrescribedDof> prescribed;
   std::vector<Vec3> load;                 // external force per point, N (npoint, or empty)
   std::vector<PointSpring> point_springs;
+  std::vector<SurfaceSpring> surface_springs;
 };
 
 struct StaticSolution {

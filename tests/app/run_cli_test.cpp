@@ -143,9 +143,11 @@ TEST(RunCli, PlanListsThePassesTheSceneNeedsAndNoMore) {
   const fs::path scene = write_scenario(dir, full);
   const auto r2 = run_organsim("run --plan '" + scene.string() + "'", dir);
   ASSERT_EQ(r2.exit_code, 0) << r2.err;
-  for (const char* pass : {"  - springs:", "  - volume:", "  - gravity:", "  - tool-contact:", "  - integrate:"}) {
+  for (const char* pass : {"  - surface-contact:", "  - springs:", "  - volume:", "  - gravity:", "  - tool-contact:",
+                           "  - integrate:"}) {
     EXPECT_NE(r2.out.find(pass), std::string::npos) << pass << "\n" << r2.out;
   }
+  EXPECT_NE(r2.out.find("broad phase"), std::string::npos) << "the contact's broad phase is named\n" << r2.out;
   EXPECT_EQ(r2.out.find("no volume pass"), std::string::npos) << r2.out;
   EXPECT_EQ(r2.out.find("no tool pass"), std::string::npos) << r2.out;
 }

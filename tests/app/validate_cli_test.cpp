@@ -31,9 +31,10 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
     EXPECT_NEAR(error, expected, 1e-12);
     EXPECT_GT(row["points"].get<int>(), 0);
   }
-  for (const char* t : {"uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"})
+  for (const char* t : {"uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1",
+                        "hertz probe d/R=0.2"})
     EXPECT_TRUE(tests.count(t)) << t;
-  EXPECT_EQ(j["rows"].size(), 2u * 7u);  // 2 materials x 7 quantities
+  EXPECT_EQ(j["rows"].size(), 2u * 8u);  // 2 materials x 8 quantities
   // The measured E and nu against what was asked (E 10 kPa, the default;
   // nu 1/4 for the springs alone, 0.4): at these 20 mm cells E is 0.80 and
   // 0.83 of the asked value (it converges from below as the cells shrink,
@@ -56,7 +57,7 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
   }
   EXPECT_EQ(checked, 4);  // E and nu for both materials
   const std::string csv = test::slurp(dir / "out" / "validation.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 14);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 16);
   const std::string png = test::slurp(dir / "out" / "validation.png");
   ASSERT_GT(png.size(), 8u);
   EXPECT_EQ(png.substr(1, 3), "PNG");

@@ -299,50 +299,19 @@ TEST(ScenarioLoad, InvalidJsonGivesLineAndColumn) {
   }
 }
 
-}  // namespace
-}  // namespace organsim
-
-namespace organsim {
-namespace {
-
-TEST(ScenarioParse, PoissonRatioIsReadAndCheckedAgainstTheVolumeModulus) {
+TEST(ScenarioParse, ToolContactIsReadAndChecked) {
   json j = minimal();
-  j["material"] = {{"young_modulus", 8000}, {"poisson_ratio", 0.45}};
-  EXPECT_DOUBLE_EQ(*parse(j).material.poisson_ratio, 0.45);
-  EXPECT_FALSE(parse(minimal()).material.poisson_ratio.has_value());  // absent: the old rule
-  // 0 to 0.25: the shear element (core/model/stiffness.h) makes them possible.
-  for (double nu : {0.0, 0.2}) {
-    j["material"]["poisson_ratio"] = nu;
-    EXPECT_DOUBLE_EQ(*parse(j).material.poisson_ratio, nu);
-  }
-  for (double nu : {-0.01, 0.5, 0.7}) {
-    j["material"]["poisson_ratio"] = nu;
-    EXPECT_NE(error_of(j).find("material.poisson_ratio: expected a number in [0, 0.5)"), std::string::npos) << nu;
-  }
-  j["material"] = {{"poisson_ratio", 0.3}, {"volume_modulus", 1000}};
-  EXPECT_NE(error_of(j).find("give poisson_ratio or volume_modulus, not both"), std::string::npos);
-}
-
-TEST(ScenarioParse, VolumeFormulationIsReadAndChecked) {
-  json j = minimal();
-  EXPECT_FALSE(parse(j).material.volume_formulation.has_value());  // absent: the material's default
-  j["material"] = {{"volume_modulus", 2000}, {"volume_formulation", "nodal"}};
-  EXPECT_EQ(*parse(j).material.volume_formulation, VolumeFormulation::Nodal);
-  j["material"]["volume_formulation"] = "per_tet";
-  EXPECT_EQ(*parse(j).material.volume_formulation, VolumeFormulation::PerTet);
-  j["material"]["volume_formulation"] = "tet";
-  EXPECT_NE(error_of(j).find("material.volume_formulation: expected"), std::string::npos) << error_of(j);
-}
-
-TEST(ScenarioParse, ShearFormulationIsReadAndChecked) {
-  json j = minimal();
-  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::Smoothed);  // absent: smoothed
-  j["material"] = {{"poisson_ratio", 0.1}, {"shear_formulation", "per_tet"}};
-  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::PerTet);
-  j["material"]["shear_formulation"] = "smoothed";
-  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::Smoothed);
-  j["material"]["shear_formulation"] = "nodal";
-  EXPECT_NE(error_of(j).find("material.shear_formulation: expected"), std::string::npos) << error_of(j);
+  j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}]})");
+  EXPECT_EQ(parse(j).tool->spec.contact, ToolContact::Surface);  // absent: the surface triangles
+  j["tool"]["contact"] = "points";
+  EXPECT_EQ(parse(j).tool->spec.contact, ToolContact::Points);
+  j["tool"]["contact"] = "surface";
+  EXPECT_EQ(parse(j).tool->spec.contact, ToolContact::Surface);
+  j["tool"]["contact"] = "triangles";
+  EXPECT_NE(error_of(j).find("tool.contact: expected"), std::string::npos) << error_of(j);
+  j["tool"]["contact"] = "points";
+  j["tool"]["mode"] = "pull";
+  EXPECT_EQ(error_of(j), "scene.json: tool.contact: only used with \"mode\": \"push\"");
 }
 
 }  // namespace

@@ -34,19 +34,22 @@ std::vector<Scene> scenes() {
     m.shear_formulation = shear;
     return m;
   };
-  const BackendTool none{}, push{true, ToolMode::Push, 0.02, 200}, pull{true, ToolMode::Pull, 0.02, 200};
+  const BackendTool none{}, push{true, ToolMode::Push, 0.02, 200}, pull{true, ToolMode::Pull, 0.02, 200},
+      push_points{true, ToolMode::Push, 0.02, 200, ToolContact::Points};
   const Vec3 g(0, 0, -9.81), no_g = Vec3::Zero();
   using P = Pass;
   return {
       {"springs only", material(std::nullopt, 0, ShearFormulation::Smoothed), no_g, none, {P::Springs, P::Integrate}},
-      {"per-tet volume, gravity, push", material(std::nullopt, 20000, ShearFormulation::Smoothed), g, push,
-       {P::Springs, P::Volume, P::Gravity, P::ToolContact, P::Integrate}},
+      {"per-tet volume, gravity, push (surface contact)", material(std::nullopt, 20000, ShearFormulation::Smoothed), g,
+       push, {P::SurfaceContact, P::Springs, P::Volume, P::Gravity, P::ToolContact, P::Integrate}},
+      {"per-tet volume, push on the points", material(std::nullopt, 20000, ShearFormulation::Smoothed), no_g,
+       push_points, {P::Springs, P::Volume, P::ToolContact, P::Integrate}},
       {"nu 0.45 (nodal volume), pull", material(0.45, 0, ShearFormulation::Smoothed), no_g, pull,
        {P::NodalPressure, P::Springs, P::Volume, P::ToolContact, P::Integrate}},
       {"nu 0.1 smoothed shear, gravity", material(0.1, 0, ShearFormulation::Smoothed), g, none,
        {P::ShearSmoothing, P::Springs, P::ShearElement, P::Gravity, P::Integrate}},
       {"nu 0.1 per-tet shear, push", material(0.1, 0, ShearFormulation::PerTet), no_g, push,
-       {P::Springs, P::ShearElement, P::ToolContact, P::Integrate}},
+       {P::SurfaceContact, P::Springs, P::ShearElement, P::ToolContact, P::Integrate}},
   };
 }
 

@@ -85,6 +85,10 @@ TEST(ToolStiffness, CpuPushContactOnALightPointUsesItsScale) {
   tool.mode = ToolMode::Push;
   tool.radius = radius;
   tool.contact_stiffness = 1000;
+  // The point penalty's own scale (surface contact spreads the corner's
+  // triangles over their corners: SurfaceContact.StiffnessPerPoint... holds
+  // its bound).
+  tool.contact = ToolContact::Points;
   auto backend = make_cpu_backend(model, tool, {});
   TickRequest request;
   request.dt = 1e-6;

@@ -98,7 +98,9 @@ TickRequest tool_request(int n, const Vec3& start, const Vec3& end) {
 // the trajectory, not only one substep's force (kernel_test.cpp), with each
 // point's gathers split over the invocations.
 TEST(GlParity, PushMatchesTheDoubleReference) {
-  // Volume, gravity, fixed bottom; a 2 cm sphere pressed 1.5 cm into the top.
+  // Volume, gravity, fixed bottom; a 2 cm sphere pressed 1.5 cm into the top,
+  // against the surface triangles (the default contact): each GL point
+  // recomputes its own triangles, the CPU evaluates each triangle once.
   const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
   const BackendTool tool{true, ToolMode::Push, 0.02, 200.0};
   const Vec3 start(0.05, 0.05, 0.072), end(0.05, 0.05, 0.055);
@@ -116,6 +118,22 @@ TEST(GlParity, PushMatchesTheDoubleReference) {
     // One fused dispatch per substep plus one reduction per tick (the extra
     // one-substep tick that fetches the last reaction adds 2).
     EXPECT_EQ(c.dispatches, kTicks * (kSubsteps + 1) + 2);
+  }
+}
+
+// The same press with the penalty on the points (tool.contact "points").
+TEST(GlParity, PushOnThePointsMatchesTheDoubleReference) {
+  const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
+  const BackendTool tool{true, ToolMode::Push, 0.02, 200.0, ToolContact::Points};
+  const Vec3 start(0.05, 0.05, 0.072), end(0.05, 0.05, 0.055);
+  for (const int32_t threads_per_point : {1, 8}) {
+    SCOPED_TRACE(std::to_string(threads_per_point) + " invocation(s) per point");
+    const Comparison c =
+        compare(model, tool, [&](int n) { return tool_request(n, start, end); }, nullptr, threads_per_point);
+    ASSERT_GT(c.max_contacts, 3);
+    ASSERT_GT(c.peak_force, 0.1);
+    EXPECT_LT(c.position, 1e-5);
+    EXPECT_LT(c.force, 1e-4);
   }
 }
 
