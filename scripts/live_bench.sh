@@ -27,13 +27,9 @@ mkdir -p "$out"
   >"$out/serve.out" 2>"$out/serve.err" &
 serve_pid=$!
 trap 'kill "$serve_pid" 2>/dev/null || true' EXIT
-port=
-for _ in $(seq 1 1800); do  # meshing the liver comes first
-  port=$(sed -n 's/.*OpenIGTLink on [0-9.]*:\([0-9]*\).*/\1/p' "$out/serve.out")
-  [ -n "$port" ] && break
-  kill -0 "$serve_pid" 2>/dev/null || break
-  sleep 0.1
-done
+# shellcheck source=scripts/serve_port.sh
+. "$root/scripts/serve_port.sh"
+port=$(serve_port "$out/serve.out" "$serve_pid" 1800)  # meshing the liver comes first
 [ -n "$port" ] || { echo "live_bench: organsim serve printed no port"; cat "$out/serve.err"; exit 1; }
 # The scenario's own press, in mm: from 88 mm down to 53 mm above the origin at x = 30 mm.
 "$client" "$port" 1000 "$((seconds + 2))" 30,0,88 30,0,53 >"$out/client.out" 2>&1 || true

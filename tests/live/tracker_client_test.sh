@@ -42,13 +42,9 @@ cleanup() {
   kill "$serve_pid" 2>/dev/null || true
 }
 trap cleanup EXIT
-port=
-for _ in $(seq 1 600); do
-  port=$(sed -n 's/.*OpenIGTLink on [0-9.]*:\([0-9]*\).*/\1/p' "$work/serve.out")
-  [ -n "$port" ] && break
-  kill -0 "$serve_pid" 2>/dev/null || break
-  sleep 0.1
-done
+# shellcheck source=scripts/serve_port.sh
+. "$root/scripts/serve_port.sh"
+port=$(serve_port "$work/serve.out" "$serve_pid" 600)
 [ -n "$port" ] || { echo "organsim serve printed no port"; cat "$work/serve.err"; exit 1; }
 "$work/tracker/TrackerClient" 127.0.0.1 "$port" 200 >"$work/tracker.out" 2>&1 &
 tracker_pid=$!
