@@ -1,0 +1,164 @@
+// dt_crit with the tool's surface contact against the threshold a run
+// shows: a small sphere pressing a light surface point, with a penalty far
+// stiffer than the springs, so the contact limits the step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/physics/force_law.h"
+#include "core/scenario/tool_spec.h"
+#include "core/sim/cpu_backend.h"
+#include "core/stability/critical_step.h"
+#include "tests/core/stability_test_util.h"
+
+namespace organsim {
+namespace {
+
+constexpr double kSize = 0.04;
+constexpr double kRadius = 0.002, kDepth = 0.0002;  // a 4 mm probe tip, 0.2 mm into the top
+
+// The top face's interior point whose surface contact, pressed at that
+// vertex, comes closest to the bound k s_p that dt_crit counts: each of its
+// triangles pushes it with full weight at the triangle's stiffness, k times
+// the smallest of its corners' shares s_i / n_i (force_law::
+// triangle_penalty_scale), so the bound is reached where p is the lightest
+// corner of all its triangles. Returns the point and that fraction.
+std::pair<int32_t, double> most_pressable_point(const Model& m) {
+  std::pair<int32_t, double> best{-1, 0};
+  for (int32_t p = 0; p < m.npoint(); ++p) {
+    const Vec3 x = m.rest_position[p];
+    if (std::abs(x.z() - kSize) > 1e-9 || m.fixed[p] || m.surface_count(p) == 0) continue;
+    if (x.x() < 0.2 * kSize || x.x() > 0.8 * kSize || x.y() < 0.2 * kSize || x.y() > 0.8 * kSize) continue;
+    double stiffness = 0;  // per unit k
+    for (int32_t i = m.surface_offset[p]; i < m.surface_offset[p + 1]; ++i) {
+      double share[3];
+      for (int c = 0; c < 3; ++c) {
+        const int32_t q = m.surface[m.surface_tri[i]][c];
+        share[c] = m.tool_scale(q) / m.surface_count(q);
+      }
+      stiffness += force_law::triangle_penalty_scale(share);
+    }
+    const double fraction = stiffness / m.tool_scale(p);
+    if (fraction > best.second) best = {p, fraction};
+  }
+  return best;
+}
+
+// Does the motion from rest, the sphere already 0.2 mm into the top, grow
+// without bound at dt? At first touch the pressed vertex is every one of
+// its triangles' closest point, so its contact stiffness is the bound; a
+// stable run oscillates within a few depths of rest (undamped), an unstable
+// one passes 100 depths (or overflows).
+bool first_touch_motion_grows(const Model& m, const Vec3& center, double k, double dt) {
+  const BackendTool tool{true, ToolMode::Push, kRadius, k, ToolContact::Surface};
+  auto backend = make_cpu_backend(m, tool, testing::one_thread());
+  TickRequest r;
+  r.dt = dt;
+  r.substeps = 50;
+  r.tool_active = true;
+  r.tool_from = r.tool_to = center;
+  std::vector<Vec3> x;
+  for (int tick = 0; tick < 200; ++tick) {
+    backend->tick(r);
+    backend->positions(x);
+    for (int32_t p = 0; p < m.npoint(); ++p) {
+      const double d = (x[p] - m.rest_position[p]).norm();
+      if (!std::isfinite(d) || d > 100 * kDepth) return true;
+    }
+  }
+  return false;
+}
+
+// The model at rest under the pressing sphere: the same model with drag,
+// stepped stably until it stops (drag changes no stiffness, so the
+// equilibrium is the undamped model's).
+std::vector<Vec3> pressed_equilibrium(const Vec3& center, double k, double dt) {
+  Material damped = testing::undamped_material();
+  damped.viscous_damping = 200;  // 1/s: the slowest mode (about 40 rad/s) is overdamped
+  const Model settling = testing::stability_box(6, kSize, damped, 0.3, 5);
+  const BackendTool tool{true, ToolMode::Push, kRadius, k, ToolContact::Surface};
+  auto backend = make_cpu_backend(settling, tool, testing::one_thread());
+  TickRequest r;
+  r.dt = dt;
+  r.substeps = 100;
+  r.tool_active = true;
+  r.tool_from = r.tool_to = center;
+  for (int tick = 0; tick < 100; ++tick) backend->tick(r);
+  std::vector<Vec3> x;
+  backend->positions(x);
+  return x;
+}
+
+// Does a perturbation of 1e-4 of the depth about the pressed equilibrium
+// grow by 1e4 within 10000 steps of dt? Small enough that every pressed
+// point stays in contact (the penalty acts linearly), undamped.
+bool contact_perturbation_grows(const Model& m, const std::vector<Vec3>& rest, const Vec3& center, double k,
+                                double dt) {
+  const BackendTool tool{true, ToolMode::Push, kRadius, k, ToolContact::Surface};
+  auto backend = make_cpu_backend(m, tool, testing::one_thread());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double scale = 1e-4 * kDepth;
+  std::vector<Vec3> x = rest;
+  for (int32_t i = 0; i < m.npoint(); ++i)
+    if (!m.fixed[i]) x[i] += scale * Vec3(u(rng), u(rng), u(rng));
+  backend->set_state(x, x);
+  TickRequest r;
+  r.dt = dt;
+  r.substeps = 50;
+  r.tool_active = true;
+  r.tool_from = r.tool_to = center;
+  for (int tick = 0; tick < 200; ++tick) {
+    backend->tick(r);
+    backend->positions(x);
+    for (int32_t i = 0; i < m.npoint(); ++i) {
+      const double d = (x[i] - rest[i]).norm();
+      if (!std::isfinite(d) || d > 1e4 * scale) return true;
+    }
+  }
+  return false;
+}
+
+TEST(StabilityToolContact, SmallToolOnALightPointIsStableBelowDtCritAndCrossesOverWithin30Percent) {
+  // Jittered cells give points of unequal mass; the tool scale s_p = m_p /
+  // median keeps k s_p / m_p the same for every point lighter than the median.
+  const Model m = testing::stability_box(6, kSize, testing::undamped_material(), 0.3, 5);
+  const auto [p, fraction] = most_pressable_point(m);
+  ASSERT_GE(p, 0);
+  ASSERT_LT(m.tool_scale(p), 1.0) << "the pressed point should be lighter than the median";
+  ASSERT_GT(fraction, 0.95) << "the pressed vertex should nearly reach the bound dt_crit counts";
+  const Vec3 center = m.rest_position[p] + Vec3(0, 0, kRadius - kDepth);
+
+  const StabilityReport springs_only = estimate_critical_step(m);
+  ToolSpec spec;
+  spec.radius = kRadius;
+  spec.keyframes = {{0, center}};
+  CriticalStepOptions options;
+  // 30x the stiffest mode's stiffness per unit mass: the contact limits dt.
+  options.tool_contact_stiffness = 30 * springs_only.lambda_max * m.mass[p] / m.tool_scale(p);
+  options.tool_may_touch = points_near_tool_path(m, spec);
+  const StabilityReport r = estimate_critical_step(m, options);
+  ASSERT_TRUE(r.converged);
+  ASSERT_LT(r.dt_crit, 0.5 * springs_only.dt_crit) << "the contact should limit the step";
+
+  // dt_crit counts every point the sphere may touch at its full k s_i, the
+  // largest its surface contact can give (a vertex pressed by all its
+  // triangles; the pressed point reaches 98 % of it), so no run below it
+  // grows. The runs cross over above it: from first touch between 1.1 and
+  // 1.2 dt_crit (the vertex leaves the sphere within a step or two of each
+  // bounce), and about the pressed equilibrium between 1.2 and 1.3, where
+  // the surface wraps the sphere, the vertex is no longer every triangle's
+  // closest point and its stiffness is about 0.63 of the bound. The bounds
+  // below (20 % and 30 %) fail if a tool stiffness were missing (dt_crit
+  // 5.5x larger) or counted twice (sqrt 2 smaller).
+  const double k = options.tool_contact_stiffness;
+  EXPECT_FALSE(first_touch_motion_grows(m, center, k, 0.95 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
+  EXPECT_TRUE(first_touch_motion_grows(m, center, k, 1.2 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
+  const std::vector<Vec3> pressed = pressed_equilibrium(center, k, 0.5 * r.dt_crit);
+  EXPECT_FALSE(contact_perturbation_grows(m, pressed, center, k, 0.95 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
+  EXPECT_TRUE(contact_perturbation_grows(m, pressed, center, k, 1.3 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
+}
+
+}  // namespace
+}  // namespace organsim
