@@ -132,19 +132,21 @@ BeamResult cantilever(const TetMesh& beam, const Material& material, BeamEnd end
 
 namespace {
 
-// The surface contact's static response at one depth: every triangle the
-// sphere reaches gets the penalty of force_law::sphere_triangle_penalty as
-// a SurfaceSpring at its closest point and normal; solve; release the
-// triangles whose spring pulls, add those now inside, and move each
-// spring's weights and normal to the new closest point, until the set is
-// the same twice and the force changed by less than 1e-5. Returns the push
-// along -z (N) and the triangles pushing.
-std::pair<double, int32_t> surface_indentation(const Model& m, const std::vector<int32_t>& bottom, const Vec3& centre,
-                                               double radius, double k_contact) {
-  std::vector<Vec3> u(m.npoint(), Vec3::Zero());
-  std::vector<uint8_t> active(m.nsurface(), 0);
-  // The closest point's weights and the penalty's direction and depth from the current displacements.
-  auto contact = [&](int32_t t, SurfaceSpring& s) {
+// The surface contact's static response at one depth: the displacement that
+// minimises the elastic energy plus every triangle's penalty
+// (force_law::sphere_triangle_penalty's k_t/2 (R - |q - c|)^2 inside the
+// sphere), by Gauss-Newton with a backtracking line search: each iteration
+// linearises the penalty of every triangle inside the sphere at its current
+// closest point and normal (a SurfaceSpring), solves, and moves towards that
+// solution by the largest of 1, 1/2, 1/4, ... that lowers the energy, until
+// the push changes by less than 1e-6 of itself. Returns the push along -z (N)
+// and the triangles pushing.
+std::pair<double, int32_t> surface_indentation(const Model& m, const StaticSolver& solver,
+                                               const StaticProblem& supports, const Vec3& centre, double radius,
+                                               double k_contact) {
+  // Triangle t at displacements u: its penalty as a SurfaceSpring (closest
+  // point weights, normal, k_t, the depth as target at rest) and its depth.
+  auto contact = [&](const std::vector<Vec3>& u, int32_t t, SurfaceSpring& s) {
     const Tri& tri = m.surface[t];
     Vec3 x[3];
     double share[3];
@@ -163,66 +165,57 @@ std::pair<double, int32_t> surface_indentation(const Model& m, const std::vector
     Vec3 rest_q = Vec3::Zero();
     for (int i = 0; i < 3; ++i) rest_q += w[i] * m.rest_position[tri[i]];
     s.target = radius - s.direction.dot(rest_q - centre);
-    return dist < radius;
+    return radius - dist;
   };
-  // The displacement of a spring's contact point.
-  auto weighted = [](const SurfaceSpring& s, const std::vector<Vec3>& d) {
-    Vec3 uq = Vec3::Zero();
-    for (int i = 0; i < 3; ++i) uq += s.weights[i] * d[s.points[i]];
-    return uq;
+  struct State {
+    double energy = 0, push = 0;
+    int32_t touching = 0;
   };
-  SurfaceSpring probe;
-  for (int32_t t = 0; t < m.nsurface(); ++t) active[t] = contact(t, probe);
-  double force = 0, last = 0;
-  int32_t touching = 0;
+  auto evaluate = [&](const std::vector<Vec3>& u) {
+    State st;
+    st.energy = solver.elastic_energy(u);
+    SurfaceSpring s;
+    for (int32_t t = 0; t < m.nsurface(); ++t) {
+      const double depth = contact(u, t, s);
+      if (!(depth > 0)) continue;
+      st.energy += s.k * depth * depth / 2;
+      st.push -= s.k * depth * s.direction.z();
+      ++st.touching;
+    }
+    return st;
+  };
+  std::vector<Vec3> u(m.npoint(), Vec3::Zero());
+  State now = evaluate(u);
   for (int iteration = 0;; ++iteration) {
     if (iteration == 100) throw Error(ErrorKind::Numerical, "sphere_indentation: surface contact did not settle");
-    StaticProblem problem;
-    clamp(problem, bottom, Vec3::Zero());
-    std::vector<int32_t> springs_of;
-    for (int32_t t = 0; t < m.nsurface(); ++t) {
-      if (!active[t]) continue;
-      SurfaceSpring s;
-      contact(t, s);
-      problem.surface_springs.push_back(s);
-      springs_of.push_back(t);
+    StaticProblem problem = supports;
+    SurfaceSpring s;
+    for (int32_t t = 0; t < m.nsurface(); ++t)
+      if (contact(u, t, s) > 0) problem.surface_springs.push_back(s);
+    const StaticSolution sol = solver.solve(problem);
+    std::vector<Vec3> next(u.size());
+    State tried;
+    double step = 1;
+    for (;; step /= 2) {
+      for (size_t p = 0; p < u.size(); ++p) next[p] = u[p] + step * (sol.displacement[p] - u[p]);
+      tried = evaluate(next);
+      if (tried.energy <= now.energy || step < 1e-3) break;
     }
-    const StaticSolution sol = solve_static(m, problem);
-    force = 0;
-    touching = 0;
-    std::vector<uint8_t> pushing(m.nsurface(), 0);
-    for (size_t k = 0; k < springs_of.size(); ++k) {
-      const SurfaceSpring& s = problem.surface_springs[k];
-      const double push = s.k * (s.target - s.direction.dot(weighted(s, sol.displacement)));
-      if (push <= 0) continue;
-      pushing[springs_of[k]] = 1;
-      force += push * s.direction.z();
-      ++touching;
-    }
-    // The closest points and normals move half way to the solution's: a
-    // full step makes the force alternate about its limit.
-    for (int32_t p = 0; p < m.npoint(); ++p) u[p] = 0.5 * (u[p] + sol.displacement[p]);
-    // Next set: the triangles that push, and those inside the sphere now.
-    bool changed = false;
-    for (int32_t t = 0; t < m.nsurface(); ++t) {
-      SurfaceSpring s;
-      const uint8_t next = pushing[t] || (contact(t, s) && s.target - s.direction.dot(weighted(s, u)) > 1e-9 * radius);
-      changed |= next != active[t];
-      active[t] = next;
-    }
-    const double change = std::abs(force - last);
-    if ((!changed && change <= 1e-5 * std::abs(force)) || (iteration >= 30 && change <= 1e-4 * std::abs(force))) break;
-    last = force;
+    const double change = std::abs(tried.push - now.push);
+    u.swap(next);
+    now = tried;
+    if (change <= 1e-6 * std::abs(now.push)) break;
   }
-  return {-force, touching};
+  return {now.push, now.touching};
 }
 
 // The point contact's static response at one depth: a stiff penalty spring
 // on every point inside the sphere; solve; release the points pulled (not
 // pushed) by their spring, add those now inside, until the set settles.
 // Returns the push along -z (N) and the points touching.
-std::pair<double, int32_t> point_indentation(const Model& m, const std::vector<int32_t>& bottom, const Vec3& centre,
-                                             double radius, double k_contact) {
+std::pair<double, int32_t> point_indentation(const Model& m, const StaticSolver& solver,
+                                             const StaticProblem& supports, const Vec3& centre, double radius,
+                                             double k_contact) {
   std::vector<uint8_t> touching(m.npoint(), 0);
   auto penetration = [&](int32_t p, const Vec3& u) { return radius - (m.rest_position[p] + u - centre).norm(); };
   for (int32_t p = 0; p < m.npoint(); ++p) touching[p] = penetration(p, Vec3::Zero()) > 0;
@@ -230,14 +223,13 @@ std::pair<double, int32_t> point_indentation(const Model& m, const std::vector<i
   int32_t contacts = 0;
   for (int iteration = 0;; ++iteration) {
     if (iteration == 100) throw Error(ErrorKind::Numerical, "sphere_indentation: contact set did not settle");
-    StaticProblem problem;
-    clamp(problem, bottom, Vec3::Zero());
+    StaticProblem problem = supports;
     for (int32_t p = 0; p < m.npoint(); ++p) {
       if (!touching[p]) continue;
       const Vec3 offset = m.rest_position[p] - centre;
       problem.point_springs.push_back({p, offset.normalized(), k_contact, radius - offset.norm()});
     }
-    const StaticSolution s = solve_static(m, problem);
+    const StaticSolution s = solver.solve(problem);
     bool changed = false;
     force = 0;
     contacts = 0;
@@ -273,6 +265,10 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
   const double k_contact = 1e3 * *std::max_element(diagonal.begin(), diagonal.end());
   const EffectiveElasticity e = effective_elasticity(material);
   const double e_star = e.young_modulus / (1 - e.poisson_ratio * e.poisson_ratio);
+  // The bottom clamped at every depth: one factorisation serves them all.
+  StaticProblem supports;
+  clamp(supports, bottom, Vec3::Zero());
+  const StaticSolver solver(m, supports.prescribed);
 
   IndentationResult r;
   r.points = m.npoint();
@@ -280,8 +276,8 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
     const Vec3 centre(0.5 * (box.min.x() + box.max.x()), 0.5 * (box.min.y() + box.max.y()),
                       box.max.z() + radius - depth);
     const auto [force, touching] = contact == ToolContact::Surface
-                                       ? surface_indentation(m, bottom, centre, radius, k_contact)
-                                       : point_indentation(m, bottom, centre, radius, k_contact);
+                                       ? surface_indentation(m, solver, supports, centre, radius, k_contact)
+                                       : point_indentation(m, solver, supports, centre, radius, k_contact);
     r.depth.push_back(depth);
     r.force.push_back(force);
     r.hertz.push_back(4.0 / 3.0 * e_star * std::sqrt(radius) * std::pow(depth, 1.5));

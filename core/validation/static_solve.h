@@ -6,6 +6,7 @@
 // slow (quasi-static) load, without the dynamics: the validation suite uses it to
 // compare the force law with elasticity theory in milliseconds.
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "core/model/model.h"
@@ -56,8 +57,35 @@ struct StaticSolution {
   std::vector<Vec3> reaction;
 };
 
-// Throws Error(Numerical) when the free part of the stiffness is singular
-// (e.g. a rigid motion left unconstrained).
+// The rest stiffness factored once for one set of held coordinates (the
+// Model's fixed points and the prescribed ones); it then solves any problem
+// with those supports, whatever its prescribed values, loads and springs.
+// The springs are rank-one terms k a a^T, added by the Woodbury identity:
+// a contact iteration that changes its springs costs a back-substitution per
+// spring, not a factorisation.
+class StaticSolver {
+ public:
+  // Throws Error(Numerical) when the free part of the stiffness is singular
+  // (e.g. a rigid motion left unconstrained).
+  StaticSolver(const Model& model, const std::vector<PrescribedDof>& held);
+  ~StaticSolver();
+  StaticSolver(const StaticSolver&) = delete;
+  StaticSolver& operator=(const StaticSolver&) = delete;
+
+  // Throws Error(Usage) when `problem` holds other coordinates than the
+  // solver was factored for.
+  StaticSolution solve(const StaticProblem& problem) const;
+
+  // 1/2 u^T K u, J: the rest stiffness's energy at displacements u (npoint).
+  double elastic_energy(const std::vector<Vec3>& u) const;
+
+ private:
+  struct Factor;
+  const Model& model_;
+  std::unique_ptr<Factor> factor_;
+};
+
+// One problem, one factorisation: StaticSolver(model, problem.prescribed).solve(problem).
 StaticSolution solve_static(const Model& model, const StaticProblem& problem);
 
 // The linearised stiffness's diagonal 3x3 block trace per point, N/m (npoint):

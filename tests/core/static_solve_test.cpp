@@ -73,6 +73,52 @@ TEST_P(StaticSolveRelaxed, MatchesTheCpuBackendRelaxedUnderGravity) {
   EXPECT_NEAR(held, 0.2 * model.total_mass(), 1e-9);
 }
 
+// The springs enter the factored stiffness by the Woodbury identity. A
+// stiff spring on one coordinate must act as that coordinate prescribed:
+// k = 1000x the point's diagonal stiffness gives way by less than 1e-3 of
+// the push, so displacements and its force (the support's reaction) agree
+// to 1e-3; a surface spring with all its weight on one corner is that
+// point's spring.
+TEST(StaticSolve, StiffSpringsAddedToTheFactorActAsPrescribedCoordinates) {
+  Material material;
+  material.young_modulus = 5000;
+  material.poisson_ratio = 0.45;
+  ModelOptions options;
+  FixedSelector base;
+  base.kind = FixedSelector::Kind::Plane;
+  base.point = Vec3(0, 0, 1e-6);
+  base.normal = Vec3(0, 0, -1);
+  options.fixed = {base};
+  const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 3, 3, 3), material, options);
+  int32_t top = 0;  // the corner (0.04, 0.04, 0.04)
+  for (int32_t p = 0; p < model.npoint(); ++p)
+    if (model.rest_position[p].sum() > model.rest_position[top].sum()) top = p;
+  ASSERT_NEAR(model.rest_position[top].z(), 0.04, 1e-12);
+  const double push = -1e-3;
+
+  StaticProblem prescribed;
+  prescribed.prescribed.push_back({top, 2, push});
+  const StaticSolution want = solve_static(model, prescribed);
+
+  const StaticSolver solver(model, {});
+  const double k = 1e3 * stiffness_diagonal(model)[top];
+  StaticProblem by_point;
+  by_point.point_springs.push_back({top, Vec3(0, 0, 1), k, push});
+  StaticProblem by_surface;
+  by_surface.surface_springs.push_back({{top, 0, 1}, {1, 0, 0}, Vec3(0, 0, 1), k, push});
+  for (const StaticProblem* problem : {&by_point, &by_surface}) {
+    const StaticSolution got = solver.solve(*problem);
+    double worst = 0;
+    for (int32_t p = 0; p < model.npoint(); ++p)
+      worst = std::max(worst, (got.displacement[p] - want.displacement[p]).norm());
+    EXPECT_LT(worst, 1e-3 * std::abs(push));
+    const double spring_force = k * (push - got.displacement[top].z());
+    EXPECT_NEAR(spring_force, want.reaction[top].z(), 1e-3 * std::abs(want.reaction[top].z()));
+  }
+  // A problem holding other coordinates than were factored is refused.
+  EXPECT_THROW(solver.solve(prescribed), Error);
+}
+
 INSTANTIATE_TEST_SUITE_P(VolumeTerms, StaticSolveRelaxed,
                          ::testing::Values(VolumeFormulation::PerTet, VolumeFormulation::Nodal),
                          [](const auto& info) { return std::string(volume_formulation_name(info.param)); });
