@@ -332,8 +332,8 @@ void run_shard(const StudyArgs& args, const Shard& shard, const StudySetup& u) {
                                       "; run each shard with the arguments of the --reference-only step");
   }
   const nlohmann::json model = {{"points", u.model.npoint()}, {"tets", u.model.ntet()}};
-  if (plan.head.value("model", nlohmann::json()).value("points", -1) != u.model.npoint() ||
-      plan.head.value("model", nlohmann::json()).value("tets", -1) != u.model.ntet())
+  // parse_study_plan checked that both are whole numbers.
+  if (plan.head["model"]["points"] != u.model.npoint() || plan.head["model"]["tets"] != u.model.ntet())
     throw Error(ErrorKind::Usage, plan_name + ": the reference's model differs from this one (" + model.dump() +
                                       "): the mesh changed since --reference-only");
   const Trajectory reference =

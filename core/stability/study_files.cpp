@@ -107,6 +107,10 @@ StudyPlan parse_study_plan(const json& j, const std::string& source) {
   plan.head = r.field(j, "head", "file");
   plan.dt_crit = r.number(r.field(plan.head, "stability", "head"), "dt_crit", "head.stability");
   if (!(plan.dt_crit > 0)) throw r.error("head.stability.dt_crit", "a positive step in s");
+  // What a shard compares with its own model.
+  const json& model = r.field(plan.head, "model", "head");
+  r.whole(model, "points", "head.model", 1, int64_t(1) << 40);
+  r.whole(model, "tets", "head.model", 0, int64_t(1) << 40);
   // What the table's summary line reads.
   const json& reference = r.field(plan.head, "reference", "head");
   r.number(reference, "dt_half", "head.reference");
