@@ -21,7 +21,6 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <thread>
 
 #include "app/backend_factory.h"
@@ -175,6 +174,13 @@ struct StudySetup {
   nlohmann::json request;       // what a shard must share with the reference step
 };
 
+// Everything the runs' results depend on; the thread and job counts are not.
+nlohmann::json request_of(const StudyArgs& args) {
+  return {{"scenario_text", read_text_file(args.scenario)}, {"dt", args.dts}, {"backend", args.backends},
+          {"precision", args.precisions}, {"duration", args.duration}, {"ref_factor", args.ref_factor},
+          {"samples", args.samples}};
+}
+
 StudySetup set_up(const StudyArgs& args) {
   StudySetup u;
   u.scenario = load_scenario(args.scenario);
@@ -204,10 +210,7 @@ StudySetup set_up(const StudyArgs& args) {
   // (results do not depend on the thread count, so they equal a serial
   // study's; run times do, which is why one job is the default).
   u.threads = args.threads > 0 || args.jobs <= 1 ? args.threads : std::max(1, usable_cpus() / args.jobs);
-  // Everything the runs' results depend on; the thread and job counts are not.
-  u.request = {{"scenario_text", read_text_file(args.scenario)}, {"dt", args.dts}, {"backend", args.backends},
-               {"precision", args.precisions}, {"duration", args.duration}, {"ref_factor", args.ref_factor},
-               {"samples", args.samples}};
+  u.request = request_of(args);
   return u;
 }
 
@@ -316,21 +319,29 @@ StudyPlan read_plan(const fs::path& outdir) {
 
 // --shard: this slice of the configurations against the written reference,
 // each outcome in study_runs/<k>.json as soon as it is known.
-void run_shard(const StudyArgs& args, const Shard& shard, const StudySetup& u) {
+// The plan a shard runs: written for the same arguments and scenario text
+// (checked before the model is built and settled).
+StudyPlan plan_for_shard(const StudyArgs& args) {
   const fs::path outdir = outdir_of(args);
   const StudyPlan plan = read_plan(outdir);
-  const std::string plan_name = plan_path(outdir).string();
-  if (plan.request != u.request) {
+  const nlohmann::json request = request_of(args);
+  if (plan.request != request) {
     std::string what = "arguments";
-    for (const auto& [key, value] : u.request.items())
+    for (const auto& [key, value] : request.items())
       if (plan.request.value(key, nlohmann::json()) != value) {
         what = key == "scenario_text" ? "scenario file content" : "--" + key + " (it has " +
                                                                       plan.request.value(key, nlohmann::json()).dump() + ")";
         break;
       }
-    throw Error(ErrorKind::Usage, plan_name + ": the reference was written for other " + what +
+    throw Error(ErrorKind::Usage, plan_path(outdir).string() + ": the reference was written for other " + what +
                                       "; run each shard with the arguments of the --reference-only step");
   }
+  return plan;
+}
+
+void run_shard(const StudyArgs& args, const Shard& shard, const StudyPlan& plan, const StudySetup& u) {
+  const fs::path outdir = outdir_of(args);
+  const std::string plan_name = plan_path(outdir).string();
   const nlohmann::json model = {{"points", u.model.npoint()}, {"tets", u.model.ntet()}};
   // parse_study_plan checked that both are whole numbers.
   if (plan.head["model"]["points"] != u.model.npoint() || plan.head["model"]["tets"] != u.model.ntet())
@@ -400,13 +411,14 @@ void study_command(const StudyArgs& args) {
     throw Error(ErrorKind::Usage, "a scenario and --dt are required (or --collect OUTDIR)");
   if (args.reference_only && !args.shard.empty())
     throw Error(ErrorKind::Usage, "--reference-only and --shard are separate steps; give one");
-  // The slice is checked before anything runs.
-  const std::optional<Shard> shard =
-      args.shard.empty() ? std::nullopt
-                         : std::optional<Shard>(parse_shard(args.shard, [](const char* n) { return std::getenv(n); }));
+  if (!args.shard.empty()) {
+    // The slice and the plan are checked before the model is built and anything runs.
+    const Shard shard = parse_shard(args.shard, [](const char* n) { return std::getenv(n); });
+    const StudyPlan plan = plan_for_shard(args);
+    return run_shard(args, shard, plan, set_up(args));
+  }
   const StudySetup u = set_up(args);
   if (args.reference_only) return write_reference(args, u);
-  if (shard) return run_shard(args, *shard, u);
 
   nlohmann::json head;
   const Trajectory reference = run_reference(args, u, head);
