@@ -1,9 +1,12 @@
 // `organsim study SCENARIO.json --dt LIST --backend LIST --precision LIST [--jobs N] [-o OUTDIR]`
+// `... --reference-only`, `... --shard i/N|slurm`, `organsim study --collect OUTDIR`
 // Error against run time: runs the scenario once per configuration, compares
 // each with a converged double-precision CPU reference and writes study.json,
 // study.csv and study.png (error against wall time per simulated second,
 // log-log, Pareto front marked). The haptic tick of the scenario is kept:
-// each asked dt becomes tick / round(tick / dt). SI units.
+// each asked dt becomes tick / round(tick / dt). SI units. Sharded, the
+// reference runs once (--reference-only) into files every shard reads
+// (core/stability/study_files.h), and --collect writes the same table.
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,31 +14,29 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <iostream>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <thread>
 
 #include "app/backend_factory.h"
 #include "app/command.h"
 #include "app/scenario_mesh.h"
+#include "app/study_tables.h"
 #include "app/sweep_runner.h"
 #include "core/run/prepare_run.h"
 #include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/stability/study.h"
+#include "core/stability/study_files.h"
+#include "core/sweep/shard.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
-
-#ifdef ORGANSIM_STUDY_PLOT
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-#endif
 
 namespace organsim::app {
 namespace {
@@ -54,21 +55,16 @@ struct StudyArgs {
   int32_t samples = 50;          // position samples per run
   int32_t threads = 0;
   int32_t jobs = 1;              // configurations run at once
+  bool reference_only = false;   // write the reference and the plan for shards, run no configuration
+  std::string shard;             // "i/N" or "slurm": run that slice against the written reference
+  std::string collect;           // OUTDIR: the table from the shards' runs
 };
 
-struct Outcome {
-  std::string backend, precision, device;
-  double dt = 0;
-  int32_t substeps = 0;
-  bool ran = false;        // false: the backend could not be created
-  bool stable = false;
-  std::string reason;      // why unstable or not run
-  double simulated = 0;    // s
-  double wall = 0;         // s, stepping loop
-  double steps_per_second = 0;
-  StudyErrors errors;
-  Trajectory trajectory;
-};
+// The files a sharded study shares in OUTDIR (core/stability/study_files.h).
+fs::path plan_path(const fs::path& outdir) { return outdir / "study_plan.json"; }
+fs::path reference_path(const fs::path& outdir) { return outdir / "study_reference.json"; }
+fs::path runs_dir(const fs::path& outdir) { return outdir / "study_runs"; }
+fs::path run_path(const fs::path& outdir, size_t k) { return runs_dir(outdir) / (std::to_string(k) + ".json"); }
 
 std::string fmt(double v, const char* spec = "%.4g") {
   char buf[64];
@@ -76,10 +72,18 @@ std::string fmt(double v, const char* spec = "%.4g") {
   return buf;
 }
 
-Outcome run_configuration(const Scenario& base, const Model& model, const std::string& backend_name,
+// A configuration's outcome and, for comparison, its trajectory.
+struct Ran {
+  StudyOutcome outcome;
+  Trajectory trajectory;
+};
+
+Ran run_configuration(const Scenario& base, const Model& model, const std::string& backend_name,
                           const std::string& precision, int32_t substeps, int32_t threads, int64_t sample_every,
                           const PreparedRun& prepared) {
-  Outcome o;
+  Ran ran;
+  StudyOutcome& o = ran.outcome;
+  Trajectory& trajectory = ran.trajectory;
   o.backend = backend_name;
   o.precision = precision;
   Scenario s = base;
@@ -98,15 +102,15 @@ Outcome run_configuration(const Scenario& base, const Model& model, const std::s
     backend = make_backend(selection, model, backend_tool(s));
   } catch (const Error& e) {
     o.reason = e.what();
-    return o;
+    return ran;
   }
   prepared.start(*backend);  // the settled start
   o.ran = true;
   o.device = backend->device();
-  o.trajectory.latency_ticks = backend->reaction_latency_ticks();
+  trajectory.latency_ticks = backend->reaction_latency_ticks();
   // Every tick: when a configuration goes unstable is what the study reports.
   BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, 1);
-  PositionSampler sampler(sample_every, o.trajectory);
+  PositionSampler sampler(sample_every, trajectory);
   RunOptions options;
   options.observers = {&monitor, &sampler};
   const auto start = std::chrono::steady_clock::now();
@@ -116,112 +120,15 @@ Outcome run_configuration(const Scenario& base, const Model& model, const std::s
     o.wall = r.meta.wall_seconds;
     o.steps_per_second = r.meta.steps_per_second;
     o.simulated = static_cast<double>(r.samples.size()) * s.time.tick();
-    o.trajectory.force = r.samples.force;
+    trajectory.force = r.samples.force;
   } catch (const Error& e) {
     if (e.kind() != ErrorKind::Numerical) throw;
     o.stable = false;
     o.reason = e.what();
     o.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  return o;
+  return ran;
 }
-
-nlohmann::json outcome_json(const Outcome& o, const StabilityReport& st, bool pareto) {
-  nlohmann::json j = {{"backend", o.backend}, {"precision", o.precision}, {"dt", o.dt},
-                      {"substeps", o.substeps}, {"dt_over_dt_crit", o.dt / st.dt_crit}, {"ran", o.ran}};
-  if (!o.ran) {
-    j["error"] = o.reason;
-    return j;
-  }
-  j["device"] = o.device;
-  j["stable"] = o.stable;
-  j["reason"] = o.stable ? "completed; no blow-up detected" : o.reason;
-  if (o.stable) {
-    j["wall_seconds_per_simulated_second"] = o.wall / o.simulated;
-    j["steps_per_second"] = o.steps_per_second;
-    j["position_error_max"] = o.errors.position_max;
-    j["position_error_rms"] = o.errors.position_rms;
-    j["force_error_rms"] = o.errors.force_rms;
-    j["pareto"] = pareto;
-  }
-  return j;
-}
-
-#ifdef ORGANSIM_STUDY_PLOT
-// Log-log scatter of RMS position error against wall time per simulated
-// second; Pareto-front points joined and ringed. A small plot of our own so
-// core stays free of OpenCV.
-void write_plot(const fs::path& path, const std::vector<Outcome>& runs, const std::vector<bool>& front) {
-  const int W = 900, H = 600, L = 90, R = 250, T = 50, B = 70;
-  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
-  std::vector<size_t> idx;
-  for (size_t i = 0; i < runs.size(); ++i)
-    if (runs[i].ran && runs[i].stable && runs[i].errors.position_rms > 0) idx.push_back(i);
-  auto cost = [&](size_t i) { return runs[i].wall / runs[i].simulated; };
-  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (size_t i : idx) {
-    x0 = std::min(x0, std::log10(cost(i)));
-    x1 = std::max(x1, std::log10(cost(i)));
-    y0 = std::min(y0, std::log10(runs[i].errors.position_rms));
-    y1 = std::max(y1, std::log10(runs[i].errors.position_rms));
-  }
-  if (idx.empty()) x0 = y0 = -1, x1 = y1 = 0;
-  x0 = std::floor(x0), x1 = std::max(std::ceil(x1), x0 + 1), y0 = std::floor(y0), y1 = std::max(std::ceil(y1), y0 + 1);
-  auto px = [&](double lx) { return L + static_cast<int>((lx - x0) / (x1 - x0) * (W - L - R)); };
-  auto py = [&](double ly) { return H - B - static_cast<int>((ly - y0) / (y1 - y0) * (H - T - B)); };
-  const cv::Scalar black(0, 0, 0), grey(210, 210, 210);
-  for (double d = x0; d <= x1 + 1e-9; d += 1) {
-    cv::line(img, {px(d), T}, {px(d), H - B}, grey);
-    cv::putText(img, "1e" + fmt(d, "%.0f"), {px(d) - 15, H - B + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
-  }
-  for (double d = y0; d <= y1 + 1e-9; d += 1) {
-    cv::line(img, {L, py(d)}, {W - R, py(d)}, grey);
-    cv::putText(img, "1e" + fmt(d, "%.0f"), {L - 45, py(d) + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
-  }
-  cv::rectangle(img, {L, T}, {W - R, H - B}, black);
-  cv::putText(img, "wall time per simulated second [s]", {L + 120, H - 25}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black);
-  cv::putText(img, "RMS position error / bbox diagonal", {10, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black);
-  const cv::Scalar colours[] = {{200, 80, 30}, {30, 140, 230}, {60, 170, 60}, {160, 60, 200}};
-  std::vector<std::string> series;
-  auto series_of = [&](const Outcome& o) {
-    const std::string name = o.backend + " " + o.precision;
-    auto it = std::find(series.begin(), series.end(), name);
-    if (it == series.end()) {
-      series.push_back(name);
-      return series.size() - 1;
-    }
-    return static_cast<size_t>(it - series.begin());
-  };
-  std::vector<std::pair<double, size_t>> on_front;
-  for (size_t i : idx) {
-    const cv::Point p(px(std::log10(cost(i))), py(std::log10(runs[i].errors.position_rms)));
-    const cv::Scalar c = colours[series_of(runs[i]) % 4];
-    cv::circle(img, p, 5, c, cv::FILLED);
-    cv::putText(img, fmt(runs[i].dt, "%.2g"), p + cv::Point(7, -6), cv::FONT_HERSHEY_SIMPLEX, 0.35, c);
-    if (front[i]) {
-      cv::circle(img, p, 10, black, 2);
-      on_front.push_back({cost(i), i});
-    }
-  }
-  std::sort(on_front.begin(), on_front.end());
-  for (size_t k = 1; k < on_front.size(); ++k) {
-    const size_t a = on_front[k - 1].second, b = on_front[k].second;
-    cv::line(img, {px(std::log10(cost(a))), py(std::log10(runs[a].errors.position_rms))},
-             {px(std::log10(cost(b))), py(std::log10(runs[b].errors.position_rms))}, black, 1, cv::LINE_AA);
-  }
-  for (size_t k = 0; k < series.size(); ++k) {
-    cv::circle(img, {W - R + 25, T + 20 + 25 * static_cast<int>(k)}, 5, colours[k % 4], cv::FILLED);
-    cv::putText(img, series[k], {W - R + 40, T + 25 + 25 * static_cast<int>(k)}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black);
-  }
-  const int ly = T + 25 + 25 * static_cast<int>(series.size());
-  cv::circle(img, {W - R + 25, ly - 5}, 10, black, 2);
-  cv::putText(img, "Pareto front", {W - R + 40, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black);
-  cv::putText(img, "labels: dt [s]", {W - R + 20, ly + 25}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", img, png)) throw Error(ErrorKind::Output, path.string() + ": PNG encoding failed");
-  write_file_atomically(path, [&](std::ostream& out) { out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size())); });
-}
-#endif
 
 void progress(int done, int total, const std::string& what) {
   if (!isatty(2)) return;
@@ -252,142 +159,274 @@ void run_jobs(size_t count, int jobs, const std::function<void(size_t)>& task) {
     if (e) std::rethrow_exception(e);
 }
 
-void study_command(const StudyArgs& args) {
-  Scenario s = load_scenario(args.scenario);
+
+// What every run of a study shares: the scenario, its model, the settled
+// start and the configurations in table order.
+struct StudySetup {
+  Scenario scenario;
+  Model model;
+  PreparedRun prepared;
+  double diag = 0;              // m, the rest bounding box's diagonal
+  int64_t sample_every = 1;     // ticks between position samples
+  int32_t threads = 0;          // per run
+  int32_t ref_substeps = 0;     // the reference's substeps; dt_ref / 2 takes twice as many
+  std::vector<StudyConfiguration> configurations;
+  nlohmann::json request;       // what a shard must share with the reference step
+};
+
+// Everything the runs' results depend on; the thread and job counts are not.
+nlohmann::json request_of(const StudyArgs& args) {
+  return {{"scenario_text", read_text_file(args.scenario)}, {"dt", args.dts}, {"backend", args.backends},
+          {"precision", args.precisions}, {"duration", args.duration}, {"ref_factor", args.ref_factor},
+          {"samples", args.samples}};
+}
+
+StudySetup set_up(const StudyArgs& args) {
+  StudySetup u;
+  u.scenario = load_scenario(args.scenario);
+  Scenario& s = u.scenario;
   if (args.duration > 0) s.time.duration = args.duration;
   const TetMesh mesh = load_scenario_mesh(s.mesh);
-  const Model model = build_scenario_model(s, mesh);
+  u.model = build_scenario_model(s, mesh);
   // Every configuration, the reference included, starts from the scenario's
   // start at rest (time.settle), so the study compares only what the tool does.
-  const PreparedRun prepared = prepare_run(s, model, {true, args.threads});
-  const StabilityReport& stability = prepared.stability;
-  const double tick = s.time.tick();
-  Vec3 lo = model.rest_position[0], hi = lo;
-  for (const Vec3& p : model.rest_position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const double diag = (hi - lo).norm();
-  const int64_t sample_every = std::max<int64_t>(1, s.time.ticks() / std::max(args.samples, 1));
+  u.prepared = prepare_run(s, u.model, {true, args.threads});
+  Vec3 lo = u.model.rest_position[0], hi = lo;
+  for (const Vec3& p : u.model.rest_position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  u.diag = (hi - lo).norm();
+  u.sample_every = std::max<int64_t>(1, s.time.ticks() / std::max(args.samples, 1));
 
+  const double tick = s.time.tick();
   std::vector<int32_t> substeps;
   for (double dt : args.dts) {
     if (!(dt > 0)) throw Error(ErrorKind::Usage, "--dt: expected positive steps in s, got " + fmt(dt));
     substeps.push_back(std::max<int32_t>(1, static_cast<int32_t>(std::lround(tick / dt))));
   }
-  const int32_t finest = *std::max_element(substeps.begin(), substeps.end());
-  const int32_t ref_substeps = finest * args.ref_factor;
-  const int total = 2 + static_cast<int>(substeps.size() * args.backends.size() * args.precisions.size());
-  int done = 0;
+  u.ref_substeps = *std::max_element(substeps.begin(), substeps.end()) * args.ref_factor;
+  for (const std::string& b : args.backends)
+    for (const std::string& p : args.precisions)
+      for (int32_t n : substeps) u.configurations.push_back({b, p, n});
   // With --jobs N the runs share the CPUs: each gets its share of threads
   // (results do not depend on the thread count, so they equal a serial
   // study's; run times do, which is why one job is the default).
-  const int32_t threads = args.threads > 0 || args.jobs <= 1 ? args.threads : std::max(1, usable_cpus() / args.jobs);
-  std::mutex progress_mutex, gl_mutex;
-  const auto step = [&](const std::string& what) {
-    const std::lock_guard<std::mutex> lock(progress_mutex);
-    progress(++done, total, what);
-  };
+  u.threads = args.threads > 0 || args.jobs <= 1 ? args.threads : std::max(1, usable_cpus() / args.jobs);
+  u.request = request_of(args);
+  return u;
+}
 
-  // The converged reference: double CPU at dt_ref and dt_ref / 2.
-  progress(done, total, "reference dt " + fmt(tick / ref_substeps) + " and " + fmt(tick / (2 * ref_substeps)));
-  Outcome ref, half;
+Ran run_one(const StudySetup& u, const std::string& backend, const std::string& precision, int32_t substeps) {
+  return run_configuration(u.scenario, u.model, backend, precision, substeps, u.threads, u.sample_every, u.prepared);
+}
+
+// The converged reference, double CPU at dt_ref and dt_ref / 2, and the head
+// of study.json. Returns the dt_ref / 2 trajectory, the one compared with.
+Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::json& head) {
+  const double tick = u.scenario.time.tick();
+  progress(0, 2, "reference dt " + fmt(tick / u.ref_substeps) + " and " + fmt(tick / (2 * u.ref_substeps)));
+  Ran ref, half;
+  std::mutex progress_mutex;
+  int done = 0;
   run_jobs(2, args.jobs, [&](size_t i) {
-    Outcome& o = i == 0 ? ref : half;
-    o = run_configuration(s, model, "cpu", "double", static_cast<int32_t>(i + 1) * ref_substeps, threads, sample_every,
-                          prepared);
-    step("reference dt " + fmt(o.dt));
+    Ran& o = i == 0 ? ref : half;
+    o = run_one(u, "cpu", "double", static_cast<int32_t>(i + 1) * u.ref_substeps);
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    progress(++done, 2, "reference dt " + fmt(o.outcome.dt));
   });
-  if (!ref.stable || !half.stable)
-    throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + fmt(half.dt) +
-                                          " s) did not complete: " + (half.stable ? ref.reason : half.reason));
-  const StudyErrors convergence = compare_trajectories(ref.trajectory, half.trajectory, diag);
+  if (!ref.outcome.stable || !half.outcome.stable)
+    throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + fmt(half.outcome.dt) +
+                                          " s) did not complete: " +
+                                          (half.outcome.stable ? ref.outcome.reason : half.outcome.reason));
+  const StudyErrors convergence = compare_trajectories(ref.trajectory, half.trajectory, u.diag);
   const bool converged = convergence.position_max <= args.ref_tolerance;
   if (!converged)
     std::cerr << "organsim: warning: the reference is not converged: halving dt_ref changed positions by "
               << fmt(convergence.position_max) << " of the bbox diagonal (tolerance " << fmt(args.ref_tolerance)
               << "); use a larger --ref-factor\n";
 
-  struct Configuration {
-    std::string backend, precision;
-    int32_t substeps = 0;
-  };
-  std::vector<Configuration> configurations;
-  for (const std::string& b : args.backends)
-    for (const std::string& p : args.precisions)
-      for (int32_t n : substeps) configurations.push_back({b, p, n});
-  std::vector<Outcome> runs(configurations.size());
-  run_jobs(configurations.size(), args.jobs, [&](size_t i) {
-    const Configuration& c = configurations[i];
+  const Model& model = u.model;
+  head = nlohmann::json::object();
+  head["scenario"] = args.scenario;
+  head["units"] = "SI: dt s, wall time per simulated second s/s; errors relative (positions to the bbox diagonal, "
+                  "forces to the reference's peak)";
+  head["model"] = {{"points", model.npoint()}, {"springs", model.nspring()}, {"tets", model.ntet()},
+                   {"bbox_diagonal", u.diag}};
+  head["tick"] = tick;
+  head["duration"] = u.scenario.time.duration;
+  head["step_policy"] = "the haptic tick is kept: each asked dt becomes tick / round(tick / dt)";
+  head["stability"] = to_json(u.prepared.stability);
+  head["reference"] = {{"backend", "cpu"}, {"precision", "double"}, {"dt", ref.outcome.dt},
+                       {"dt_half", half.outcome.dt}, {"compared_against", "dt_half"},
+                       {"halving_position_change_max", convergence.position_max},
+                       {"halving_position_change_rms", convergence.position_rms},
+                       {"halving_force_change_rms", convergence.force_rms},
+                       {"tolerance", args.ref_tolerance}, {"converged", converged}};
+  return std::move(half.trajectory);
+}
+
+// Runs configurations `which` (indices into u.configurations), `jobs` at a
+// time, each compared with `reference`; done(k, outcome) as each finishes.
+void run_configurations(const StudyArgs& args, const StudySetup& u, const std::vector<size_t>& which,
+                        const Trajectory& reference, const std::function<void(size_t, StudyOutcome&&)>& done) {
+  std::mutex progress_mutex, gl_mutex;
+  int finished = 0;
+  run_jobs(which.size(), args.jobs, [&](size_t i) {
+    const StudyConfiguration& c = u.configurations[which[i]];
     // GL runs one at a time: each holds its own context, and they would
     // share one device.
     std::unique_lock<std::mutex> gl_lock(gl_mutex, std::defer_lock);
     if (c.backend == "gl") gl_lock.lock();
-    Outcome o = run_configuration(s, model, c.backend, c.precision, c.substeps, threads, sample_every, prepared);
-    if (o.stable) o.errors = compare_trajectories(o.trajectory, half.trajectory, diag);
-    o.trajectory = Trajectory{};  // keep memory flat
-    runs[i] = std::move(o);
-    step(c.backend + " " + c.precision + " dt " + fmt(tick / c.substeps));
+    Ran o = run_one(u, c.backend, c.precision, c.substeps);
+    if (o.outcome.stable) o.outcome.errors = compare_trajectories(o.trajectory, reference, u.diag);
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    progress(++finished, static_cast<int>(which.size()),
+             c.backend + " " + c.precision + " dt " + fmt(u.scenario.time.tick() / c.substeps));
+    done(which[i], std::move(o.outcome));
   });
+}
 
-  std::vector<double> cost, error;
-  for (const Outcome& o : runs) {
-    const bool ok = o.ran && o.stable;
-    cost.push_back(ok ? o.wall / o.simulated : NAN);
-    error.push_back(ok ? o.errors.position_rms : NAN);
-  }
-  const std::vector<bool> front = pareto_front(cost, error);
+fs::path outdir_of(const StudyArgs& args) {
+  return args.outdir.empty() ? fs::path("out") / (fs::path(args.scenario).stem().string() + "_study")
+                             : fs::path(args.outdir);
+}
 
-  const fs::path outdir = args.outdir.empty() ? fs::path("out") / (fs::path(args.scenario).stem().string() + "_study")
-                                              : fs::path(args.outdir);
+// --reference-only: the reference and the plan for the shards. Earlier
+// shards' runs are removed first (they may belong to another plan); the plan
+// is written last, so a plan on disk means its reference is complete.
+void write_reference(const StudyArgs& args, const StudySetup& u) {
+  nlohmann::json head;
+  const Trajectory reference = run_reference(args, u, head);
+  const fs::path outdir = outdir_of(args);
   fs::create_directories(outdir);
-  nlohmann::json j;
-  j["scenario"] = args.scenario;
-  j["units"] = "SI: dt s, wall time per simulated second s/s; errors relative (positions to the bbox diagonal, "
-               "forces to the reference's peak)";
-  j["model"] = {{"points", model.npoint()}, {"springs", model.nspring()}, {"tets", model.ntet()},
-                {"bbox_diagonal", diag}};
-  j["tick"] = tick;
-  j["duration"] = s.time.duration;
-  j["step_policy"] = "the haptic tick is kept: each asked dt becomes tick / round(tick / dt)";
-  j["stability"] = to_json(stability);
-  j["reference"] = {{"backend", "cpu"}, {"precision", "double"}, {"dt", ref.dt}, {"dt_half", half.dt},
-                    {"compared_against", "dt_half"},
-                    {"halving_position_change_max", convergence.position_max},
-                    {"halving_position_change_rms", convergence.position_rms},
-                    {"halving_force_change_rms", convergence.force_rms},
-                    {"tolerance", args.ref_tolerance}, {"converged", converged}};
-  j["runs"] = nlohmann::json::array();
-  for (size_t i = 0; i < runs.size(); ++i) j["runs"].push_back(outcome_json(runs[i], stability, front[i]));
-  write_file_atomically(outdir / "study.json", [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+  fs::remove(plan_path(outdir));
+  fs::remove_all(runs_dir(outdir));
+  fs::create_directories(runs_dir(outdir));
+  write_file_atomically(reference_path(outdir), [&](std::ostream& out) { out << trajectory_json(reference).dump() << "\n"; });
+  StudyPlan plan{u.request, head, u.configurations, u.prepared.stability.dt_crit};
+  write_file_atomically(plan_path(outdir), [&](std::ostream& out) { out << plan_json(plan).dump(2) << "\n"; });
+  std::cout << "reference: " << reference_path(outdir).string() << "; plan: " << plan_path(outdir).string() << ", "
+            << u.configurations.size() << " configurations\n"
+            << "next: the same command with --shard i/N (or --shard slurm) instead of --reference-only, then "
+               "organsim study --collect " << outdir.string() << "\n";
+}
 
-  std::ostringstream csv;
-  csv << "backend,precision,dt_s,substeps,dt_over_dt_crit,stable,wall_s_per_sim_s,steps_per_s,"
-         "position_error_max,position_error_rms,force_error_rms,pareto,reason\n";
-  for (size_t i = 0; i < runs.size(); ++i) {
-    const Outcome& o = runs[i];
-    std::string reason = o.stable ? "" : o.reason;
-    std::replace(reason.begin(), reason.end(), '"', '\'');
-    csv << o.backend << "," << o.precision << "," << fmt(o.dt, "%.6g") << "," << o.substeps << ","
-        << fmt(o.dt / stability.dt_crit, "%.3f") << "," << (o.ran ? (o.stable ? "yes" : "no") : "not run") << ",";
-    if (o.stable)
-      csv << fmt(o.wall / o.simulated) << "," << fmt(o.steps_per_second) << "," << fmt(o.errors.position_max) << ","
-          << fmt(o.errors.position_rms) << "," << fmt(o.errors.force_rms) << "," << (front[i] ? "yes" : "no");
-    else
-      csv << ",,,,,";
-    csv << ",\"" << reason << "\"\n";
+StudyPlan read_plan(const fs::path& outdir) {
+  const fs::path path = plan_path(outdir);
+  if (!fs::exists(path))
+    throw input_error(path.string(), "no such file: run the same study with --reference-only first "
+                                     "(docs/stability.md, \"Shards\")");
+  return parse_study_plan(read_study_file(path.string()), path.string());
+}
+
+// --shard: this slice of the configurations against the written reference,
+// each outcome in study_runs/<k>.json as soon as it is known.
+// The plan a shard runs: written for the same arguments and scenario text
+// (checked before the model is built and settled).
+StudyPlan plan_for_shard(const StudyArgs& args) {
+  const fs::path outdir = outdir_of(args);
+  const StudyPlan plan = read_plan(outdir);
+  const nlohmann::json request = request_of(args);
+  if (plan.request != request) {
+    std::string what = "arguments";
+    for (const auto& [key, value] : request.items())
+      if (plan.request.value(key, nlohmann::json()) != value) {
+        what = key == "scenario_text" ? "scenario file content" : "--" + key + " (it has " +
+                                                                      plan.request.value(key, nlohmann::json()).dump() + ")";
+        break;
+      }
+    throw Error(ErrorKind::Usage, plan_path(outdir).string() + ": the reference was written for other " + what +
+                                      "; run each shard with the arguments of the --reference-only step");
   }
-  write_file_atomically(outdir / "study.csv", [&](std::ostream& out) { out << csv.str(); });
+  return plan;
+}
 
-  std::cout << "reference: cpu double dt " << fmt(half.dt) << " s; halving dt_ref changed positions by "
-            << fmt(convergence.position_max) << " (max) of the bbox diagonal: "
-            << (converged ? "converged" : "NOT converged") << "\n";
-  std::cout << "dt_crit " << fmt(stability.dt_crit) << " s\n";
-  std::cout << csv.str();
-#ifdef ORGANSIM_STUDY_PLOT
-  write_plot(outdir / "study.png", runs, front);
-  std::cout << "study: " << (outdir / "study.json").string() << ", study.csv, study.png\n";
-#else
-  throw Error(ErrorKind::Output, (outdir / "study.png").string() +
-                                     ": not written, this build has no OpenCV (study.json and study.csv are there)");
-#endif
+void run_shard(const StudyArgs& args, const Shard& shard, const StudyPlan& plan, const StudySetup& u) {
+  const fs::path outdir = outdir_of(args);
+  const std::string plan_name = plan_path(outdir).string();
+  const nlohmann::json model = {{"points", u.model.npoint()}, {"tets", u.model.ntet()}};
+  // parse_study_plan checked that both are whole numbers.
+  if (plan.head["model"]["points"] != u.model.npoint() || plan.head["model"]["tets"] != u.model.ntet())
+    throw Error(ErrorKind::Usage, plan_name + ": the reference's model differs from this one (" + model.dump() +
+                                      "): the mesh changed since --reference-only");
+  const Trajectory reference =
+      parse_trajectory(read_study_file(reference_path(outdir).string()), reference_path(outdir).string());
+  for (const auto& sample : reference.positions)
+    if (static_cast<int64_t>(sample.size()) != u.model.npoint())
+      throw input_error(reference_path(outdir).string(), "positions: expected " +
+                                                             std::to_string(u.model.npoint()) + " points per sample");
+  // A configuration with an outcome is done (the reference step emptied
+  // study_runs/): a resubmitted shard runs only what is missing.
+  std::vector<size_t> which;
+  size_t done = 0;
+  for (size_t k = 0; k < u.configurations.size(); ++k)
+    if (shard.takes(k)) {
+      if (fs::exists(run_path(outdir, k)))
+        ++done;
+      else
+        which.push_back(k);
+    }
+  std::cout << "study shard " << shard.index << "/" << shard.count << ": " << which.size() + done << " of "
+            << u.configurations.size() << " configurations, " << done << " done before, " << which.size()
+            << " to run\n" << std::flush;
+  run_configurations(args, u, which, reference, [&](size_t k, StudyOutcome&& o) {
+    write_file_atomically(run_path(outdir, k), [&](std::ostream& out) { out << outcome_record_json(o).dump(2) << "\n"; });
+    std::cout << "configuration " << k << " (" << o.backend << " " << o.precision << " dt " << fmt(o.dt) << "): "
+              << (o.ran ? (o.stable ? "stable" : "unstable") : "not run") << " -> " << run_path(outdir, k).string()
+              << std::endl;
+  });
+}
+
+// --collect: the table from the plan and every configuration's outcome.
+void collect_study(const fs::path& outdir) {
+  const StudyPlan plan = read_plan(outdir);
+  std::vector<StudyOutcome> runs;
+  std::string missing;
+  for (size_t k = 0; k < plan.configurations.size(); ++k) {
+    const fs::path path = run_path(outdir, k);
+    const StudyConfiguration& c = plan.configurations[k];
+    if (!fs::exists(path)) {
+      missing += (missing.empty() ? "" : ", ") + std::to_string(k) + " (" + c.backend + " " + c.precision + ")";
+      continue;
+    }
+    StudyOutcome o = parse_outcome_record(read_study_file(path.string()), path.string());
+    if (o.backend != c.backend || o.precision != c.precision || o.substeps != c.substeps)
+      throw input_error(path.string(), "expected configuration " + std::to_string(k) + " of the plan (" + c.backend +
+                                           " " + c.precision + ", " + std::to_string(c.substeps) + " substeps)");
+    runs.push_back(std::move(o));
+  }
+  if (!missing.empty())
+    throw Error(ErrorKind::Cases, outdir.string() + ": no outcome yet for configurations " + missing +
+                                      " (run or rerun the shards that take them)");
+  write_study_outputs(outdir, plan.head, plan.dt_crit, runs);
+}
+
+void study_command(const StudyArgs& args) {
+  if (!args.collect.empty()) {
+    if (!args.scenario.empty() || !args.dts.empty() || args.reference_only || !args.shard.empty())
+      throw Error(ErrorKind::Usage, "--collect OUTDIR takes no scenario, --dt, --shard or --reference-only "
+                                    "(the folder has the plan)");
+    collect_study(args.collect);
+    return;
+  }
+  if (args.scenario.empty() || args.dts.empty())
+    throw Error(ErrorKind::Usage, "a scenario and --dt are required (or --collect OUTDIR)");
+  if (args.reference_only && !args.shard.empty())
+    throw Error(ErrorKind::Usage, "--reference-only and --shard are separate steps; give one");
+  if (!args.shard.empty()) {
+    // The slice and the plan are checked before the model is built and anything runs.
+    const Shard shard = parse_shard(args.shard, [](const char* n) { return std::getenv(n); });
+    const StudyPlan plan = plan_for_shard(args);
+    return run_shard(args, shard, plan, set_up(args));
+  }
+  const StudySetup u = set_up(args);
+  if (args.reference_only) return write_reference(args, u);
+
+  nlohmann::json head;
+  const Trajectory reference = run_reference(args, u, head);
+  std::vector<size_t> all(u.configurations.size());
+  for (size_t k = 0; k < all.size(); ++k) all[k] = k;
+  std::vector<StudyOutcome> runs(all.size());
+  run_configurations(args, u, all, reference, [&](size_t k, StudyOutcome&& o) { runs[k] = std::move(o); });
+  write_study_outputs(outdir_of(args), head, u.prepared.stability.dt_crit, runs);
 }
 
 const bool registered = register_command("study", 40, [](CLI::App& root) {
@@ -395,9 +434,8 @@ const bool registered = register_command("study", 40, [](CLI::App& root) {
   CLI::App* cmd = root.add_subcommand(
       "study", "Error against run time: run a scenario at several dt [s], backends and precisions, compare each "
                "with a converged double-precision CPU reference, write study.json, study.csv and study.png");
-  cmd->add_option("scenario", args->scenario, "Scenario file (see docs/scenarios.md)")->required();
+  cmd->add_option("scenario", args->scenario, "Scenario file (see docs/scenarios.md)");
   cmd->add_option("--dt", args->dts, "Integration steps to try, s (comma-separated); the tick is kept")
-      ->required()
       ->delimiter(',');
   cmd->add_option("--backend", args->backends, "Backends (comma-separated: cpu, gl)")->delimiter(',');
   cmd->add_option("--precision", args->precisions, "Precisions (comma-separated: double, float)")->delimiter(',');
@@ -415,6 +453,12 @@ const bool registered = register_command("study", 40, [](CLI::App& root) {
                   "Configurations run at once (default 1: the wall times are the study's cost axis, and runs "
                   "side by side slow each other; the errors are the same)")
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--reference-only", args->reference_only,
+                "Run only the reference and write it with the plan into OUTDIR, for --shard runs (docs/cluster.md)");
+  cmd->add_option("--shard", args->shard,
+                  "Run only slice i of N of the configurations (i/N: i, i+N, ...) against the reference "
+                  "--reference-only wrote, or \"slurm\": the slice of this Slurm array task");
+  cmd->add_option("--collect", args->collect, "Write study.json, study.csv and study.png from OUTDIR's shards");
   cmd->callback([args] { study_command(*args); });
 });
 

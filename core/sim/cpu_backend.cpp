@@ -208,7 +208,8 @@ class CpuBackend final : public Backend {
       case Pass::SurfaceContact:
         return "sphere against " + std::to_string(m.nsurface()) +
                " surface triangles, broad phase: the sphere against each triangle's box; each touching "
-               "triangle's penalty at its closest point, spread to its corners (one thread, triangle order)";
+               "triangle's penalty at its closest point, spread to its corners (box tests on the step's threads, "
+               "penalties on one thread in triangle order)";
       case Pass::ToolContact:
         return plan_.tool == ToolTerm::Push      ? "sphere penalty contact on the points"
                : plan_.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
@@ -238,11 +239,8 @@ class CpuBackend final : public Backend {
   void positions(std::vector<Vec3>& out) const override {
     out.resize(u_.x.size());
     if (fast_) {
-      Real u[3], d[3];
-      for (size_t i = 0; i < out.size(); ++i) {
-        fast_->get_point(static_cast<int32_t>(i), u, d);
-        out[i] = model_->rest_position[i] + Vec3(u[0], u[1], u[2]);
-      }
+      const Real *ux = fast_->displacement(0), *uy = fast_->displacement(1), *uz = fast_->displacement(2);
+      for (size_t i = 0; i < out.size(); ++i) out[i] = model_->rest_position[i] + Vec3(ux[i], uy[i], uz[i]);
       return;
     }
     for (size_t i = 0; i < out.size(); ++i) out[i] = model_->rest_position[i] + displacement(u_, i);
@@ -439,21 +437,11 @@ class CpuBackend final : public Backend {
   // The surface-contact pass at this substep's positions (X + u): the
   // kernels' tool pass then adds its per-point forces.
   void surface_contact(KernelStepInputs<Real>& ctx) {
-    if (fast_) {
-      surface_.evaluate(
-          [&](int32_t p, Real x[3]) {
-            Real u[3], d[3];
-            fast_->get_point(p, u, d);
-            x[0] = rest_.x[p] + u[0], x[1] = rest_.y[p] + u[1], x[2] = rest_.z[p] + u[2];
-          },
-          ctx.tool_center, ctx.tool_radius, ctx.tool_k);
-    } else {
-      surface_.evaluate(
-          [&](int32_t p, Real x[3]) {
-            x[0] = rest_.x[p] + u_.x[p], x[1] = rest_.y[p] + u_.y[p], x[2] = rest_.z[p] + u_.z[p];
-          },
-          ctx.tool_center, ctx.tool_radius, ctx.tool_k);
-    }
+    const std::array<const Real*, 3> rest = {rest_.x.data(), rest_.y.data(), rest_.z.data()};
+    const std::array<const Real*, 3> u =
+        fast_ ? std::array<const Real*, 3>{fast_->displacement(0), fast_->displacement(1), fast_->displacement(2)}
+              : std::array<const Real*, 3>{u_.x.data(), u_.y.data(), u_.z.data()};
+    surface_.evaluate(rest, u, ctx.tool_center, ctx.tool_radius, ctx.tool_k, threads_);
     ctx.contact_slot = surface_.slot();
     ctx.contact_force = surface_.force();
   }

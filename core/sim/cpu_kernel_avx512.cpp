@@ -149,6 +149,11 @@ void Avx512Kernel<Real>::get_point(int32_t p, Real u[3], Real d[3]) const {
 }
 
 template <class Real>
+const Real* Avx512Kernel<Real>::displacement(int k) const {
+  return data_->u[data_->cur][k].data();
+}
+
+template <class Real>
 void Avx512Kernel<Real>::set_spring_rest(int32_t e, Real rest) {
   data_->spring_rest[e] = rest;
 }

@@ -56,6 +56,10 @@ class Avx512Kernel {
   // State of point p: displacement u = x - X and step increment d = u_t - u_{t-1}.
   void get_point(int32_t p, Real u[3], Real d[3]) const;
   void set_point(int32_t p, const Real u[3], const Real d[3]);
+  // Axis k of every point's displacement (npoint and more: padding), valid
+  // until the next step: for readers of many points (the surface contact,
+  // positions()) without a call per point.
+  const Real* displacement(int k) const;
 
   // The rest length of the spring in layout slot e (sutures, per tick).
   void set_spring_rest(int32_t e, Real rest);

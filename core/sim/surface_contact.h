@@ -9,11 +9,16 @@
 //
 // Broad phase: the sphere against each triangle's bounding box at the
 // current positions, so a triangle away from the tool costs a box test and
-// an untouched point nothing in the kernels. One thread, in triangle order:
-// the result does not depend on the thread count.
+// an untouched point nothing in the kernels. The box tests are independent
+// per triangle and may run on several threads; the penalties are summed on
+// one thread, in triangle order: the result does not depend on the thread
+// count.
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "core/model/model.h"
@@ -36,11 +41,12 @@ class SurfaceContact {
         local_of_point_[p] = static_cast<int32_t>(points_.size());
         points_.push_back(p);
       }
-    tris_.resize(model.surface.size());
-    for (auto& v : corner_) v.resize(tris_.size());
-    near_.assign(tris_.size(), 0);
-    for (size_t t = 0; t < tris_.size(); ++t)
-      for (int k = 0; k < 3; ++k) corner_[k][t] = tris_[t][k] = local_of_point_[model.surface[t][k]];
+    const size_t ntri = model.surface.size();
+    for (auto& v : corner_) v.resize(ntri);
+    for (size_t t = 0; t < ntri; ++t)
+      for (int k = 0; k < 3; ++k) corner_[k][t] = local_of_point_[model.surface[t][k]];
+    // Whole 8-byte words, the tail zero: the narrow phase skips 8 far triangles at a time.
+    near_.assign((ntri + 7) / 8 * 8, 0);
     share_.resize(points_.size());
     for (size_t i = 0; i < points_.size(); ++i)
       share_[i] = scale[points_[i]] / static_cast<Real>(model.surface_count(points_[i]));
@@ -51,24 +57,85 @@ class SurfaceContact {
   }
 
   // Forces for the sphere (centre c, radius R, penalty k N/m) with every
-  // surface point at position(p, x[3]) (internal id p).
-  template <class Position>
-  void evaluate(Position position, const Real center[3], Real radius, Real k) {
+  // point p at rest[axis][p] + u[axis][p] (internal ids, the backend's
+  // streams); the positions and box tests on up to `threads` threads.
+  void evaluate(const std::array<const Real*, 3>& rest, const std::array<const Real*, 3>& u, const Real center[3],
+                Real radius, Real k, int threads) {
     for (int32_t p : touched_) slot_[p] = -1;
     touched_.clear();
     force_.clear();
-    const size_t n = points_.size();
-    for (size_t i = 0; i < n; ++i) {
-      Real x[3];
-      position(points_[i], x);
-      x_[i] = x[0], y_[i] = x[1], z_[i] = x[2];
-    }
     using V3 = Eigen::Matrix<Real, 3, 1>;
     const V3 c(center[0], center[1], center[2]);
     const Real r2 = radius * radius;
-    // Broad phase, vectorised over triangles: the squared distance from the
-    // centre to each triangle's box.
-    const int32_t ntri = static_cast<int32_t>(tris_.size());
+    const int32_t npoint = static_cast<int32_t>(points_.size()), ntri = triangles();
+    const int32_t* ta = corner_[0].data();
+    const int32_t* tb = corner_[1].data();
+    const int32_t* tc = corner_[2].data();
+    const uint8_t* near = near_.data();
+    const Real* X = x_.data();
+    const Real* Y = y_.data();
+    const Real* Z = z_.data();
+#pragma omp parallel num_threads(threads) if (threads > 1)
+    {
+      // Each thread its share of the points, then of the triangles (the
+      // loops are functions of their own so that they vectorise as in a
+      // serial build).
+      const int32_t n = omp_get_num_threads(), i = omp_get_thread_num();
+      gather_positions(i * npoint / n, (i + 1) * npoint / n, rest, u);
+#pragma omp barrier
+      box_tests(i * ntri / n, (i + 1) * ntri / n, c[0], c[1], c[2], r2);
+    }
+    for (int32_t word = 0; word < ntri; word += 8) {
+      uint64_t any;
+      std::memcpy(&any, near + word, sizeof any);
+      if (any == 0) continue;
+      for (int32_t i = word; i < word + 8; ++i) {
+        if (!near[i]) continue;
+        const int32_t corner[3] = {ta[i], tb[i], tc[i]};
+        auto at = [&](int32_t j) { return V3(X[j], Y[j], Z[j]); };
+        const Real share[3] = {share_[corner[0]], share_[corner[1]], share_[corner[2]]};
+        V3 f;
+        Real w[3];
+        if (!force_law::sphere_triangle_penalty(c, radius, at(corner[0]), at(corner[1]), at(corner[2]), k, share, f, w))
+          continue;
+        for (int j = 0; j < 3; ++j) {
+          const int32_t p = points_[corner[j]];
+          if (slot_[p] < 0) {
+            slot_[p] = static_cast<int32_t>(touched_.size());
+            touched_.push_back(p);
+            force_.insert(force_.end(), 3, Real(0));
+          }
+          Real* fp = &force_[3 * static_cast<size_t>(slot_[p])];
+          for (int axis = 0; axis < 3; ++axis) fp[axis] += w[j] * f[axis];
+        }
+      }
+    }
+  }
+
+ private:
+  // Positions of surface points [begin, end) into x_, y_, z_.
+  __attribute__((noinline)) void gather_positions(int32_t begin, int32_t end, const std::array<const Real*, 3>& rest,
+                                                  const std::array<const Real*, 3>& u) {
+    const int32_t* __restrict point = points_.data();
+    const Real* __restrict RX = rest[0];
+    const Real* __restrict RY = rest[1];
+    const Real* __restrict RZ = rest[2];
+    const Real* __restrict UX = u[0];
+    const Real* __restrict UY = u[1];
+    const Real* __restrict UZ = u[2];
+    Real* __restrict X = x_.data();
+    Real* __restrict Y = y_.data();
+    Real* __restrict Z = z_.data();
+#pragma omp simd
+    for (int32_t i = begin; i < end; ++i) {
+      const int32_t p = point[i];
+      X[i] = RX[p] + UX[p], Y[i] = RY[p] + UY[p], Z[i] = RZ[p] + UZ[p];
+    }
+  }
+
+  // Broad phase for triangles [begin, end), vectorised: whether the squared
+  // distance from the centre to each triangle's box is below r2.
+  __attribute__((noinline)) void box_tests(int32_t begin, int32_t end, Real cx, Real cy, Real cz, Real r2) {
     const int32_t* __restrict ta = corner_[0].data();
     const int32_t* __restrict tb = corner_[1].data();
     const int32_t* __restrict tc = corner_[2].data();
@@ -76,9 +143,8 @@ class SurfaceContact {
     const Real* __restrict X = x_.data();
     const Real* __restrict Y = y_.data();
     const Real* __restrict Z = z_.data();
-    const Real cx = c[0], cy = c[1], cz = c[2];
 #pragma omp simd
-    for (int32_t t = 0; t < ntri; ++t) {
+    for (int32_t t = begin; t < end; ++t) {
       auto gap = [](Real p, Real u, Real v, Real w) {
         const Real lo = u < v ? (u < w ? u : w) : (v < w ? v : w), hi = u > v ? (u > w ? u : w) : (v > w ? v : w);
         return p < lo ? lo - p : p > hi ? p - hi : Real(0);
@@ -88,39 +154,20 @@ class SurfaceContact {
       const Real gz = gap(cz, Z[ta[t]], Z[tb[t]], Z[tc[t]]);
       near[t] = gx * gx + gy * gy + gz * gz < r2;
     }
-    for (int32_t i = 0; i < ntri; ++i) {
-      if (!near[i]) continue;
-      const auto& t = tris_[i];
-      const V3 a(x_[t[0]], y_[t[0]], z_[t[0]]), b(x_[t[1]], y_[t[1]], z_[t[1]]), e(x_[t[2]], y_[t[2]], z_[t[2]]);
-      const Real share[3] = {share_[t[0]], share_[t[1]], share_[t[2]]};
-      V3 f;
-      Real w[3];
-      if (!force_law::sphere_triangle_penalty(c, radius, a, b, e, k, share, f, w)) continue;
-      for (int j = 0; j < 3; ++j) {
-        const int32_t p = points_[t[j]];
-        if (slot_[p] < 0) {
-          slot_[p] = static_cast<int32_t>(touched_.size());
-          touched_.push_back(p);
-          force_.insert(force_.end(), 3, Real(0));
-        }
-        Real* fp = &force_[3 * static_cast<size_t>(slot_[p])];
-        for (int axis = 0; axis < 3; ++axis) fp[axis] += w[j] * f[axis];
-      }
-    }
   }
 
+ public:
   // Per point (lanes): index into force() or -1; 3 per touched point.
   const int32_t* slot() const { return slot_.data(); }
   const Real* force() const { return force_.data(); }
   int32_t touched() const { return static_cast<int32_t>(touched_.size()); }
-  int32_t triangles() const { return static_cast<int32_t>(tris_.size()); }
+  int32_t triangles() const { return static_cast<int32_t>(corner_[0].size()); }
 
  private:
   std::vector<int32_t> points_;          // surface points' internal ids, ascending
   std::vector<int32_t> local_of_point_;  // index into points_ or -1 (npoint)
-  std::vector<std::array<int32_t, 3>> tris_;  // corners as indices into points_
-  std::array<std::vector<int32_t>, 3> corner_;  // the same, one array per corner (the broad phase's gathers)
-  std::vector<uint8_t> near_;                  // per triangle: its box reaches into the sphere
+  std::array<std::vector<int32_t>, 3> corner_;  // each triangle's corners as indices into points_, one array per corner
+  std::vector<uint8_t> near_;            // per triangle: its box reaches into the sphere (8-byte words)
   std::vector<Real> share_;              // s_p / n_p per surface point (force_law::sphere_triangle_penalty)
   std::vector<Real> x_, y_, z_;          // surface points' positions this substep
   std::vector<int32_t> slot_;            // per lane

@@ -1,6 +1,7 @@
 // `organsim study` end to end on the small gentle-push box: the reference
 // converges, a dt above dt_crit is reported unstable with its reason, stable
-// runs have small errors that shrink with dt, and the three files are there.
+// runs have small errors that shrink with dt, and the three files are there;
+// sharded, collected, it gives the same table.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -8,7 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -140,6 +143,90 @@ TEST(StudyCli, JobsGiveTheSerialStudysResults) {
     unstable += !a["stable"].get<bool>();
   }
   EXPECT_EQ(unstable, 2);  // 2 ms in both precisions
+}
+
+// study.csv with the timing columns (wall_s_per_sim_s, steps_per_s and the
+// Pareto flag drawn from them) blanked: what must not depend on the run.
+std::string csv_without_timing(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, out;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::istringstream fields(line);
+    std::string cell;
+    for (int column = 0; column < 12 && std::getline(fields, cell, ','); ++column) cells.push_back(cell);
+    std::getline(fields, cell);  // the 13th, the reason, may hold commas
+    cells.push_back(cell);
+    if (cells.size() != 13) return "a line without 13 columns: " + line;
+    for (const int timing : {6, 7, 11}) cells[timing].clear();
+    for (const std::string& c : cells) out += c + ",";
+    out += "\n";
+  }
+  return out;
+}
+
+nlohmann::json without_timing(nlohmann::json study) {
+  for (auto& r : study["runs"])
+    for (const char* timing : {"wall_seconds_per_simulated_second", "steps_per_second", "pareto"}) r.erase(timing);
+  return study;
+}
+
+// The reference written once (--reference-only), shards 0/3, 1/3 and 2/3 run
+// as separate processes, and --collect: study.json equals the local study's
+// but for the timing entries (wall time, steps per second, the Pareto flag
+// drawn from them), every other number to the last bit (the shards read the
+// reference's exact values back), and study.csv line for line with the
+// timing columns blanked. The long-tick scenario gives unstable
+// configurations too.
+TEST(StudyCli, ShardsCollectedGiveTheLocalTable) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_shards";
+  write_long_tick_scenario(out, 0.05);
+  const std::string study = "study " + (out / "long_tick.json").string() +
+                            " --dt 0.002,0.0005,0.00025 --precision double,float --threads 1 -o ";
+  const fs::path local = out / "local", sharded = out / "sharded";
+  std::string output;
+  ASSERT_EQ(run(study + local.string(), output), 0) << output;
+  ASSERT_EQ(run(study + sharded.string() + " --reference-only", output), 0) << output;
+  EXPECT_FALSE(fs::exists(sharded / "study.json"));  // no configuration ran
+  for (const char* shard : {"0/3", "1/3", "2/3"}) {
+    // Before the last shard the table is incomplete: --collect says which are missing.
+    std::string collected;
+    EXPECT_EQ(run("study --collect " + sharded.string(), collected), 8) << collected;
+    EXPECT_NE(collected.find("no outcome yet for configurations"), std::string::npos) << collected;
+    ASSERT_EQ(run(study + sharded.string() + " --shard " + shard, output), 0) << output;
+  }
+  ASSERT_EQ(run("study --collect " + sharded.string(), output), 0) << output;
+
+  const nlohmann::json a = nlohmann::json::parse(std::ifstream(local / "study.json"));
+  const nlohmann::json b = nlohmann::json::parse(std::ifstream(sharded / "study.json"));
+  ASSERT_EQ(a["runs"].size(), 6u);
+  EXPECT_EQ(without_timing(a), without_timing(b));
+  EXPECT_EQ(csv_without_timing(local / "study.csv"), csv_without_timing(sharded / "study.csv"));
+  EXPECT_TRUE(fs::exists(sharded / "study.png"));
+}
+
+// A shard index out of range is refused before anything runs or is written;
+// a shard without the reference step, or with other arguments than it had,
+// is refused naming the plan and what differs.
+TEST(StudyCli, BadShardsAreRefusedBeforeAnyRun) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_bad_shards";
+  write_long_tick_scenario(out, 0.02);
+  const std::string study =
+      "study " + (out / "long_tick.json").string() + " --precision double --threads 1 -o " + (out / "s").string();
+  std::string output;
+  EXPECT_EQ(run(study + " --dt 0.0005 --shard 3/3", output), 2) << output;
+  EXPECT_NE(output.find("--shard: 3/3: shard index 3 out of range 0..2"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(out / "s"));
+  output.clear();
+  EXPECT_EQ(run(study + " --dt 0.0005 --shard 0/2", output), 3) << output;
+  EXPECT_NE(output.find("study_plan.json: no such file: run the same study with --reference-only first"),
+            std::string::npos)
+      << output;
+  ASSERT_EQ(run(study + " --dt 0.0005 --reference-only", output), 0) << output;
+  output.clear();
+  EXPECT_EQ(run(study + " --dt 0.00025 --shard 0/2", output), 2) << output;
+  EXPECT_NE(output.find("the reference was written for other --dt (it has [0.0005])"), std::string::npos) << output;
+  EXPECT_TRUE(fs::is_empty(out / "s" / "study_runs"));
 }
 
 }  // namespace

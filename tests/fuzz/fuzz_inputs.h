@@ -26,6 +26,7 @@
 #include "core/scenario/scenario.h"
 #include "core/run/run.h"
 #include "core/stability/critical_step.h"
+#include "core/stability/study_files.h"
 #include "core/sweep/case_names.h"
 #include "core/sweep/sweep_spec.h"
 #include "igtl/igtl_stream.h"
@@ -132,6 +133,35 @@ inline Sweep sweep_input(std::string_view text, const std::string& source) {
     require(!c.scenario_text.empty(), "sweep case without a scenario");
   }
   return sweep;
+}
+
+// kind study: the files a sharded `organsim study` shares (study_plan.json,
+// study_reference.json, study_runs/<k>.json), each read by the parser its
+// "format" names (any other: the plan's, which refuses it). An accepted file
+// survives a round trip unchanged: the shards and --collect read back exactly
+// what was written. Returns the configurations, samples or 1 (a run).
+inline size_t study_input(std::string_view text, const std::string& source) {
+  const nlohmann::json j = parse_study_json(std::string(text), source);
+  const std::string format = j.is_object() && j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
+  if (format == "organsim study reference 1") {
+    const Trajectory t = parse_trajectory(j, source);
+    const Trajectory again = parse_trajectory(trajectory_json(t), "again.json");
+    require(again.ticks == t.ticks && again.positions == t.positions && again.force == t.force &&
+                again.latency_ticks == t.latency_ticks,
+            "reference round trip changed the trajectory");
+    return t.ticks.size();
+  }
+  if (format == "organsim study run 1") {
+    const StudyOutcome o = parse_outcome_record(j, source);
+    require(outcome_record_json(parse_outcome_record(outcome_record_json(o), "again.json")) == outcome_record_json(o),
+            "run round trip changed the outcome");
+    return 1;
+  }
+  const StudyPlan plan = parse_study_plan(j, source);
+  require(plan.dt_crit > 0, "plan accepted without a positive dt_crit");
+  require(plan_json(parse_study_plan(plan_json(plan), "again.json")) == plan_json(plan),
+          "plan round trip changed the plan");
+  return plan.configurations.size();
 }
 
 // An upper bound on the cases a sweep file expands to (the sweep harness

@@ -37,6 +37,7 @@ const std::map<std::string, std::string> kRefused = {
     {"scenarios/stress/stiff_x1000.json", "exceeds the critical step dt_crit = 0.0001416 s"},
     {"tests/fuzz/corpus/surface_check/open.off", "fuzz.off: open surface: 3 border edges"},
     {"tests/fuzz/corpus/sweep/bad_entries.json", "index out of range (the base scenario's array has 2 elements)"},
+    {"tests/fuzz/corpus/study/unsorted_ticks.json", "fuzz.json: ticks[1]: expected a tick index above the one before"},
 };
 
 struct Row {
@@ -89,6 +90,7 @@ size_t run_harness(const Row& row, const std::string& text, const std::string& s
     return static_cast<size_t>(s.time.ticks());
   }
   if (row.kind == "sweep") return fuzz::sweep_input(text, source).cases.size();
+  if (row.kind == "study") return fuzz::study_input(text, source);
   if (row.kind == "igtl") return fuzz::igtl_input(text).size();
   if (row.kind == "label_image") return static_cast<size_t>(fuzz::label_image_input(text, source).voxel_count());
   ADD_FAILURE() << "harnesses.txt: row " << row.name << " has an unknown kind " << row.kind;

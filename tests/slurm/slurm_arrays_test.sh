@@ -3,8 +3,10 @@
 # from Debian's munge and slurm-wlm, a generated slurm.conf in a temporary
 # folder), started and stopped here: a 6-case sweep is submitted as an array
 # of 3 tasks (2 cases each), waited for and collected, and its table and
-# force logs must equal the same sweep run locally.
-# Usage: sweep_array_test.sh ORGANSIM_EXE WORKDIR
+# force logs must equal the same sweep run locally; then a 6-configuration
+# study as docs/cluster.md submits it (its reference as one job, an array of
+# 3 shards that waits for it), collected, must give the local study's table.
+# Usage: slurm_arrays_test.sh ORGANSIM_EXE WORKDIR
 # Exit 77 (ctest: skipped) only when the Slurm or munge programs are missing.
 #
 # Nothing this test starts outlives it, however it ends: every process it
@@ -181,5 +183,39 @@ for row in ra:
     name = row["name"]
     assert samples(a / "cases" / name / "forces.json") == samples(b / "cases" / name / "forces.json"), name
 print("slurm sweep equals the local sweep:", len(ra), "cases")
+PY
+
+# The study, as docs/cluster.md "Studies" submits it.
+wait_for() {  # JOB: until it has left the queue (300 s at most)
+  for _ in $(seq 1200); do
+    [ -z "$(squeue -h -j "$1" 2>/dev/null)" ] && return 0
+    sleep 0.25
+  done
+  fail "job $1 still queued or running after 300 s: $(squeue -j "$1")"
+}
+args="$source_dir/scenarios/stress/gentle_push.json --dt 0.0005,0.00025,0.000125 --precision double,float --duration 0.05 --threads 1"
+ref=$(sbatch --parsable --output="$work/study_ref.out" --wrap "'$organsim' study $args -o '$work/study' --reference-only")
+arr=$(sbatch --parsable --dependency=afterok:"$ref" --array=0-2 --output="$work/study_%a.out" \
+      --wrap "'$organsim' study $args -o '$work/study' --shard slurm")
+wait_for "$ref"
+wait_for "$arr"
+for f in "$work"/study_*.out; do echo "--- $f"; cat "$f"; done
+for i in 0 1 2; do
+  grep -q "study shard $i/3: 2 of 6 configurations" "$work/study_$i.out" || fail "array task $i did not run study shard $i/3"
+done
+"$organsim" study --collect "$work/study" >"$work/collect.txt" || fail "study --collect: $(cat "$work/collect.txt")"
+"$organsim" study $args -o "$work/study_local" >"$work/study_local.txt" || fail "the local study failed"
+python3 - "$work/study/study.json" "$work/study_local/study.json" <<'PY' || fail "the Slurm study differs from the local one"
+import json, sys
+def table(path):
+    j = json.load(open(path))
+    for run in j["runs"]:
+        for timing in ("wall_seconds_per_simulated_second", "steps_per_second", "pareto"):
+            run.pop(timing, None)
+    return j
+a, b = table(sys.argv[1]), table(sys.argv[2])
+assert len(a["runs"]) == 6, len(a["runs"])
+assert a == b, (a, b)
+print("slurm study equals the local study:", len(a["runs"]), "configurations")
 PY
 echo "PASSED"
