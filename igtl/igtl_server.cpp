@@ -126,6 +126,10 @@ bool IgtlServer::deliver(Client& c, LivePoseSink& sink) {
       refusals_.refuse(m->refused_kind, c.address, m->refused + " (device \"" + m->device + "\")");
       continue;
     }
+    if (m->text) {
+      sink.on_text({m->device, m->content, c.address, c.last_receipt});
+      continue;
+    }
     ClientPose pose;
     pose.device = m->device;
     pose.matrix = m->matrix;

@@ -1,6 +1,6 @@
 #pragma once
 // The OpenIGTLink side of `organsim serve`: a TCP server (POSIX sockets,
-// non-blocking, one thread: the run loop's) that reads TRANSFORM messages
+// non-blocking, one thread: the run loop's) that reads TRANSFORM messages (and STRING commands)
 // from any number of clients through IgtlStream and answers every tick with a
 // SENSOR message packed by the library: device "ToolReaction", six float64
 // values fx, fy, fz (N) and tx, ty, tz (N m, about the tool centre) in the

@@ -1,6 +1,6 @@
 #pragma once
 // What the live session (live_session.h) needs of a network protocol, and
-// nothing more: wait for a client, receive tool poses until a deadline, send
+// nothing more: wait for a client, receive tool poses and commands until a deadline, send
 // each tick's reaction without blocking. The OpenIGTLink server (igtl/)
 // implements it; the session's logic is tested without sockets.
 #include <nlohmann/json.hpp>
@@ -28,12 +28,22 @@ struct ClientPose {
   LiveClock::time_point received;
 };
 
+// A STRING message's text (a command, core/live/client_command.h), who sent it and when it arrived.
+struct ClientText {
+  std::string device;
+  std::string text;
+  std::string client;  // "address:port"
+  LiveClock::time_point received;
+};
+
 class LivePoseSink {
  public:
   virtual ~LivePoseSink() = default;
   // Called for every well-formed pose; true asks the link to return from
   // receive_until now (the session starts its tick).
   virtual bool on_pose(const ClientPose& pose) = 0;
+  // Called for every well-formed STRING, in order with the poses.
+  virtual void on_text(const ClientText& text) = 0;
 };
 
 class LiveLink {

@@ -1,5 +1,6 @@
 #include "core/live/live_session.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -29,7 +30,7 @@ std::string ms(double s) { return format_number(s * 1e3, "%.3g") + " ms"; }
 }  // namespace
 
 LiveSession::LiveSession(LiveLink& link, LiveOptions options)
-    : link_(link), o_(std::move(options)), refusals_(o_.log), device_(o_.device), current_(o_.start) {
+    : link_(link), o_(std::move(options)), refusals_(o_.log), command_refusals_(o_.log), device_(o_.device), current_(o_.start) {
   keyframes_.push_back({0.0, o_.start});
 }
 
@@ -55,8 +56,58 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
   if (!pending_) link_.receive_until(scheduled, *this);
   if (stopped()) return std::nullopt;
   apply_pending(tick, t_start, t_end);
+  if (cut_requested_) make_cut(tick, t_start, t_end);
   end_time_ = t_end;
   return current_;
+}
+
+std::optional<CutEvent> LiveSession::cut_for_tick() {
+  std::optional<CutEvent> cut;
+  cut.swap(cut_this_tick_);
+  return cut;
+}
+
+void LiveSession::on_text(const ClientText& text) {
+  ParsedCommand parsed = parse_client_command(text.text);
+  if (auto* why = std::get_if<std::string>(&parsed)) {
+    command_refusals_.refuse("unknown_command", text.client, "STRING of device \"" + text.device + "\": " + *why);
+    return;
+  }
+  if (!current_matrix_ && !pending_) {
+    command_refusals_.refuse("cut_without_pose", text.client, "CUT before any tool pose (the cut is made at the tool's pose)");
+    return;
+  }
+  if (cut_requested_) {
+    command_refusals_.refuse("cut_busy", text.client, "CUT while the previous CUT has not been made yet (one cut per tick)");
+    return;
+  }
+  cut_requested_.emplace(std::get<CutCommand>(parsed), text);
+}
+
+void LiveSession::make_cut(int64_t tick, double t_start, double t_end) {
+  const auto [command, text] = *cut_requested_;
+  cut_requested_.reset();
+  // The pose this tick moves the tool to: a CUT sent after a pose cuts at that pose.
+  const CutBlade blade = cut_blade(o_.frame, *current_matrix_, command);
+  if (!blade.a0.allFinite() || !blade.b0.allFinite() || !blade.a1.allFinite() || !blade.b1.allFinite()) {
+    command_refusals_.refuse("cut_degenerate", text.client, "CUT at a pose whose rotation has a zero x or z axis");
+    return;
+  }
+  CutEvent cut;
+  for (size_t n = cuts_.size() + 1; cut.name.empty() || std::count(o_.cut_names.begin(), o_.cut_names.end(), cut.name); ++n)
+    cut.name = "client_cut" + std::to_string(n);
+  cut.keyframes = {{t_start, blade.a0, blade.b0}, {t_end, blade.a1, blade.b1}};
+  cuts_.push_back(cut);
+  cut_this_tick_ = cut;
+  const auto vec = [](const Vec3& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
+  cut_log_.push_back({{"tick", tick},
+                      {"name", cut.name},
+                      {"received_s", seconds(text.received - start_)},
+                      {"client", text.client},
+                      {"text", printable_text(text.text)},
+                      {"blade_start", {vec(blade.a0), vec(blade.b0)}},
+                      {"blade_end", {vec(blade.a1), vec(blade.b1)}}});
+  if (o_.log) *o_.log << "organsim serve: " << cut.name << " from " << text.client << " at tick " << tick << "\n";
 }
 
 bool LiveSession::on_pose(const ClientPose& pose) {
@@ -101,6 +152,7 @@ void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
     keyframes_.push_back({t_end, pending_position_});
     current_ = pending_position_;
   }
+  current_matrix_ = pending_->matrix;
   pending_.reset();
 }
 
@@ -161,7 +213,7 @@ void LiveSession::maybe_status(LiveClock::time_point now) {
     line += ", latency median " + ms(l.median) + ", p99 " + ms(l.p99) + ", max " + ms(l.max);
   else
     line += ", no poses";
-  line += ", " + std::to_string(refusals_.total()) + " refused";
+  line += ", " + std::to_string(refusals_.total() + command_refusals_.total()) + " refused";
   o_.status(line);
   last_status_ = now;
   status_ticks_ = ticks_;
@@ -196,6 +248,8 @@ void LiveSession::add_meta(nlohmann::json& extra) const {
       {"poses_refused", refusals_.counts()},
       {"stopped_by", stopped_by_},
       {"surfaces_sent", surfaces_},
+      {"commands_refused", command_refusals_.counts()},
+      {"cuts", cut_log_},
       {"link", link_.report()},
       {"applied_poses", poses},
   };

@@ -145,6 +145,11 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
           const std::optional<Vec3> to = options.tool_driver->tool_at_end_of(i, t1);
           if (!to) break;
           request.tool_to = *to;
+          if (std::optional<CutEvent> cut = options.tool_driver->cut_for_tick()) {
+            // No events so far means `current` is still `model`.
+            if (!topology) topology.emplace(EventsDef{}, *current);
+            topology->add_cut(std::move(*cut));
+          }
         } else {
           request.tool_to = tool->position_at(t1);
         }

@@ -34,7 +34,7 @@ nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, do
 TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)
     : events_(events), editor_(initial), cut_records_(events.cuts.size()), tied_(events.sutures.size(), 0),
       step_check_(initial) {
-  for (size_t i = 0; i < events.cuts.size(); ++i) cut_records_[i].cut = &events.cuts[i];
+  for (size_t i = 0; i < events_.cuts.size(); ++i) cut_records_[i].cut = &events_.cuts[i];
   if (events.tear) {
     TearSettings s;
     s.strain = events.tear->strain;
@@ -42,6 +42,13 @@ TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)
     s.max_per_tick = events.tear->max_per_tick;
     tear_.emplace(s);
   }
+}
+
+void TopologyEvents::add_cut(CutEvent cut) {
+  events_.cuts.push_back(std::move(cut));
+  cut_records_.emplace_back();
+  // The vector may have moved: every record points into it again.
+  for (size_t i = 0; i < events_.cuts.size(); ++i) cut_records_[i].cut = &events_.cuts[i];
 }
 
 bool TopologyEvents::suture_due(size_t i, double t0, double t1) const {

@@ -31,6 +31,10 @@ class TopologyEvents {
  public:
   TopologyEvents(const EventsDef& events, const Model& initial);
 
+  // A cut added during the run (organsim serve's client cut), from now on
+  // like the scenario's cuts; its name must be new.
+  void add_cut(CutEvent cut);
+
   // Whether anything happens over the tick [t0, t1] (then positions are needed).
   bool active(double t0, double t1) const;
 
@@ -66,7 +70,7 @@ class TopologyEvents {
   bool tie_sutures_due(double t0, double t1, const Model& base, const std::vector<Vec3>& x, Model& next,
                        nlohmann::json& sources);
 
-  const EventsDef& events_;
+  EventsDef events_;  // the scenario's, and the cuts added during the run
   TopologyEditor editor_;
   std::vector<CutRecord> cut_records_;  // per cut: the faces its blade separated
   std::vector<uint8_t> tied_;           // per suture event: done

@@ -21,6 +21,7 @@
 #include "igtlPolyDataMessage.h"
 #include "igtl_header.h"
 #include "igtlSensorMessage.h"
+#include "igtlStringMessage.h"
 #include "igtlTransformMessage.h"
 
 namespace organsim::test {
@@ -67,10 +68,24 @@ class IgtlTestClient {
 
   // A TRANSFORM with identity rotation and translation `p` (client units), packed by the library.
   static std::vector<uint8_t> transform(const std::string& device, const std::array<float, 3>& p) {
+    igtl::Matrix4x4 matrix = {{1, 0, 0, p[0]}, {0, 1, 0, p[1]}, {0, 0, 1, p[2]}, {0, 0, 0, 1}};
+    return transform(device, matrix);
+  }
+  // A TRANSFORM with any matrix (client units).
+  static std::vector<uint8_t> transform(const std::string& device, igtl::Matrix4x4& matrix) {
     igtl::TransformMessage::Pointer m = igtl::TransformMessage::New();
     m->SetDeviceName(device.c_str());
-    igtl::Matrix4x4 matrix = {{1, 0, 0, p[0]}, {0, 1, 0, p[1]}, {0, 0, 1, p[2]}, {0, 0, 0, 1}};
     m->SetMatrix(matrix);
+    m->Pack();
+    const auto* b = static_cast<const uint8_t*>(m->GetPackPointer());
+    return std::vector<uint8_t>(b, b + m->GetPackSize());
+  }
+
+  // A STRING (a command to the server), packed by the library.
+  static std::vector<uint8_t> text(const std::string& device, const std::string& content) {
+    igtl::StringMessage::Pointer m = igtl::StringMessage::New();
+    m->SetDeviceName(device.c_str());
+    m->SetString(content.c_str());
     m->Pack();
     const auto* b = static_cast<const uint8_t*>(m->GetPackPointer());
     return std::vector<uint8_t>(b, b + m->GetPackSize());
@@ -86,6 +101,7 @@ class IgtlTestClient {
     return true;
   }
   bool send_pose(const std::string& device, const std::array<float, 3>& p) { return send_bytes(transform(device, p)); }
+  bool send_text(const std::string& device, const std::string& content) { return send_bytes(text(device, content)); }
 
   // Reads what has arrived (waiting up to `wait_ms`), unpacking complete
   // messages into replies; false once the server has closed the connection.

@@ -23,6 +23,7 @@ namespace fs = std::filesystem;
 class ScriptedLink : public LiveLink {
  public:
   std::map<int64_t, std::vector<ClientPose>> script;
+  std::map<int64_t, std::vector<std::string>> texts;  // STRING commands, after the tick's poses
   std::vector<std::pair<double, Vec3>> replies;  // (t, force)
   int64_t stop_at = -1;
   std::atomic<bool> stop{false};
@@ -37,6 +38,7 @@ class ScriptedLink : public LiveLink {
       p.received = LiveClock::now();
       sink.on_pose(p);
     }
+    for (const std::string& t : texts[tick]) sink.on_text({"Command", t, "test", LiveClock::now()});
   }
   void send_reaction(int64_t, double t, const Vec3& force, const Vec3&) override { replies.push_back({t, force}); }
   void send_surface(double, const std::vector<Vec3>&, const std::vector<Tri>&) override {}
@@ -81,6 +83,7 @@ Scenario cube() {
 struct Served {
   RunResult result;
   std::vector<Keyframe> keyframes;
+  std::vector<CutEvent> cuts;
   double end_time = 0;
   nlohmann::json live;
 };
@@ -100,6 +103,7 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
   Served out;
   out.result = run_scenario(s, model, *backend, r);
   out.keyframes = session.keyframes();
+  out.cuts = session.cuts();
   out.end_time = session.end_time();
   out.live = out.result.meta.extra["live"];
   return out;
@@ -108,6 +112,7 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
 RunResult replay(Scenario s, const Model& model, const Served& served) {
   s.tool->spec.keyframes = served.keyframes;
   s.time.duration = served.end_time;
+  s.events.cuts.insert(s.events.cuts.end(), served.cuts.begin(), served.cuts.end());
   auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session_replay";
@@ -198,6 +203,60 @@ TEST(LiveSession, RefusedPosesChangeNothingAndAStopEndsTheRunWithAReplayableReco
   EXPECT_EQ(f.tool_position[9], Vec3(0.02, 0.02, 0.046));
   EXPECT_EQ(served.end_time, f.t.back());
   expect_same_samples(replay(s, model, served).samples, f);
+}
+
+// A pose in mm whose z axis (the instrument's) points down into the cube and x axis along x.
+ClientPose pose_down_mm(double x, double y, double z) {
+  ClientPose p = pose_mm("Tool", x, y, z);
+  p.matrix[5] = p.matrix[10] = -1;
+  return p;
+}
+
+TEST(LiveSession, AClientCutIsAScriptedCutOverItsTickAndReplaysBitForBit) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  link.texts[1] = {"CUT"};                           // before any pose: refused
+  link.script[2] = {pose_down_mm(20, 21, 46)};       // 4 mm into the top
+  link.texts[4] = {"SLICE", "CUT 5", "cut -1 3"};    // not commands: refused
+  link.texts[10] = {" cut ", "CUT"};                 // the second waits for the first: refused
+  link.script[20] = {pose_down_mm(22, 25, 46)};
+  link.texts[20] = {"CUT 15 20"};                    // after the tick's pose: cuts there
+  const Served served = serve(s, model, link);
+
+  EXPECT_EQ(served.live["commands_refused"],
+            (nlohmann::json{{"cut_busy", 1}, {"cut_without_pose", 1}, {"unknown_command", 3}}));
+  ASSERT_EQ(served.cuts.size(), 2u);
+  // The default blade: 20 mm from the tool centre down its z axis, swept 20 mm along its x axis over tick 10.
+  const CutEvent& first = served.cuts[0];
+  EXPECT_EQ(first.name, "client_cut1");
+  ASSERT_EQ(first.keyframes.size(), 2u);
+  EXPECT_EQ(first.keyframes[0].t, 10 * s.time.tick());
+  EXPECT_EQ(first.keyframes[1].t, 11 * s.time.tick());
+  const double tol = 1e-15;  // mm to m and the blade's sums round in the last bit
+  EXPECT_LT((first.keyframes[0].a - Vec3(0.010, 0.021, 0.046)).norm(), tol);
+  EXPECT_LT((first.keyframes[0].b - Vec3(0.010, 0.021, 0.026)).norm(), tol);
+  EXPECT_LT((first.keyframes[1].a - Vec3(0.030, 0.021, 0.046)).norm(), tol);
+  EXPECT_LT((first.keyframes[1].b - Vec3(0.030, 0.021, 0.026)).norm(), tol);
+  // CUT DEPTH WIDTH in the client's units, at the pose of the same tick.
+  const CutEvent& second = served.cuts[1];
+  EXPECT_EQ(second.keyframes[0].t, 20 * s.time.tick());
+  EXPECT_LT((second.keyframes[0].a - Vec3(0.012, 0.025, 0.046)).norm(), tol);
+  EXPECT_LT((second.keyframes[1].b - Vec3(0.032, 0.025, 0.031)).norm(), tol);
+
+  // Both separated faces at the start of their tick (meta.events) and the model grew.
+  const nlohmann::json& events = served.result.meta.extra["events"];
+  ASSERT_EQ(events.size(), 2u) << events;
+  EXPECT_EQ(events[0]["t"], 10 * s.time.tick());
+  EXPECT_EQ(events[0]["sources"][0]["name"], "client_cut1");
+  EXPECT_GT(events[0]["faces_separated"].get<int>(), 0);
+  EXPECT_GT(events[0]["points_added"].get<int>(), 0);
+  EXPECT_EQ(events[1]["t"], 20 * s.time.tick());
+  EXPECT_GT(served.result.meta.extra["final_points"].get<int>(), model.npoint());
+
+  const RunResult again = replay(s, model, served);
+  expect_same_samples(again.samples, served.result.samples);
+  EXPECT_EQ(again.meta.extra["final_points"], served.result.meta.extra["final_points"]);
 }
 
 }  // namespace

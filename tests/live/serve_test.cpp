@@ -242,6 +242,49 @@ TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
   EXPECT_EQ(session["tool"]["keyframes"].back()["position"][2], 0.047);
 }
 
+TEST(Serve, AClientsCutIsRecordedAsAScriptedCutAndTheSessionReplaysBitForBit) {
+  // The box's top at 40 mm; the tool 4 mm into it with its z axis (the
+  // instrument's) pointing down; a CUT cuts 20 mm down from its centre.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_cut";
+  fs::remove_all(dir);
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "1"}, dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  ASSERT_TRUE(client.send_text("Command", "CUT"));  // no pose yet: refused
+  igtl::Matrix4x4 down = {{1, 0, 0, 20}, {0, -1, 0, 21}, {0, 0, -1, 46}, {0, 0, 0, 1}};
+  ASSERT_TRUE(client.send_bytes(IgtlTestClient::transform("Tool", down)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(client.send_text("Command", "SLICE"));  // not a command: refused
+  ASSERT_TRUE(client.send_text("Command", "CUT"));
+  client.read_until_closed(60);
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  const nlohmann::json& live = log["meta"]["live"];
+  EXPECT_EQ(live["commands_refused"], (nlohmann::json{{"cut_without_pose", 1}, {"unknown_command", 1}}));
+  ASSERT_EQ(live["cuts"].size(), 1u);
+  const int64_t tick = live["cuts"][0]["tick"];
+  ASSERT_EQ(log["meta"]["events"].size(), 1u);
+  ASSERT_GT(tick, 0);
+  EXPECT_EQ(log["meta"]["events"][0]["t"], log["samples"]["t"][tick - 1]) << "applied before the tick, at its start";
+  EXPECT_GT(log["meta"]["events"][0]["faces_separated"].get<int>(), 0);
+  const std::string err = serve.stderr_text();
+  EXPECT_NE(err.find("refused from 127.0.0.1:"), std::string::npos) << err;
+  // session.json holds it as an ordinary cut over the tick that applied it.
+  const nlohmann::json session = read_json(dir / "out/session.json");
+  ASSERT_EQ(session["events"].size(), 1u);
+  const nlohmann::json& frames = session["events"][0]["cut"]["keyframes"];
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0]["t"], log["meta"]["events"][0]["t"]);
+  EXPECT_EQ(frames[1]["t"], log["samples"]["t"][tick]);
+  EXPECT_NEAR(frames[0]["a"][0].get<double>(), 0.010, 1e-15);
+  EXPECT_NEAR(frames[1]["b"][2].get<double>(), 0.026, 1e-15);
+  expect_replay_identical(dir);
+  EXPECT_EQ(read_json(dir / "replay/forces.json")["meta"]["final_points"], log["meta"]["final_points"]);
+}
+
 TEST(Serve, SendsTheBoundarySurfaceAtItsRateInTheClientsFrame) {
   // The 4 cm box (5 x 5 x 5 grid points: 98 on the boundary, 2 x 6 x 16 = 192 triangles)
   // at 20 surfaces per second for 1 s, the client's frame shifted by 100 mm along x.
