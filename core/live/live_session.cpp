@@ -67,6 +67,23 @@ std::optional<CutEvent> LiveSession::cut_for_tick() {
   return cut;
 }
 
+void LiveSession::cut_applied(double t0) {
+  if (!cut_in_flight_) return;
+  cuts_.back().applied_at = t0;
+  cut_log_.back()["applied_tick"] = ticks_;  // the tick that starts now (ticks_ were served before it)
+  cut_in_flight_ = false;
+}
+
+std::vector<CutEvent> LiveSession::cuts() const {
+  std::vector<CutEvent> out = cuts_;
+  for (CutEvent& c : out) {
+    // A cut still being built: no tick of the replay starts at the session's end.
+    if (!c.applied_at) c.applied_at = end_time_;
+    c.when_ready = false;
+  }
+  return out;
+}
+
 void LiveSession::on_text(const ClientText& text) {
   ParsedCommand parsed = parse_client_command(text.text);
   if (auto* why = std::get_if<std::string>(&parsed)) {
@@ -77,8 +94,9 @@ void LiveSession::on_text(const ClientText& text) {
     command_refusals_.refuse("cut_without_pose", text.client, "CUT before any tool pose (the cut is made at the tool's pose)");
     return;
   }
-  if (cut_requested_) {
-    command_refusals_.refuse("cut_busy", text.client, "CUT while the previous CUT has not been made yet (one cut per tick)");
+  if (cut_requested_ || cut_in_flight_) {
+    command_refusals_.refuse("cut_busy", text.client,
+                             "CUT while the previous cut is not in the model yet (it is being built off the tick's path)");
     return;
   }
   cut_requested_.emplace(std::get<CutCommand>(parsed), text);
@@ -97,8 +115,10 @@ void LiveSession::make_cut(int64_t tick, double t_start, double t_end) {
   for (size_t n = cuts_.size() + 1; cut.name.empty() || std::count(o_.cut_names.begin(), o_.cut_names.end(), cut.name); ++n)
     cut.name = "client_cut" + std::to_string(n);
   cut.keyframes = {{t_start, blade.a0, blade.b0}, {t_end, blade.a1, blade.b1}};
+  cut.when_ready = true;
   cuts_.push_back(cut);
   cut_this_tick_ = cut;
+  cut_in_flight_ = true;
   const auto vec = [](const Vec3& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
   cut_log_.push_back({{"tick", tick},
                       {"name", cut.name},

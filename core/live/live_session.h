@@ -60,8 +60,11 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
 
   // ToolDriver: waits for the first client (tick 0), then for the tick's time.
   std::optional<Vec3> tool_at_end_of(int64_t tick, double t_end) override;
-  // The client's cut over the tick just asked for, if a CUT came before it.
+  // The client's cut over the tick just asked for, if a CUT came before it;
+  // built off the tick's path (when_ready).
   std::optional<CutEvent> cut_for_tick() override;
+  // Records the tick that swapped the cut in (its applied_at in session.json).
+  void cut_applied(double t0) override;
   void add_meta(nlohmann::json& extra) const override;
   // RunObserver: sends the tick's reaction and keeps the timing (and the surface now and then).
   void on_start(const Model& model, Backend& backend) override;
@@ -76,8 +79,10 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   double end_time() const { return end_time_; }
   int64_t ticks() const { return ticks_; }
   const std::vector<AppliedPose>& applied() const { return applied_; }
-  // The client's cuts as scripted cuts over the ticks that applied them (for session.json).
-  const std::vector<CutEvent>& cuts() const { return cuts_; }
+  // The client's cuts as scripted cuts over the ticks that made them, with
+  // the tick that swapped each in (applied_at; for a cut still being built
+  // when the session ended, its end: never), for session.json.
+  std::vector<CutEvent> cuts() const;
   // Why the session ended early ("SIGINT"), empty otherwise.
   const std::string& stopped_by() const { return stopped_by_; }
 
@@ -110,6 +115,7 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::optional<std::pair<CutCommand, ClientText>> cut_requested_;
   std::optional<CutEvent> cut_this_tick_;
   std::vector<CutEvent> cuts_;
+  bool cut_in_flight_ = false;  // the last cut is made but not yet swapped in
   nlohmann::json cut_log_ = nlohmann::json::array();
   std::vector<Keyframe> keyframes_;
   std::vector<AppliedPose> applied_;

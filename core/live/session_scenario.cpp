@@ -21,7 +21,9 @@ nlohmann::json session_scenario(const std::filesystem::path& served_scenario, co
   for (const CutEvent& c : client_cuts) {
     nlohmann::json frames = nlohmann::json::array();
     for (const BladeKeyframe& k : c.keyframes) frames.push_back({{"t", k.t}, {"a", vec(k.a)}, {"b", vec(k.b)}});
-    j["events"].push_back({{"cut", {{"name", c.name}, {"keyframes", frames}}}});
+    nlohmann::json cut = {{"name", c.name}, {"keyframes", frames}};
+    if (c.applied_at) cut["applied_at"] = *c.applied_at;
+    j["events"].push_back({{"cut", cut}});
   }
   // "backend" may be a bare name; threads, when given, stay (results do not depend on them).
   nlohmann::json b = j.contains("backend") && j["backend"].is_object() ? j["backend"] : nlohmann::json::object();

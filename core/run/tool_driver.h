@@ -26,6 +26,11 @@ class ToolDriver {
   // or nullopt; called right after tool_at_end_of. The run applies it as a
   // scripted cut from then on, so a scenario holding the same cut replays it.
   virtual std::optional<CutEvent> cut_for_tick() { return std::nullopt; }
+  // The driver's last cut (built off the tick's path when it is marked
+  // when_ready) was swapped in, or found to change nothing, at the tick
+  // starting at `t0`: the driver's record of it gets applied_at = t0 so that
+  // its replay swaps it in at the same tick.
+  virtual void cut_applied(double /*t0*/) {}
   // Added to the force log's meta.extra when the log is written (also when
   // the run failed).
   virtual void add_meta(nlohmann::json& extra) const = 0;

@@ -27,6 +27,16 @@ double suture_tension_max(const Model& model, const std::vector<Vec3>& x, double
 // saw at the end of any tick.
 nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t, double tension_peak);
 
+// Whether the change over a tick may be built off the tick's path
+// (core/run/change_worker.h): only when all that happens then is cuts
+// marked for it (CutEvent::applied_at later than the tick, or when_ready).
+// `at`: the time of the tick that swaps it in (the earliest applied_at);
+// absent: the first tick after it is built.
+struct OffPathPlan {
+  bool off = false;
+  std::optional<double> at;
+};
+
 class TopologyEvents {
  public:
   TopologyEvents(const EventsDef& events, const Model& initial);
@@ -37,6 +47,9 @@ class TopologyEvents {
 
   // Whether anything happens over the tick [t0, t1] (then positions are needed).
   bool active(double t0, double t1) const;
+  // For an active tick: whether its change may be built off the tick's path
+  // (dt: the time step, for rounding applied_at).
+  OffPathPlan off_path(double t0, double t1, double dt) const;
 
   // The changes over the tick [t0, t1] at positions x (internal numbering of
   // `current`): blades sweep from their pose at t0 to their pose at t1, the
@@ -54,8 +67,10 @@ class TopologyEvents {
   // time, the guaranteed step and, when the run needed it, the new dt_crit
   // from the full estimate, and how long the check took) and carries the
   // tear counters over.
+  // `applied_t`: the start of the tick that swapped it in, when that was
+  // later than the tick that made it (off the tick's path).
   void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit_guaranteed,
-               const StabilityReport* full, double check_seconds);
+               const StabilityReport* full, double check_seconds, std::optional<double> applied_t = std::nullopt);
 
   // meta.events of the force log: one entry per change.
   const nlohmann::json& log() const { return log_; }

@@ -31,5 +31,32 @@ TEST(ClientCommand, RefusalsPrintOnlyPrintableTextAndNotMuchOfIt) {
   EXPECT_EQ(why.find('\x07'), std::string::npos);
 }
 
+// The blade follows the pose's axes through the registration: a pose turned
+// 90 degrees about x (its z axis along the client's -y) in a client frame
+// turned 90 degrees about z (client -y is scene +x), in mm.
+TEST(ClientCommand, TheBladeRunsAlongThePosesZAxisAndSweepsAlongItsXAxisInTheScene) {
+  ClientFrame frame;
+  frame.to_scene << 0, -1, 0, 100,  //
+      1, 0, 0, 0,                   //
+      0, 0, 1, 0,                   //
+      0, 0, 0, 1;
+  const std::array<double, 16> pose{1, 0, 0, 10, 0, 0, -1, 20, 0, 1, 0, 30, 0, 0, 0, 1};
+  CutCommand sized;
+  sized.depth = 15;
+  sized.width = 8;
+  const CutBlade b = cut_blade(frame, pose, sized);
+  // Centre: client (10, 20, 30) mm -> scene (100 - 20, 10, 30) mm. Axis z
+  // (client (0, -1, 0)) -> scene (1, 0, 0); sweep x (client (1, 0, 0)) -> scene (0, 1, 0).
+  const double tol = 1e-15;
+  EXPECT_LT((b.a0 - Vec3(0.080, 0.006, 0.030)).norm(), tol);
+  EXPECT_LT((b.b0 - Vec3(0.095, 0.006, 0.030)).norm(), tol);
+  EXPECT_LT((b.a1 - Vec3(0.080, 0.014, 0.030)).norm(), tol);
+  EXPECT_LT((b.b1 - Vec3(0.095, 0.014, 0.030)).norm(), tol);
+  // Without lengths: the defaults, in metres whatever the client's unit.
+  const CutBlade d = cut_blade(frame, pose, CutCommand{});
+  EXPECT_NEAR((d.b0 - d.a0).norm(), CutCommand::kDefaultDepth, tol);
+  EXPECT_NEAR((d.a1 - d.a0).norm(), CutCommand::kDefaultWidth, tol);
+}
+
 }  // namespace
 }  // namespace organsim

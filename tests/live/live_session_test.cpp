@@ -212,50 +212,49 @@ ClientPose pose_down_mm(double x, double y, double z) {
   return p;
 }
 
-TEST(LiveSession, AClientCutIsAScriptedCutOverItsTickAndReplaysBitForBit) {
+TEST(LiveSession, AClientCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
   const Scenario s = cube();
   const Model model = cube_model(s);
   ScriptedLink link;
   link.texts[1] = {"CUT"};                           // before any pose: refused
   link.script[2] = {pose_down_mm(20, 21, 46)};       // 4 mm into the top
   link.texts[4] = {"SLICE", "CUT 5", "cut -1 3"};    // not commands: refused
-  link.texts[10] = {" cut ", "CUT"};                 // the second waits for the first: refused
+  link.texts[10] = {" cut ", "CUT"};                 // the second while the first is not in: refused
   link.script[20] = {pose_down_mm(22, 25, 46)};
-  link.texts[20] = {"CUT 15 20"};                    // after the tick's pose: cuts there
   const Served served = serve(s, model, link);
 
   EXPECT_EQ(served.live["commands_refused"],
             (nlohmann::json{{"cut_busy", 1}, {"cut_without_pose", 1}, {"unknown_command", 3}}));
-  ASSERT_EQ(served.cuts.size(), 2u);
+  ASSERT_EQ(served.cuts.size(), 1u);
   // The default blade: 20 mm from the tool centre down its z axis, swept 20 mm along its x axis over tick 10.
-  const CutEvent& first = served.cuts[0];
-  EXPECT_EQ(first.name, "client_cut1");
-  ASSERT_EQ(first.keyframes.size(), 2u);
-  EXPECT_EQ(first.keyframes[0].t, 10 * s.time.tick());
-  EXPECT_EQ(first.keyframes[1].t, 11 * s.time.tick());
+  const CutEvent& cut = served.cuts[0];
+  EXPECT_EQ(cut.name, "client_cut1");
+  ASSERT_EQ(cut.keyframes.size(), 2u);
+  EXPECT_EQ(cut.keyframes[0].t, 10 * s.time.tick());
+  EXPECT_EQ(cut.keyframes[1].t, 11 * s.time.tick());
   const double tol = 1e-15;  // mm to m and the blade's sums round in the last bit
-  EXPECT_LT((first.keyframes[0].a - Vec3(0.010, 0.021, 0.046)).norm(), tol);
-  EXPECT_LT((first.keyframes[0].b - Vec3(0.010, 0.021, 0.026)).norm(), tol);
-  EXPECT_LT((first.keyframes[1].a - Vec3(0.030, 0.021, 0.046)).norm(), tol);
-  EXPECT_LT((first.keyframes[1].b - Vec3(0.030, 0.021, 0.026)).norm(), tol);
-  // CUT DEPTH WIDTH in the client's units, at the pose of the same tick.
-  const CutEvent& second = served.cuts[1];
-  EXPECT_EQ(second.keyframes[0].t, 20 * s.time.tick());
-  EXPECT_LT((second.keyframes[0].a - Vec3(0.012, 0.025, 0.046)).norm(), tol);
-  EXPECT_LT((second.keyframes[1].b - Vec3(0.032, 0.025, 0.031)).norm(), tol);
+  EXPECT_LT((cut.keyframes[0].a - Vec3(0.010, 0.021, 0.046)).norm(), tol);
+  EXPECT_LT((cut.keyframes[0].b - Vec3(0.010, 0.021, 0.026)).norm(), tol);
+  EXPECT_LT((cut.keyframes[1].a - Vec3(0.030, 0.021, 0.046)).norm(), tol);
+  EXPECT_LT((cut.keyframes[1].b - Vec3(0.030, 0.021, 0.026)).norm(), tol);
 
-  // Both separated faces at the start of their tick (meta.events) and the model grew.
+  // Made from tick 10's positions on the worker and swapped in at a later
+  // tick (whichever followed the worker's end): recorded as applied_at.
   const nlohmann::json& events = served.result.meta.extra["events"];
-  ASSERT_EQ(events.size(), 2u) << events;
+  ASSERT_EQ(events.size(), 1u) << events;
   EXPECT_EQ(events[0]["t"], 10 * s.time.tick());
   EXPECT_EQ(events[0]["sources"][0]["name"], "client_cut1");
   EXPECT_GT(events[0]["faces_separated"].get<int>(), 0);
   EXPECT_GT(events[0]["points_added"].get<int>(), 0);
-  EXPECT_EQ(events[1]["t"], 20 * s.time.tick());
+  ASSERT_TRUE(cut.applied_at);
+  EXPECT_GE(*cut.applied_at, 11 * s.time.tick());
+  EXPECT_EQ(events[0]["applied_t"], *cut.applied_at);
+  EXPECT_EQ(served.live["cuts"][0]["applied_tick"], std::llround(*cut.applied_at / s.time.tick()));
   EXPECT_GT(served.result.meta.extra["final_points"].get<int>(), model.npoint());
 
   const RunResult again = replay(s, model, served);
   expect_same_samples(again.samples, served.result.samples);
+  EXPECT_EQ(again.meta.extra["events"][0]["applied_t"], *cut.applied_at);
   EXPECT_EQ(again.meta.extra["final_points"], served.result.meta.extra["final_points"]);
 }
 

@@ -242,7 +242,7 @@ TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
   EXPECT_EQ(session["tool"]["keyframes"].back()["position"][2], 0.047);
 }
 
-TEST(Serve, AClientsCutIsRecordedAsAScriptedCutAndTheSessionReplaysBitForBit) {
+TEST(Serve, AClientsCutIsBuiltOffTheTicksPathRecordedAsAScriptedCutAndReplaysBitForBit) {
   // The box's top at 40 mm; the tool 4 mm into it with its z axis (the
   // instrument's) pointing down; a CUT cuts 20 mm down from its centre.
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_cut";
@@ -281,6 +281,11 @@ TEST(Serve, AClientsCutIsRecordedAsAScriptedCutAndTheSessionReplaysBitForBit) {
   EXPECT_EQ(frames[1]["t"], log["samples"]["t"][tick]);
   EXPECT_NEAR(frames[0]["a"][0].get<double>(), 0.010, 1e-15);
   EXPECT_NEAR(frames[1]["b"][2].get<double>(), 0.026, 1e-15);
+  // Built off the tick's path: in at a later tick, which the replay takes from applied_at.
+  const nlohmann::json& cut = session["events"][0]["cut"];
+  ASSERT_TRUE(cut.contains("applied_at")) << cut;
+  EXPECT_GE(cut["applied_at"].get<double>(), frames[1]["t"].get<double>());
+  EXPECT_EQ(log["meta"]["events"][0]["applied_t"], cut["applied_at"]);
   expect_replay_identical(dir);
   EXPECT_EQ(read_json(dir / "replay/forces.json")["meta"]["final_points"], log["meta"]["final_points"]);
 }
