@@ -95,6 +95,7 @@ void serve_command(const ServeArgs& args) {
   live.log = &std::cerr;
   live.surface_rate = args.surface_rate;
   for (const CutEvent& c : s.events.cuts) live.cut_names.push_back(c.name);
+  live.tool = backend_tool(s);
   if (stderr_is_terminal()) live.status = [](const std::string& line) { std::cerr << "organsim " << line << "\n"; };
   LiveSession session(server, live);
 

@@ -57,9 +57,11 @@ class LiveLink {
   // logged here (with the client's address), never passed on.
   virtual void receive_until(LiveClock::time_point deadline, LivePoseSink& sink) = 0;
   // The reaction at the end of tick `tick` (simulated time `t`, s; force N,
-  // torque N m, in the client's axes) to every connected client, without
-  // blocking: a reply that cannot go out at once is dropped and counted.
-  virtual void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque) = 0;
+  // torque N m, in the client's axes) and the contact's local stiffness
+  // dF/dc (N/m, client axes), to every connected client, without blocking:
+  // a reply that cannot go out at once is dropped and counted.
+  virtual void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque,
+                             const Eigen::Matrix3d& stiffness) = 0;
   // The organ's boundary surface at simulated time `t` (points in the
   // client's frame and units, triangles by point index), at display rate,
   // best effort: dropped for a client that has not taken the last replies.

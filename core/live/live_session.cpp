@@ -7,6 +7,7 @@
 #include "core/live/latency_stats.h"
 #include "core/mesh/boundary.h"
 #include "core/model/model.h"
+#include "core/sim/contact_stiffness.h"
 #include "core/util/format.h"
 
 namespace organsim {
@@ -176,9 +177,16 @@ void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
   pending_.reset();
 }
 
-void LiveSession::on_tick(const Model& /*model*/, Backend& backend, const TickInfo& info) {
+void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
+  // The contact's stiffness at the tissue's end-of-tick positions; only in
+  // contact (a copy of the positions and one pass over the surface).
+  Mat3 stiffness = Mat3::Zero();
+  if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
+    backend.positions(stiffness_positions_);
+    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, info.tool_center);
+  }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
-                      o_.frame.client_direction(info.reaction.torque));
+                      o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
   const LiveClock::time_point now = LiveClock::now();
   ++ticks_;
   if (now > start_ + from_seconds(info.t)) ++late_;

@@ -27,6 +27,7 @@
 #include "core/run/tool_driver.h"
 #include "core/scenario/tool_spec.h"
 #include "core/sim/run_observer.h"
+#include "core/sim/tool.h"
 
 namespace organsim {
 
@@ -44,6 +45,7 @@ struct LiveOptions {
   // The boundary surface to the clients this many times per wall second (0: never).
   double surface_rate = 0;  // Hz
   std::vector<std::string> cut_names;  // the scenario's cuts: a client's cut gets another name
+  BackendTool tool;  // for the contact stiffness in each reply (push only)
 };
 
 // One applied pose, for the force log: the tick it was applied at, when it
@@ -135,6 +137,7 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::vector<int32_t> surface_points_;
   std::vector<Tri> surface_triangles_;
   std::vector<Vec3> positions_, surface_client_;
+  std::vector<Vec3> stiffness_positions_;  // the tissue at the end of a tick in contact
   LiveClock::time_point last_surface_{};
   int64_t surfaces_ = 0;
 };

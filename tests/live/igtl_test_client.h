@@ -29,7 +29,8 @@ namespace organsim::test {
 struct Reply {
   std::string type, device;
   double t = 0;                  // the header's timestamp, s
-  std::array<double, 6> values{};  // SENSOR: fx fy fz tx ty tz
+  std::array<double, 15> values{};  // SENSOR: fx fy fz tx ty tz, then the stiffness row by row
+  unsigned length = 0;              // SENSOR: how many values it carried
   std::vector<std::array<float, 3>> points;  // POLYDATA
   std::vector<std::array<uint32_t, 3>> triangles;  // POLYDATA polygons of three points
 };
@@ -172,7 +173,8 @@ class IgtlTestClient {
         s->AllocatePack();
         std::memcpy(s->GetPackBodyPointer(), bytes_.data() + at + IGTL_HEADER_SIZE, body);
         if (s->Unpack(1) & igtl::MessageHeader::UNPACK_BODY) {
-          for (unsigned i = 0; i < 6 && i < s->GetLength(); ++i) r.values[i] = s->GetValue(i);
+          r.length = s->GetLength();
+          for (unsigned i = 0; i < r.values.size() && i < s->GetLength(); ++i) r.values[i] = s->GetValue(i);
         } else {
           ++bad_crc;
         }

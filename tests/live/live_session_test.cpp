@@ -11,6 +11,7 @@
 #include "core/live/live_session.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/run/run.h"
+#include "core/sim/contact_stiffness.h"
 #include "core/sim/cpu_backend.h"
 
 namespace organsim {
@@ -25,6 +26,7 @@ class ScriptedLink : public LiveLink {
   std::map<int64_t, std::vector<ClientPose>> script;
   std::map<int64_t, std::vector<std::string>> texts;  // STRING commands, after the tick's poses
   std::vector<std::pair<double, Vec3>> replies;  // (t, force)
+  std::vector<Eigen::Matrix3d> stiffness;         // per reply
   int64_t stop_at = -1;
   std::atomic<bool> stop{false};
 
@@ -40,7 +42,10 @@ class ScriptedLink : public LiveLink {
     }
     for (const std::string& t : texts[tick]) sink.on_text({"Command", t, "test", LiveClock::now()});
   }
-  void send_reaction(int64_t, double t, const Vec3& force, const Vec3&) override { replies.push_back({t, force}); }
+  void send_reaction(int64_t, double t, const Vec3& force, const Vec3&, const Eigen::Matrix3d& k) override {
+    replies.push_back({t, force});
+    stiffness.push_back(k);
+  }
   void send_surface(double, const std::vector<Vec3>&, const std::vector<Tri>&) override {}
   void send_notice(const std::string&) override {}
   nlohmann::json report() const override { return nlohmann::json::object(); }
@@ -88,9 +93,21 @@ struct Served {
   nlohmann::json live;
 };
 
-Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
+// The contact stiffness at each tick's end, from the backend's positions as the session sees them.
+struct StiffnessProbe : RunObserver {
+  BackendTool tool;
+  std::vector<Eigen::Matrix3d> k;
+  std::vector<Vec3> x;
+  void on_tick(const Model& model, Backend& backend, const TickInfo& info) override {
+    backend.positions(x);
+    k.push_back(tool_contact_stiffness(model, x, tool, info.tool_center));
+  }
+};
+
+Served serve(const Scenario& s, const Model& model, ScriptedLink& link, StiffnessProbe* probe = nullptr) {
   auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   LiveOptions o;
+  o.tool = backend_tool(s);
   o.tick = s.time.tick();
   o.start = s.tool->spec.position_at(0);
   o.scene = scene_box(model.rest_position);
@@ -99,6 +116,10 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session";
   r.observers = {&session};
+  if (probe) {
+    probe->tool = backend_tool(s);
+    r.observers.push_back(probe);
+  }
   r.tool_driver = &session;
   Served out;
   out.result = run_scenario(s, model, *backend, r);
@@ -158,10 +179,25 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
   link.script[30].push_back(pose_mm("Tool", 21.234567, 19.5, 44.5));
   link.script[50] = {pose_mm("Tool", 20.5, 20, 45)};
   link.script[51] = {pose_mm("Tool", 20.5, 20, 45)};
-  const Served served = serve(s, model, link);
+  StiffnessProbe probe;
+  const Served served = serve(s, model, link, &probe);
 
   const ForceSamples& f = served.result.samples;
   ASSERT_EQ(f.size(), 80u);
+  // Each reply carries the contact's stiffness at the tick's end (zero
+  // without contact; in contact, pressing deeper pushes back harder).
+  ASSERT_EQ(link.stiffness.size(), 80u);
+  int in_contact = 0;
+  for (size_t k = 0; k < 80; ++k) {
+    ASSERT_EQ(link.stiffness[k], probe.k[k]) << "tick " << k;
+    if (f.contacts[k] == 0) {
+      ASSERT_EQ(link.stiffness[k], Eigen::Matrix3d::Zero()) << "tick " << k;
+    } else {
+      ++in_contact;
+      ASSERT_LT(link.stiffness[k](2, 2), 0) << "tick " << k;
+    }
+  }
+  EXPECT_GT(in_contact, 20);
   EXPECT_EQ(link.replies.size(), 80u);
   Vec3 held = s.tool->spec.position_at(0);
   for (int64_t k = 0; k < 80; ++k) {

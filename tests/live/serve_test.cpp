@@ -86,6 +86,7 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
   EXPECT_GT(replies_sent, 1000);
   EXPECT_EQ(client.bad_crc, 0);
   int64_t previous = -1;
+  int replies_in_contact = 0;
   for (const Reply& r : client.replies) {
     ASSERT_EQ(r.type, "SENSOR");
     ASSERT_EQ(r.device, "ToolReaction");
@@ -98,7 +99,18 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
       ASSERT_EQ(r.values[static_cast<size_t>(c)], samples["force"][i][c].get<double>()) << i;
       ASSERT_EQ(r.values[static_cast<size_t>(c + 3)], samples["torque"][i][c].get<double>()) << i;
     }
+    // Then the contact stiffness dF/dc row by row (N/m): zero out of contact,
+    // its zz entry (the press direction) negative in contact.
+    ASSERT_EQ(r.length, 15u);
+    const double kzz = r.values[14];
+    if (samples["contacts"][i] == 0) {
+      for (size_t v = 6; v < 15; ++v) ASSERT_EQ(r.values[v], 0) << i;
+    } else {
+      ASSERT_LT(kzz, 0) << i;
+      ++replies_in_contact;
+    }
   }
+  EXPECT_GT(replies_in_contact, 100);
   // Units and order: each applied pose (mm, as sent) is the tool centre in
   // metres from its tick on; ticks only grow.
   int64_t last_tick = -1;
