@@ -126,6 +126,10 @@ bool IgtlServer::deliver(Client& c, LivePoseSink& sink) {
       refusals_.refuse(m->refused_kind, c.address, m->refused + " (device \"" + m->device + "\")");
       continue;
     }
+    if (m->text) {
+      sink.on_text({m->device, m->content, c.address, c.last_receipt});
+      continue;
+    }
     ClientPose pose;
     pose.device = m->device;
     pose.matrix = m->matrix;
@@ -207,14 +211,16 @@ int64_t IgtlServer::send_all(const uint8_t* data, size_t size, int64_t* sent) {
   return dropped;
 }
 
-void IgtlServer::send_reaction(int64_t /*tick*/, double t, const Vec3& force, const Vec3& torque) {
+void IgtlServer::send_reaction(int64_t /*tick*/, double t, const Vec3& force, const Vec3& torque,
+                               const Eigen::Matrix3d& stiffness) {
   if (clients_.empty()) return;
   igtl::SensorMessage::Pointer m = igtl::SensorMessage::New();
   m->SetDeviceName("ToolReaction");
-  m->SetLength(6);
+  m->SetLength(15);
   for (unsigned i = 0; i < 3; ++i) {
     m->SetValue(i, force[i]);
     m->SetValue(i + 3, torque[i]);
+    for (unsigned j = 0; j < 3; ++j) m->SetValue(6 + 3 * i + j, stiffness(i, j));  // row by row
   }
   set_time(*m, t);
   reply_ = packed(*m);

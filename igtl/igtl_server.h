@@ -1,10 +1,11 @@
 #pragma once
 // The OpenIGTLink side of `organsim serve`: a TCP server (POSIX sockets,
-// non-blocking, one thread: the run loop's) that reads TRANSFORM messages
+// non-blocking, one thread: the run loop's) that reads TRANSFORM messages (and STRING commands)
 // from any number of clients through IgtlStream and answers every tick with a
-// SENSOR message packed by the library: device "ToolReaction", six float64
-// values fx, fy, fz (N) and tx, ty, tz (N m, about the tool centre) in the
-// client's axes, timestamp = the tick's simulated end time. A reply that does
+// SENSOR message packed by the library: device "ToolReaction", fifteen
+// float64 values fx, fy, fz (N), tx, ty, tz (N m, about the tool centre) and
+// the contact stiffness dF/dc row by row (N/m), all in the client's axes,
+// timestamp = the tick's simulated end time. A reply that does
 // not fit the socket's send buffer at once is dropped and counted (at most
 // the tail of one partly sent message waits per client), so a client that
 // never reads cannot stall the loop. With --surface-rate, POLYDATA
@@ -36,7 +37,8 @@ class IgtlServer : public LiveLink {
 
   bool wait_for_client(const std::atomic<bool>& stop) override;
   void receive_until(LiveClock::time_point deadline, LivePoseSink& sink) override;
-  void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque) override;
+  void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque,
+                     const Eigen::Matrix3d& stiffness) override;
   void send_surface(double t, const std::vector<Vec3>& points, const std::vector<Tri>& triangles) override;
   void send_notice(const std::string& text) override;
   nlohmann::json report() const override;

@@ -2,9 +2,10 @@
 // One client's TCP byte stream cut into OpenIGTLink messages (header
 // version 1, protocol 1-2, and header version 2, protocol 3, whose body
 // carries an extended header and metadata around the content). Only
-// TRANSFORM is decoded (through the library's byte-order and CRC-64
-// functions); every other message is skipped without being stored and
-// reported as refused. A header that cannot be a message (type or device
+// TRANSFORM (the tool's pose) and STRING (a command, docs/live.md#commands)
+// are decoded (through the library's byte-order and CRC-64 functions);
+// every other message is skipped without being stored and reported as
+// refused. A header that cannot be a message (type or device
 // name not printable, body larger than any message we accept) means the
 // stream has lost its framing: the stream is broken and the connection must
 // be closed (the client may reconnect). This is the code that reads outside
@@ -23,6 +24,8 @@ struct IgtlMessage {
   std::string device;  // the header's device name
   bool transform = false;               // a well-formed TRANSFORM: matrix holds it
   std::array<double, 16> matrix{};      // row-major 4x4, as sent (client units)
+  bool text = false;                    // a well-formed STRING: content holds it
+  std::string content;                  // the STRING's bytes as sent (not checked for any encoding)
   std::string refused_kind;             // empty when accepted; "bad_crc", "unknown_type", ...
   std::string refused;                  // what was wrong, for the log
 };
@@ -49,14 +52,14 @@ class IgtlStream {
     uint16_t version = 0;
     std::string type, device;
     uint64_t body_size = 0, crc = 0;
-    bool keep = false;        // TRANSFORM: the body is kept and checked
+    bool keep = false;        // TRANSFORM or STRING of a plausible size: the body is kept and checked
     uint64_t skipped = 0;     // other types: body bytes dropped so far
   };
   std::optional<Pending> pending_;
   std::string broken_;
 
   bool read_header();
-  IgtlMessage finish_transform(const Pending& p, const uint8_t* body);
+  IgtlMessage finish_kept(const Pending& p, const uint8_t* body);
   void compact();
 };
 

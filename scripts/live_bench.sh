@@ -6,9 +6,14 @@
 # half and holding it there. Prints ticks served, late ticks, reply latency
 # (receipt of a pose to the force reply of its tick: median, p99, max) and
 # the real-time factor from the force log's meta, with the CPU and the load.
+# With ORGANSIM_LIVE_BENCH_CUT=S the client's tool points down into the liver
+# and it sends the STRING command "CUT 40 30" after S seconds; the cut's figures are
+# printed: the new Model built off the tick's path (model_ms, on a worker
+# thread) and what stayed on it (the backend's rebuild and the dt check, ms),
+# and how many ticks after the request it went in.
 # A benchmark, not a test: its figures depend on the machine and its load
 # (docs/live.md lists what it measured).
-# Usage: scripts/live_bench.sh [SECONDS (default 60)] [extra organsim serve options...]
+# Usage: [ORGANSIM_LIVE_BENCH_CUT=S] scripts/live_bench.sh [SECONDS (default 60)] [extra organsim serve options...]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ORGANSIM_BUILD_DIR:-$root/build}
@@ -32,7 +37,12 @@ trap 'kill "$serve_pid" 2>/dev/null || true' EXIT
 port=$(serve_port "$out/serve.out" "$serve_pid" 1800)  # meshing the liver comes first
 [ -n "$port" ] || { echo "live_bench: organsim serve printed no port"; cat "$out/serve.err"; exit 1; }
 # The scenario's own press, in mm: from 88 mm down to 53 mm above the origin at x = 30 mm.
-"$client" "$port" 1000 "$((seconds + 2))" 30,0,88 30,0,53 >"$out/client.out" 2>&1 || true
+cut=()
+if [ -n "${ORGANSIM_LIVE_BENCH_CUT:-}" ]; then
+  # 40 mm deep from the tool centre (the tool's radius is 20 mm), 30 mm wide.
+  cut=(--down --cut "$(python3 -c "print(round(1000 * float('$ORGANSIM_LIVE_BENCH_CUT')))")" --cut-text "CUT 40 30")
+fi
+"$client" "$port" 1000 "$((seconds + 2))" 30,0,88 30,0,53 "${cut[@]}" >"$out/client.out" 2>&1 || true
 wait "$serve_pid"
 trap - EXIT
 cat "$out/serve.out"
@@ -48,4 +58,16 @@ print(f"served:   {live['ticks']} ticks, {live['late_ticks']} late, real-time fa
 print(f"latency:  median {lat['median_ms']:.3f} ms, p99 {lat['p99_ms']:.3f} ms, max {lat['max_ms']:.3f} ms over {lat['count']} poses")
 peak = max((sum(c * c for c in f) ** 0.5 for f in json.load(open(sys.argv[1]))["samples"]["force"]), default=0)
 print(f"contact:  peak tool force {peak:.3g} N; replies sent {live['link']['replies_sent']}, dropped {live['link']['replies_dropped']}")
+tick = meta["dt"] * meta["substeps"]
+for cut in live.get("cuts", []):
+    e = next((e for e in meta.get("events", []) if e["sources"][0].get("name") == cut["name"]), None)
+    if e is None:
+        print(f"cut:      {cut['name']} at tick {cut['tick']} separated nothing (or was not in by the end)")
+        continue
+    print(f"cut:      {cut['name']} asked at tick {cut['tick']}, in at tick {cut.get('applied_tick', '-')}: "
+          f"{e['faces_separated']} faces, {e['points_added']} points added; off the tick's path {e['model_ms']:.1f} ms "
+          f"(the new Model, on the worker), on it {e['backend_rebuild_ms']:.1f} ms backend rebuild "
+          f"+ {e['dt_check_ms']:.1f} ms dt check ({e['dt_check']})")
+if live.get("commands_refused"):
+    print(f"refused:  {live['commands_refused']}")
 PY

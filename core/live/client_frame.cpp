@@ -24,6 +24,11 @@ Vec3 ClientFrame::client_direction(const Vec3& scene) const {
   return to_scene.topLeftCorner<3, 3>().transpose() * scene;
 }
 
+Eigen::Matrix3d ClientFrame::client_matrix(const Eigen::Matrix3d& scene) const {
+  const Eigen::Matrix3d r = to_scene.topLeftCorner<3, 3>();
+  return r.transpose() * scene * r;
+}
+
 double client_unit_metres(const std::string& unit) {
   if (unit == "mm") return 1e-3;
   if (unit == "m") return 1.0;

@@ -27,6 +27,9 @@ struct ClientFrame {
   Vec3 client_position(const Vec3& scene) const;
   // A scene vector (force, torque) in the client's axes; its unit is kept (N, N m).
   Vec3 client_direction(const Vec3& scene) const;
+  // A scene 3x3 map between vectors (the contact stiffness dF/dc) in the
+  // client's axes, R^T K R; its unit is kept (N/m).
+  Eigen::Matrix3d client_matrix(const Eigen::Matrix3d& scene) const;
 };
 
 // "mm" or "m" (Error(Usage) naming the option otherwise).

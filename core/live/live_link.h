@@ -1,6 +1,6 @@
 #pragma once
 // What the live session (live_session.h) needs of a network protocol, and
-// nothing more: wait for a client, receive tool poses until a deadline, send
+// nothing more: wait for a client, receive tool poses and commands until a deadline, send
 // each tick's reaction without blocking. The OpenIGTLink server (igtl/)
 // implements it; the session's logic is tested without sockets.
 #include <nlohmann/json.hpp>
@@ -28,12 +28,22 @@ struct ClientPose {
   LiveClock::time_point received;
 };
 
+// A STRING message's text (a command, core/live/client_command.h), who sent it and when it arrived.
+struct ClientText {
+  std::string device;
+  std::string text;
+  std::string client;  // "address:port"
+  LiveClock::time_point received;
+};
+
 class LivePoseSink {
  public:
   virtual ~LivePoseSink() = default;
   // Called for every well-formed pose; true asks the link to return from
   // receive_until now (the session starts its tick).
   virtual bool on_pose(const ClientPose& pose) = 0;
+  // Called for every well-formed STRING, in order with the poses.
+  virtual void on_text(const ClientText& text) = 0;
 };
 
 class LiveLink {
@@ -47,9 +57,11 @@ class LiveLink {
   // logged here (with the client's address), never passed on.
   virtual void receive_until(LiveClock::time_point deadline, LivePoseSink& sink) = 0;
   // The reaction at the end of tick `tick` (simulated time `t`, s; force N,
-  // torque N m, in the client's axes) to every connected client, without
-  // blocking: a reply that cannot go out at once is dropped and counted.
-  virtual void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque) = 0;
+  // torque N m, in the client's axes) and the contact's local stiffness
+  // dF/dc (N/m, client axes), to every connected client, without blocking:
+  // a reply that cannot go out at once is dropped and counted.
+  virtual void send_reaction(int64_t tick, double t, const Vec3& force, const Vec3& torque,
+                             const Eigen::Matrix3d& stiffness) = 0;
   // The organ's boundary surface at simulated time `t` (points in the
   // client's frame and units, triangles by point index), at display rate,
   // best effort: dropped for a client that has not taken the last replies.

@@ -1,11 +1,13 @@
 #include "core/live/live_session.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
 #include "core/live/latency_stats.h"
 #include "core/mesh/boundary.h"
 #include "core/model/model.h"
+#include "core/sim/contact_stiffness.h"
 #include "core/util/format.h"
 
 namespace organsim {
@@ -29,7 +31,7 @@ std::string ms(double s) { return format_number(s * 1e3, "%.3g") + " ms"; }
 }  // namespace
 
 LiveSession::LiveSession(LiveLink& link, LiveOptions options)
-    : link_(link), o_(std::move(options)), refusals_(o_.log), device_(o_.device), current_(o_.start) {
+    : link_(link), o_(std::move(options)), refusals_(o_.log), command_refusals_(o_.log), device_(o_.device), current_(o_.start) {
   keyframes_.push_back({0.0, o_.start});
 }
 
@@ -55,8 +57,78 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
   if (!pending_) link_.receive_until(scheduled, *this);
   if (stopped()) return std::nullopt;
   apply_pending(tick, t_start, t_end);
+  if (cut_requested_) make_cut(tick, t_start, t_end);
   end_time_ = t_end;
   return current_;
+}
+
+std::optional<CutEvent> LiveSession::cut_for_tick() {
+  std::optional<CutEvent> cut;
+  cut.swap(cut_this_tick_);
+  return cut;
+}
+
+void LiveSession::cut_applied(double t0) {
+  if (!cut_in_flight_) return;
+  cuts_.back().applied_at = t0;
+  cut_log_.back()["applied_tick"] = ticks_;  // the tick that starts now (ticks_ were served before it)
+  cut_in_flight_ = false;
+}
+
+std::vector<CutEvent> LiveSession::cuts() const {
+  std::vector<CutEvent> out = cuts_;
+  for (CutEvent& c : out) {
+    // A cut still being built: no tick of the replay starts at the session's end.
+    if (!c.applied_at) c.applied_at = end_time_;
+    c.when_ready = false;
+  }
+  return out;
+}
+
+void LiveSession::on_text(const ClientText& text) {
+  ParsedCommand parsed = parse_client_command(text.text);
+  if (auto* why = std::get_if<std::string>(&parsed)) {
+    command_refusals_.refuse("unknown_command", text.client, "STRING of device \"" + text.device + "\": " + *why);
+    return;
+  }
+  if (!current_matrix_ && !pending_) {
+    command_refusals_.refuse("cut_without_pose", text.client, "CUT before any tool pose (the cut is made at the tool's pose)");
+    return;
+  }
+  if (cut_requested_ || cut_in_flight_) {
+    command_refusals_.refuse("cut_busy", text.client,
+                             "CUT while the previous cut is not in the model yet (it is being built off the tick's path)");
+    return;
+  }
+  cut_requested_.emplace(std::get<CutCommand>(parsed), text);
+}
+
+void LiveSession::make_cut(int64_t tick, double t_start, double t_end) {
+  const auto [command, text] = *cut_requested_;
+  cut_requested_.reset();
+  // The pose this tick moves the tool to: a CUT sent after a pose cuts at that pose.
+  const CutBlade blade = cut_blade(o_.frame, *current_matrix_, command);
+  if (!blade.a0.allFinite() || !blade.b0.allFinite() || !blade.a1.allFinite() || !blade.b1.allFinite()) {
+    command_refusals_.refuse("cut_degenerate", text.client, "CUT at a pose whose rotation has a zero x or z axis");
+    return;
+  }
+  CutEvent cut;
+  for (size_t n = cuts_.size() + 1; cut.name.empty() || std::count(o_.cut_names.begin(), o_.cut_names.end(), cut.name); ++n)
+    cut.name = "client_cut" + std::to_string(n);
+  cut.keyframes = {{t_start, blade.a0, blade.b0}, {t_end, blade.a1, blade.b1}};
+  cut.when_ready = true;
+  cuts_.push_back(cut);
+  cut_this_tick_ = cut;
+  cut_in_flight_ = true;
+  const auto vec = [](const Vec3& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
+  cut_log_.push_back({{"tick", tick},
+                      {"name", cut.name},
+                      {"received_s", seconds(text.received - start_)},
+                      {"client", text.client},
+                      {"text", printable_text(text.text)},
+                      {"blade_start", {vec(blade.a0), vec(blade.b0)}},
+                      {"blade_end", {vec(blade.a1), vec(blade.b1)}}});
+  if (o_.log) *o_.log << "organsim serve: " << cut.name << " from " << text.client << " at tick " << tick << "\n";
 }
 
 bool LiveSession::on_pose(const ClientPose& pose) {
@@ -101,12 +173,20 @@ void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
     keyframes_.push_back({t_end, pending_position_});
     current_ = pending_position_;
   }
+  current_matrix_ = pending_->matrix;
   pending_.reset();
 }
 
-void LiveSession::on_tick(const Model& /*model*/, Backend& backend, const TickInfo& info) {
+void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
+  // The contact's stiffness at the tissue's end-of-tick positions; only in
+  // contact (a copy of the positions and one pass over the surface).
+  Mat3 stiffness = Mat3::Zero();
+  if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
+    backend.positions(stiffness_positions_);
+    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, info.tool_center);
+  }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
-                      o_.frame.client_direction(info.reaction.torque));
+                      o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
   const LiveClock::time_point now = LiveClock::now();
   ++ticks_;
   if (now > start_ + from_seconds(info.t)) ++late_;
@@ -161,7 +241,7 @@ void LiveSession::maybe_status(LiveClock::time_point now) {
     line += ", latency median " + ms(l.median) + ", p99 " + ms(l.p99) + ", max " + ms(l.max);
   else
     line += ", no poses";
-  line += ", " + std::to_string(refusals_.total()) + " refused";
+  line += ", " + std::to_string(refusals_.total() + command_refusals_.total()) + " refused";
   o_.status(line);
   last_status_ = now;
   status_ticks_ = ticks_;
@@ -196,6 +276,8 @@ void LiveSession::add_meta(nlohmann::json& extra) const {
       {"poses_refused", refusals_.counts()},
       {"stopped_by", stopped_by_},
       {"surfaces_sent", surfaces_},
+      {"commands_refused", command_refusals_.counts()},
+      {"cuts", cut_log_},
       {"link", link_.report()},
       {"applied_poses", poses},
   };

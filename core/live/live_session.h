@@ -2,7 +2,8 @@
 // `organsim serve`'s session, apart from the protocol: it paces the ordinary
 // run loop (core/run, through ToolDriver) to the wall clock, applies each
 // client pose at the tick it arrives in (the last pose holds in between and
-// while no client is connected), replies with every tick's reaction, keeps
+// while no client is connected), turns a client's CUT command into a cut
+// over the next tick (client_command.h), replies with every tick's reaction, keeps
 // the timing figures, and records the tool path so that the session replays
 // as an ordinary scenario (session_scenario.h).
 //
@@ -19,12 +20,14 @@
 #include <string>
 #include <vector>
 
+#include "core/live/client_command.h"
 #include "core/live/client_frame.h"
 #include "core/live/live_link.h"
 #include "core/live/refusal_log.h"
 #include "core/run/tool_driver.h"
 #include "core/scenario/tool_spec.h"
 #include "core/sim/run_observer.h"
+#include "core/sim/tool.h"
 
 namespace organsim {
 
@@ -41,6 +44,8 @@ struct LiveOptions {
   double status_interval = 2.0;  // s
   // The boundary surface to the clients this many times per wall second (0: never).
   double surface_rate = 0;  // Hz
+  std::vector<std::string> cut_names;  // the scenario's cuts: a client's cut gets another name
+  BackendTool tool;  // for the contact stiffness in each reply (push only)
 };
 
 // One applied pose, for the force log: the tick it was applied at, when it
@@ -57,6 +62,11 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
 
   // ToolDriver: waits for the first client (tick 0), then for the tick's time.
   std::optional<Vec3> tool_at_end_of(int64_t tick, double t_end) override;
+  // The client's cut over the tick just asked for, if a CUT came before it;
+  // built off the tick's path (when_ready).
+  std::optional<CutEvent> cut_for_tick() override;
+  // Records the tick that swapped the cut in (its applied_at in session.json).
+  void cut_applied(double t0) override;
   void add_meta(nlohmann::json& extra) const override;
   // RunObserver: sends the tick's reaction and keeps the timing (and the surface now and then).
   void on_start(const Model& model, Backend& backend) override;
@@ -71,11 +81,17 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   double end_time() const { return end_time_; }
   int64_t ticks() const { return ticks_; }
   const std::vector<AppliedPose>& applied() const { return applied_; }
+  // The client's cuts as scripted cuts over the ticks that made them, with
+  // the tick that swapped each in (applied_at; for a cut still being built
+  // when the session ended, its end: never), for session.json.
+  std::vector<CutEvent> cuts() const;
   // Why the session ended early ("SIGINT"), empty otherwise.
   const std::string& stopped_by() const { return stopped_by_; }
 
  private:
   bool on_pose(const ClientPose& pose) override;
+  void on_text(const ClientText& text) override;
+  void make_cut(int64_t tick, double t_start, double t_end);
   void apply_pending(int64_t tick, double t_start, double t_end);
   void maybe_status(LiveClock::time_point now);
   void find_surface(const Model& model);
@@ -83,7 +99,8 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
 
   LiveLink& link_;
   LiveOptions o_;
-  RefusalLog refusals_;
+  RefusalLog refusals_;          // poses
+  RefusalLog command_refusals_;  // STRING commands
   std::string device_;  // the device followed (o_.device or the first sender)
 
   LiveClock::time_point start_{};
@@ -94,6 +111,14 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   int64_t poses_received_ = 0;
 
   Vec3 current_;
+  std::optional<std::array<double, 16>> current_matrix_;  // the last applied pose, as sent
+  // A CUT received and not yet made (with who sent it), the cut made for
+  // this tick until the run takes it, and every cut made.
+  std::optional<std::pair<CutCommand, ClientText>> cut_requested_;
+  std::optional<CutEvent> cut_this_tick_;
+  std::vector<CutEvent> cuts_;
+  bool cut_in_flight_ = false;  // the last cut is made but not yet swapped in
+  nlohmann::json cut_log_ = nlohmann::json::array();
   std::vector<Keyframe> keyframes_;
   std::vector<AppliedPose> applied_;
   std::optional<LiveClock::time_point> tick_pose_received_;  // of the pose this tick applied
@@ -112,6 +137,7 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::vector<int32_t> surface_points_;
   std::vector<Tri> surface_triangles_;
   std::vector<Vec3> positions_, surface_client_;
+  std::vector<Vec3> stiffness_positions_;  // the tissue at the end of a tick in contact
   LiveClock::time_point last_surface_{};
   int64_t surfaces_ = 0;
 };

@@ -266,6 +266,27 @@ inline bool sphere_triangle_penalty(const V3& center, Real radius, const V3& x0,
   return true;
 }
 
+// The push penalty's derivative with respect to the tool centre c, for the
+// haptic local force model (the tool's local contact stiffness). The penalty
+// f = k (R - d) n, n = o / d, o = q - c, d = |o| < R (push_penalty with k =
+// k s; sphere_triangle_penalty with k = k_t), acts on a contact point q that
+// follows c as dq/dc = P: P = 0 for a mesh point with the tissue held, the
+// projector onto the closest feature's directions for a triangle's closest
+// point (face: I - m m^T, m its normal; edge: e e^T; vertex: 0). With
+// df/do = k (-n n^T + (R - d)/d (I - n n^T)):
+//   df/dc = df/do (P - I).
+// At d = 0 (n chosen, not defined) only the normal term -k n n^T is kept.
+// The tool's reaction F = -sum f then has dF/dc = -sum df/dc (N/m). No
+// GLSL twin: it is evaluated once per tick on the CPU from the backend's
+// positions (core/sim/contact_stiffness.h), whichever backend stepped.
+template <class M3, class V3, class Real>
+inline M3 push_penalty_center_jacobian(const V3& n, Real dist, Real radius, Real k, const M3& follow) {
+  const M3 nn = n * n.transpose();
+  M3 df_do = -nn;
+  if (dist > Real(0)) df_do += (radius - dist) / dist * (M3::Identity() - nn);
+  return k * df_do * (follow - M3::Identity());
+}
+
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o
 // (the point's offset from the centre at grasp time).
 template <class V3, class Real>

@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "core/model/material_summary.h"
+#include "core/run/change_worker.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/run_events.h"
 #include "core/util/error.h"
@@ -122,6 +123,47 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   std::vector<Vec3> event_positions;
   double suture_tension_peak = 0;  // N, at the end of any tick (meta.sutures.tension_max_N)
 
+  // A change being built off the tick's path (cuts marked for it); declared
+  // after `topology` so that it is done before they go.
+  ChangeWorker off_path;
+  bool off_path_driver_cut = false;  // the change the worker builds holds the tool driver's cut
+  const ToolSpec* tool_spec = scenario.tool ? &scenario.tool->spec : nullptr;
+  // Makes `next`, the version `topology` made from *current, the Model the
+  // backend steps from the tick starting at t0. `guaranteed`: its
+  // guaranteed-stable step when the worker computed it; `applied_t`: t0 when
+  // that is later than the tick that made it.
+  const auto adopt = [&](std::unique_ptr<Model> next, double t0, std::optional<double> guaranteed,
+                         std::optional<double> applied_t) {
+    const auto rebuild_start = Clock::now();
+    backend.rebuild(*next);
+    const double rebuild_seconds = seconds_since(rebuild_start);
+    // From here the backend steps `next`; the previous version lives until
+    // the end of this call (the log compares the two).
+    const std::unique_ptr<Model> previous_owned = std::move(owned);
+    const Model& previous = *current;
+    owned = std::move(next);
+    current = owned.get();
+    for (RunObserver* o : options.observers) o->on_topology_changed(*current, backend);
+    // dt below the guaranteed (Gershgorin) step is stable, and the full
+    // estimate would accept it too; only above it is the power iteration
+    // needed to decide.
+    const auto check_start = Clock::now();
+    const CriticalStepOptions step_options = critical_step_options(*current, tool_spec);
+    if (!guaranteed) guaranteed = topology->guaranteed_step(previous, *current, step_options);
+    std::optional<StabilityReport> report;
+    if (!(time.dt <= *guaranteed)) report = estimate_critical_step(*current, step_options);
+    topology->changed(previous, *current, rebuild_seconds, *guaranteed, report ? &*report : nullptr,
+                      seconds_since(check_start), applied_t);
+    if (report) check_step_after_change(*report, scenario, t0, options.allow_unstable);
+  };
+  // Swaps in the change built off the tick's path at the tick starting at t0.
+  const auto finish_off_path = [&](double t0) {
+    ChangeWorker::Built built = off_path.take();
+    if (built.next) adopt(std::move(built.next), t0, built.guaranteed, t0);
+    if (off_path_driver_cut) options.tool_driver->cut_applied(t0);
+    off_path_driver_cut = false;
+  };
+
   TickRequest request;
   request.dt = time.dt;
   request.substeps = time.substeps;
@@ -137,6 +179,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
     for (int64_t i = 0; i < nticks; ++i) {
       const double t0 = static_cast<double>(i) * tick;
       const double t1 = static_cast<double>(i + 1) * tick;
+      bool driver_cut = false;  // the tool driver asked for a cut over this tick
       if (tool) {
         // A tick starts where the last one ended (the same double t0 as the
         // last tick's t1, so identical to position_at(t0) for keyframes).
@@ -145,36 +188,30 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
           const std::optional<Vec3> to = options.tool_driver->tool_at_end_of(i, t1);
           if (!to) break;
           request.tool_to = *to;
+          if (std::optional<CutEvent> cut = options.tool_driver->cut_for_tick()) {
+            driver_cut = true;
+            if (off_path.busy()) finish_off_path(t0);  // the events change only while the worker is idle
+            // No events so far means `current` is still `model`.
+            if (!topology) topology.emplace(EventsDef{}, *current);
+            topology->add_cut(std::move(*cut));
+          }
         } else {
           request.tool_to = tool->position_at(t1);
         }
       }
+      // A change built off the tick's path goes in at its tick, or before any other change.
+      if (off_path.busy() && (off_path.due(t0, time.dt) || topology->active(t0, t1))) finish_off_path(t0);
       if (topology && topology->active(t0, t1)) {
         backend.positions(event_positions);
-        auto next = std::make_unique<Model>();
-        if (topology->before_tick(t0, t1, *current, event_positions, *next)) {
-          const auto rebuild_start = Clock::now();
-          backend.rebuild(*next);
-          const double rebuild_seconds = seconds_since(rebuild_start);
-          // From here the backend steps `next`; the previous version lives
-          // until the end of this block (the log compares the two).
-          const std::unique_ptr<Model> previous_owned = std::move(owned);
-          const Model& previous = *current;
-          owned = std::move(next);
-          current = owned.get();
-          for (RunObserver* o : options.observers) o->on_topology_changed(*current, backend);
-          // dt below the guaranteed (Gershgorin) step is stable, and the full
-          // estimate would accept it too; only above it is the power
-          // iteration needed to decide.
-          const auto check_start = Clock::now();
-          const ToolSpec* tool_spec = scenario.tool ? &scenario.tool->spec : nullptr;
-          const CriticalStepOptions step_options = critical_step_options(*current, tool_spec);
-          const double guaranteed = topology->guaranteed_step(previous, *current, step_options);
-          std::optional<StabilityReport> report;
-          if (!(time.dt <= guaranteed)) report = estimate_critical_step(*current, step_options);
-          topology->changed(previous, *current, rebuild_seconds, guaranteed, report ? &*report : nullptr,
-                            seconds_since(check_start));
-          if (report) check_step_after_change(*report, scenario, t0, options.allow_unstable);
+        const OffPathPlan plan = topology->off_path(t0, t1, time.dt);
+        if (plan.off) {
+          off_path.start(*topology, *current, event_positions, t0, t1, tool_spec, plan);
+          off_path_driver_cut = driver_cut;
+        } else {
+          auto next = std::make_unique<Model>();
+          if (topology->before_tick(t0, t1, *current, event_positions, *next))
+            adopt(std::move(next), t0, std::nullopt, std::nullopt);
+          if (driver_cut) options.tool_driver->cut_applied(t0);  // with the tick's other events, at once
         }
       }
       if (pull && !grasped && starts_at_or_after(t0, tool->grasp_time, time.dt)) {
@@ -216,10 +253,12 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       info.reaction = r;
       for (RunObserver* o : options.observers) o->on_tick(*current, backend, info);
     }
+    off_path.abandon();  // a change not swapped in by the last tick never is
     finish_called = true;
     for (RunObserver* o : options.observers) o->on_finish(*current, backend);
     result.meta.completed = true;
   } catch (const std::exception& e) {
+    off_path.abandon();
     result.meta.completed = false;
     result.meta.stop_reason = e.what();
     failure = std::current_exception();

@@ -25,6 +25,14 @@ struct BladeKeyframe {
 struct CutEvent {
   std::string name;                     // for sutures along it and the log
   std::vector<BladeKeyframe> keyframes;  // sorted by strictly increasing t, at least two
+  // Off the tick's path: the Model version this cut makes is built on a
+  // worker thread while the run steps the previous one, and swapped in at
+  // the first tick that starts at or after `applied_at` (s; what `organsim
+  // serve` records for a client's cut, two keyframes one tick apart).
+  std::optional<double> applied_at;
+  // Off the tick's path, swapped in at the first tick after the worker is
+  // done (a live client's cut; the run tells its ToolDriver that tick).
+  bool when_ready = false;
 
   double start() const { return keyframes.front().t; }
   double end() const { return keyframes.back().t; }

@@ -57,6 +57,14 @@ CutEvent parse_cut(const nlohmann::json& j, const JsonPath& at) {
                             std::to_string(cut.keyframes.back().t) + ")");
     cut.keyframes.push_back(b);
   }
+  if (auto v = r.number("applied_at")) {
+    if (cut.keyframes.size() != 2)
+      throw r.at("applied_at").error("is for a cut over one tick (exactly two keyframes, as organsim serve records)");
+    if (!(*v >= cut.keyframes.front().t))
+      throw r.at("applied_at").error("expected a time >= the first keyframe's t (" +
+                                     std::to_string(cut.keyframes.front().t) + " s)");
+    cut.applied_at = *v;
+  }
   r.finish();
   return cut;
 }

@@ -34,7 +34,7 @@ nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, do
 TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)
     : events_(events), editor_(initial), cut_records_(events.cuts.size()), tied_(events.sutures.size(), 0),
       step_check_(initial) {
-  for (size_t i = 0; i < events.cuts.size(); ++i) cut_records_[i].cut = &events.cuts[i];
+  for (size_t i = 0; i < events_.cuts.size(); ++i) cut_records_[i].cut = &events_.cuts[i];
   if (events.tear) {
     TearSettings s;
     s.strain = events.tear->strain;
@@ -42,6 +42,13 @@ TopologyEvents::TopologyEvents(const EventsDef& events, const Model& initial)
     s.max_per_tick = events.tear->max_per_tick;
     tear_.emplace(s);
   }
+}
+
+void TopologyEvents::add_cut(CutEvent cut) {
+  events_.cuts.push_back(std::move(cut));
+  cut_records_.emplace_back();
+  // The vector may have moved: every record points into it again.
+  for (size_t i = 0; i < events_.cuts.size(); ++i) cut_records_[i].cut = &events_.cuts[i];
 }
 
 bool TopologyEvents::suture_due(size_t i, double t0, double t1) const {
@@ -55,6 +62,25 @@ bool TopologyEvents::active(double t0, double t1) const {
   for (size_t i = 0; i < tied_.size(); ++i)
     if (suture_due(i, t0, t1)) return true;
   return events_.tear && t1 > events_.tear->start;
+}
+
+OffPathPlan TopologyEvents::off_path(double t0, double t1, double dt) const {
+  OffPathPlan plan;
+  bool when_ready = false;
+  for (const CutEvent& c : events_.cuts) {
+    if (!(t1 > c.start() && t0 < c.end())) continue;
+    // applied_at at this tick (within half a step) is a cut made and applied at once.
+    const bool later = c.when_ready || (c.applied_at && !(t0 >= *c.applied_at - 0.5 * dt));
+    if (!later) return {};
+    plan.off = true;
+    when_ready = when_ready || c.when_ready;
+    if (c.applied_at && (!plan.at || *c.applied_at < *plan.at)) plan.at = c.applied_at;
+  }
+  if (when_ready) plan.at.reset();
+  for (size_t i = 0; i < tied_.size(); ++i)
+    if (suture_due(i, t0, t1)) return {};
+  if (events_.tear && t1 > events_.tear->start) return {};
+  return plan;
 }
 
 bool TopologyEvents::separate(double t0, double t1, const Model& current, const std::vector<Vec3>& x, Model& next,
@@ -160,8 +186,10 @@ double TopologyEvents::guaranteed_step(const Model& previous, const Model& next,
 }
 
 void TopologyEvents::changed(const Model& previous, const Model& next, double rebuild_seconds,
-                             double dt_crit_guaranteed, const StabilityReport* full, double check_seconds) {
+                             double dt_crit_guaranteed, const StabilityReport* full, double check_seconds,
+                             std::optional<double> applied_t) {
   if (tear_) tear_->model_changed(previous, next);
+  if (applied_t) pending_["applied_t"] = *applied_t;
   pending_["backend_rebuild_ms"] = 1e3 * rebuild_seconds;
   pending_["dt_crit_guaranteed"] = dt_crit_guaranteed;
   pending_["dt_check"] = full ? "power iteration" : "gershgorin";

@@ -27,12 +27,29 @@ double suture_tension_max(const Model& model, const std::vector<Vec3>& x, double
 // saw at the end of any tick.
 nlohmann::json suture_summary(const Model& model, const std::vector<Vec3>& x, double t, double tension_peak);
 
+// Whether the change over a tick may be built off the tick's path
+// (core/run/change_worker.h): only when all that happens then is cuts
+// marked for it (CutEvent::applied_at later than the tick, or when_ready).
+// `at`: the time of the tick that swaps it in (the earliest applied_at);
+// absent: the first tick after it is built.
+struct OffPathPlan {
+  bool off = false;
+  std::optional<double> at;
+};
+
 class TopologyEvents {
  public:
   TopologyEvents(const EventsDef& events, const Model& initial);
 
+  // A cut added during the run (organsim serve's client cut), from now on
+  // like the scenario's cuts; its name must be new.
+  void add_cut(CutEvent cut);
+
   // Whether anything happens over the tick [t0, t1] (then positions are needed).
   bool active(double t0, double t1) const;
+  // For an active tick: whether its change may be built off the tick's path
+  // (dt: the time step, for rounding applied_at).
+  OffPathPlan off_path(double t0, double t1, double dt) const;
 
   // The changes over the tick [t0, t1] at positions x (internal numbering of
   // `current`): blades sweep from their pose at t0 to their pose at t1, the
@@ -50,8 +67,10 @@ class TopologyEvents {
   // time, the guaranteed step and, when the run needed it, the new dt_crit
   // from the full estimate, and how long the check took) and carries the
   // tear counters over.
+  // `applied_t`: the start of the tick that swapped it in, when that was
+  // later than the tick that made it (off the tick's path).
   void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit_guaranteed,
-               const StabilityReport* full, double check_seconds);
+               const StabilityReport* full, double check_seconds, std::optional<double> applied_t = std::nullopt);
 
   // meta.events of the force log: one entry per change.
   const nlohmann::json& log() const { return log_; }
@@ -66,7 +85,7 @@ class TopologyEvents {
   bool tie_sutures_due(double t0, double t1, const Model& base, const std::vector<Vec3>& x, Model& next,
                        nlohmann::json& sources);
 
-  const EventsDef& events_;
+  EventsDef events_;  // the scenario's, and the cuts added during the run
   TopologyEditor editor_;
   std::vector<CutRecord> cut_records_;  // per cut: the faces its blade separated
   std::vector<uint8_t> tied_;           // per suture event: done

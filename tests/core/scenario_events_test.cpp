@@ -87,6 +87,21 @@ TEST(ScenarioEvents, ErrorsNameTheFileAndPath) {
   expect_error(json::array({tear, tear}), "events[1]: only one \"tear\"");
 }
 
+TEST(ScenarioEvents, AppliedAtIsForACutOfTwoKeyframesAndNotBeforeIt) {
+  json later = kCut;
+  later["cut"]["applied_at"] = 0.5;
+  const Scenario s = parse_scenario(with_events(json::array({later})), "/data", "scene.json");
+  ASSERT_TRUE(s.events.cuts[0].applied_at);
+  EXPECT_EQ(*s.events.cuts[0].applied_at, 0.5);
+  EXPECT_FALSE(parse_scenario(with_events(json::array({kCut})), "/data", "scene.json").events.cuts[0].applied_at);
+  json early = later;
+  early["cut"]["applied_at"] = 0.05;
+  expect_error(json::array({early}), "events[0].cut.applied_at: expected a time >= the first keyframe's t");
+  json three = later;
+  three["cut"]["keyframes"].push_back(json::parse(R"({"t": 0.4, "a": [0, 0, -1], "b": [0, 1, -1]})"));
+  expect_error(json::array({three}), "events[0].cut.applied_at: is for a cut over one tick (exactly two keyframes");
+}
+
 const json kSuture = json::parse(R"({"suture": {"t": 0.4, "along": "incision", "spacing": 0.005,
     "max_distance": 0.02, "stiffness": 50, "rate": 0.01, "min_length": 0.001}})");
 

@@ -138,6 +138,67 @@ TEST(TopologyRun, ThreadedRunIsBitIdenticalToSingleThreadedAcrossCuts) {
   for (size_t i = 0; i < finals[0].size(); ++i) ASSERT_EQ(finals[0][i], finals[1][i]) << "point " << i;
 }
 
+// Each tick's positions of the mesh's points (internal ids below the original count).
+struct TickPositions : RunObserver {
+  int32_t points = 0;
+  std::vector<std::vector<Vec3>> x;
+  std::vector<Vec3> all;
+  void on_tick(const Model&, Backend& backend, const TickInfo&) override {
+    backend.positions(all);
+    x.emplace_back(all.begin(), all.begin() + points);
+  }
+};
+
+struct BlockRun {
+  TickPositions ticks;
+  RunResult result;
+};
+
+BlockRun run_block(const Scenario& s, const Model& model, const std::string& name) {
+  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  BlockRun r;
+  r.ticks.points = model.npoint();
+  RunOptions options;
+  options.outdir = fs::path(ORGANSIM_TEST_TMP) / name;
+  options.observers = {&r.ticks};
+  r.result = run_scenario(s, model, *backend, options);
+  return r;
+}
+
+// The cut through the block over tick 20 with applied_at = 25 ms: made from
+// tick 20's positions on a worker thread while ticks 20-24 step the uncut
+// block, swapped in before tick 25. Replays of it must not depend on when
+// the worker finishes.
+TEST(TopologyRun, ACutOffTheTicksPathStepsTheOldModelUntilItsAppliedTick) {
+  const Scenario at_once = hanging_block();
+  Scenario later = at_once;
+  later.events.cuts[0].applied_at = 0.025;
+  Scenario uncut = at_once;
+  uncut.events.cuts.clear();
+  const Model model = block_model(at_once);
+  const BlockRun a = run_block(at_once, model, "topology_off_path_at_once");
+  const BlockRun b = run_block(later, model, "topology_off_path_later");
+  const BlockRun b2 = run_block(later, model, "topology_off_path_later_again");
+  const BlockRun u = run_block(uncut, model, "topology_off_path_uncut");
+
+  const double tick = at_once.time.tick();
+  const nlohmann::json& events = b.result.meta.extra["events"];
+  ASSERT_EQ(events.size(), 1u) << events;
+  EXPECT_EQ(events[0]["t"], 20 * tick);
+  EXPECT_EQ(events[0]["applied_t"], 25 * tick);
+  EXPECT_EQ(events[0]["points_added"], 25);
+  EXPECT_FALSE(a.result.meta.extra["events"][0].contains("applied_t"));
+  ASSERT_EQ(b.ticks.x.size(), 60u);
+  // Ticks 0-24 (ending at 1..25 ms) step the uncut block exactly; the cut at
+  // once has changed tick 20 already; from tick 25 on the block falls apart.
+  for (size_t k = 0; k < 25; ++k) ASSERT_EQ(b.ticks.x[k], u.ticks.x[k]) << "tick " << k;
+  EXPECT_NE(a.ticks.x[20], u.ticks.x[20]);
+  EXPECT_NE(b.ticks.x[30], u.ticks.x[30]);
+  EXPECT_NE(b.ticks.x[30], a.ticks.x[30]);
+  for (size_t k = 0; k < 60; ++k) ASSERT_EQ(b.ticks.x[k], b2.ticks.x[k]) << "tick " << k;
+  EXPECT_EQ(b.result.meta.extra["final_points"], a.result.meta.extra["final_points"]);
+}
+
 TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {
   // run_scenario leaves the check before a run to its caller, so a dt 1.5 x
   // dt_crit gets as far as the first change, at the first tick (before any

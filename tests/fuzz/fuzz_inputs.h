@@ -29,6 +29,7 @@
 #include "core/stability/study_files.h"
 #include "core/sweep/case_names.h"
 #include "core/sweep/sweep_spec.h"
+#include "core/live/client_command.h"
 #include "igtl/igtl_stream.h"
 #include "meshing/label_image.h"
 #include "meshing/surface_check.h"
@@ -210,7 +211,9 @@ inline LabelImage label_image_input(std::string_view bytes, const std::string& s
 // (IgtlStream). Any bytes give messages, refusals or a broken stream, never
 // an exception or a crash; the same bytes cut into 7-byte pieces (as TCP may
 // deliver them) give the same messages; an accepted TRANSFORM has the last
-// row of a transform.
+// row of a transform; an accepted STRING's text goes through the session's
+// command parser (parse_client_command), which refuses or accepts it but
+// never throws, and whose refusal prints no control character.
 inline std::vector<IgtlMessage> igtl_input(std::string_view bytes) {
   const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
   IgtlStream whole;
@@ -227,13 +230,20 @@ inline std::vector<IgtlMessage> igtl_input(std::string_view bytes) {
           "the stream read whole and in pieces gave different messages");
   for (size_t i = 0; i < once.size(); ++i) {
     const IgtlMessage &a = once[i], &b = cut[i];
-    require(a.transform == b.transform && a.refused_kind == b.refused_kind && a.type == b.type &&
-                a.device == b.device && std::memcmp(a.matrix.data(), b.matrix.data(), sizeof a.matrix) == 0,
+    require(a.transform == b.transform && a.text == b.text && a.content == b.content &&
+                a.refused_kind == b.refused_kind && a.type == b.type && a.device == b.device &&
+                std::memcmp(a.matrix.data(), b.matrix.data(), sizeof a.matrix) == 0,
             "message " + std::to_string(i) + " differs read whole and in pieces");
-    require(a.transform == a.refused_kind.empty(), "a message is neither or both of accepted and refused");
+    require(!(a.transform && a.text), "a message is both a TRANSFORM and a STRING");
+    require((a.transform || a.text) == a.refused_kind.empty(), "a message is neither or both of accepted and refused");
     if (a.transform)
       require(a.matrix[12] == 0 && a.matrix[13] == 0 && a.matrix[14] == 0 && a.matrix[15] == 1,
               "accepted TRANSFORM without the last row 0 0 0 1");
+    if (a.text) {
+      const ParsedCommand command = parse_client_command(a.content);
+      if (const auto* why = std::get_if<std::string>(&command))
+        for (char c : *why) require(static_cast<unsigned char>(c) >= 0x20, "a command refusal prints a control character");
+    }
   }
   return once;
 }

@@ -19,7 +19,7 @@ fs::path write(const std::string& name, const std::string& text) {
   return dir / name;
 }
 
-TEST(ClientFrame, MapsAPoseInMillimetresThroughTheRegistrationAndForcesBack) {
+TEST(ClientFrame, MapsAPoseInMillimetresThroughTheRegistrationAndForcesAndStiffnessBack) {
   ClientFrame f;
   f.metres_per_unit = client_unit_metres("mm");
   // 90 degrees about z, then 100 mm along x (client units).
@@ -33,6 +33,19 @@ TEST(ClientFrame, MapsAPoseInMillimetresThroughTheRegistrationAndForcesBack) {
   const Vec3 c = f.client_direction(Vec3(0, 2, 0));
   EXPECT_DOUBLE_EQ(c.x(), 2);
   EXPECT_DOUBLE_EQ(c.y(), 0);
+  // A stiffness maps client displacements to client forces as the scene's
+  // does scene ones: a scene stiffness along y alone (client x) is the
+  // client's xx entry, in N/m whatever the client's length unit.
+  Eigen::Matrix3d k = Eigen::Matrix3d::Zero();
+  k(1, 1) = -300;
+  k(1, 2) = 40;  // scene force along y from a move along z
+  const Eigen::Matrix3d kc = f.client_matrix(k);
+  Eigen::Matrix3d expected = Eigen::Matrix3d::Zero();
+  expected(0, 0) = -300;
+  expected(0, 2) = 40;
+  EXPECT_EQ(kc, expected);
+  const Vec3 move_client(0.001, 0, 0.002);
+  EXPECT_LT((f.client_direction(k * f.to_scene.topLeftCorner<3, 3>() * move_client) - kc * move_client).norm(), 1e-15);
   EXPECT_EQ(client_unit_metres("m"), 1.0);
   EXPECT_THROW(client_unit_metres("cm"), Error);
 }

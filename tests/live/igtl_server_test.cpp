@@ -12,21 +12,33 @@ namespace {
 
 struct CountingSink : LivePoseSink {
   std::vector<ClientPose> poses;
+  std::vector<ClientText> texts;
+  size_t poses_before_text = 0;
   bool on_pose(const ClientPose& p) override {
     poses.push_back(p);
     return true;  // as the session does once its tick may start
   }
+  void on_text(const ClientText& t) override {
+    texts.push_back(t);
+    poses_before_text = poses.size();
+  }
 };
 
 // A session behind the clock must get the newest pose, so one receive takes
-// every pose that has arrived even though the sink asks to return at the first.
-TEST(IgtlServer, OneReceiveHandsOverEveryPoseThatHasArrived) {
+// every pose that has arrived even though the sink asks to return at the
+// first; a command comes in its place among them.
+TEST(IgtlServer, OneReceiveHandsOverEveryPoseAndCommandThatHasArrivedInOrder) {
   IgtlServer server("127.0.0.1", 0, nullptr);
   test::IgtlTestClient client;
   ASSERT_TRUE(client.connect_to(server.port()));
   const std::atomic<bool> stop{false};
   ASSERT_TRUE(server.wait_for_client(stop));
-  for (float z : {50.0f, 49.0f, 48.0f}) ASSERT_TRUE(client.send_pose("Tool", {20, 20, z}));
+  for (float z : {50.0f, 49.0f, 48.0f}) {
+    ASSERT_TRUE(client.send_pose("Tool", {20, 20, z}));
+    if (z == 49.0f) {
+      ASSERT_TRUE(client.send_text("Command", "CUT"));
+    }
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // all three in the server's socket
   CountingSink sink;
   server.receive_until(LiveClock::now() - std::chrono::seconds(1), sink);
@@ -34,6 +46,11 @@ TEST(IgtlServer, OneReceiveHandsOverEveryPoseThatHasArrived) {
   EXPECT_EQ(sink.poses.back().matrix[11], 48.0);
   EXPECT_EQ(sink.poses.back().device, "Tool");
   EXPECT_EQ(sink.poses.back().client.rfind("127.0.0.1:", 0), 0u);
+  ASSERT_EQ(sink.texts.size(), 1u);
+  EXPECT_EQ(sink.texts[0].text, "CUT");
+  EXPECT_EQ(sink.texts[0].device, "Command");
+  EXPECT_EQ(sink.texts[0].client, sink.poses.back().client);
+  EXPECT_EQ(sink.poses_before_text, 2u);
 }
 
 TEST(IgtlServer, RefusesAnAddressItCannotUse) {

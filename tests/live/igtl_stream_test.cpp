@@ -139,5 +139,41 @@ TEST(IgtlStream, ReadsAVersion2TransformAroundItsExtendedHeaderAndMetadata) {
   EXPECT_EQ(got[0].matrix[11], 9);
 }
 
+TEST(IgtlStream, ReadsTheLibrarysStringAndRefusesABrokenOne) {
+  const std::vector<uint8_t> cut = IgtlTestClient::text("Command", "CUT 5 10");
+  std::vector<uint8_t> bad_crc = IgtlTestClient::text("Command", "CUT");
+  bad_crc.back() ^= 0x01;
+  // The length field (body bytes 2-3) one more than the bytes that follow, with the body's right CRC.
+  std::vector<uint8_t> long_length = IgtlTestClient::text("Command", "CUT");
+  long_length[58 + 3] += 1;
+  {
+    igtl_header h;
+    std::memcpy(&h, long_length.data(), 58);
+    igtl_header_convert_byte_order(&h);
+    h.crc = crc64(long_length.data() + 58, long_length.size() - 58, 0);
+    igtl_header_convert_byte_order(&h);
+    std::memcpy(long_length.data(), &h, 58);
+  }
+  const std::vector<uint8_t> pose = IgtlTestClient::transform("Tool", {4, 5, 6});
+  IgtlStream s;
+  std::vector<IgtlMessage> got;
+  for (const std::vector<uint8_t>* part : std::initializer_list<const std::vector<uint8_t>*>{&cut, &bad_crc, &long_length, &pose}) {
+    for (uint8_t b : *part) {
+      s.append(&b, 1);
+      for (auto& m : all(s)) got.push_back(m);
+    }
+  }
+  ASSERT_EQ(got.size(), 4u);
+  EXPECT_TRUE(got[0].text) << got[0].refused;
+  EXPECT_EQ(got[0].type, "STRING");
+  EXPECT_EQ(got[0].device, "Command");
+  EXPECT_EQ(got[0].content, "CUT 5 10");
+  EXPECT_EQ(got[1].refused_kind, "bad_crc");
+  EXPECT_EQ(got[2].refused_kind, "malformed_body");
+  EXPECT_FALSE(got[2].text);
+  EXPECT_TRUE(got[3].transform);
+  EXPECT_FALSE(s.broken());
+}
+
 }  // namespace
 }  // namespace organsim

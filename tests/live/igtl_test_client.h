@@ -21,6 +21,7 @@
 #include "igtlPolyDataMessage.h"
 #include "igtl_header.h"
 #include "igtlSensorMessage.h"
+#include "igtlStringMessage.h"
 #include "igtlTransformMessage.h"
 
 namespace organsim::test {
@@ -28,7 +29,8 @@ namespace organsim::test {
 struct Reply {
   std::string type, device;
   double t = 0;                  // the header's timestamp, s
-  std::array<double, 6> values{};  // SENSOR: fx fy fz tx ty tz
+  std::array<double, 15> values{};  // SENSOR: fx fy fz tx ty tz, then the stiffness row by row
+  unsigned length = 0;              // SENSOR: how many values it carried
   std::vector<std::array<float, 3>> points;  // POLYDATA
   std::vector<std::array<uint32_t, 3>> triangles;  // POLYDATA polygons of three points
 };
@@ -67,10 +69,24 @@ class IgtlTestClient {
 
   // A TRANSFORM with identity rotation and translation `p` (client units), packed by the library.
   static std::vector<uint8_t> transform(const std::string& device, const std::array<float, 3>& p) {
+    igtl::Matrix4x4 matrix = {{1, 0, 0, p[0]}, {0, 1, 0, p[1]}, {0, 0, 1, p[2]}, {0, 0, 0, 1}};
+    return transform(device, matrix);
+  }
+  // A TRANSFORM with any matrix (client units).
+  static std::vector<uint8_t> transform(const std::string& device, igtl::Matrix4x4& matrix) {
     igtl::TransformMessage::Pointer m = igtl::TransformMessage::New();
     m->SetDeviceName(device.c_str());
-    igtl::Matrix4x4 matrix = {{1, 0, 0, p[0]}, {0, 1, 0, p[1]}, {0, 0, 1, p[2]}, {0, 0, 0, 1}};
     m->SetMatrix(matrix);
+    m->Pack();
+    const auto* b = static_cast<const uint8_t*>(m->GetPackPointer());
+    return std::vector<uint8_t>(b, b + m->GetPackSize());
+  }
+
+  // A STRING (a command to the server), packed by the library.
+  static std::vector<uint8_t> text(const std::string& device, const std::string& content) {
+    igtl::StringMessage::Pointer m = igtl::StringMessage::New();
+    m->SetDeviceName(device.c_str());
+    m->SetString(content.c_str());
     m->Pack();
     const auto* b = static_cast<const uint8_t*>(m->GetPackPointer());
     return std::vector<uint8_t>(b, b + m->GetPackSize());
@@ -86,6 +102,7 @@ class IgtlTestClient {
     return true;
   }
   bool send_pose(const std::string& device, const std::array<float, 3>& p) { return send_bytes(transform(device, p)); }
+  bool send_text(const std::string& device, const std::string& content) { return send_bytes(text(device, content)); }
 
   // Reads what has arrived (waiting up to `wait_ms`), unpacking complete
   // messages into replies; false once the server has closed the connection.
@@ -156,7 +173,8 @@ class IgtlTestClient {
         s->AllocatePack();
         std::memcpy(s->GetPackBodyPointer(), bytes_.data() + at + IGTL_HEADER_SIZE, body);
         if (s->Unpack(1) & igtl::MessageHeader::UNPACK_BODY) {
-          for (unsigned i = 0; i < 6 && i < s->GetLength(); ++i) r.values[i] = s->GetValue(i);
+          r.length = s->GetLength();
+          for (unsigned i = 0; i < r.values.size() && i < s->GetLength(); ++i) r.values[i] = s->GetValue(i);
         } else {
           ++bad_crc;
         }

@@ -11,6 +11,7 @@
 #include "core/live/live_session.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/run/run.h"
+#include "core/sim/contact_stiffness.h"
 #include "core/sim/cpu_backend.h"
 
 namespace organsim {
@@ -23,7 +24,9 @@ namespace fs = std::filesystem;
 class ScriptedLink : public LiveLink {
  public:
   std::map<int64_t, std::vector<ClientPose>> script;
+  std::map<int64_t, std::vector<std::string>> texts;  // STRING commands, after the tick's poses
   std::vector<std::pair<double, Vec3>> replies;  // (t, force)
+  std::vector<Eigen::Matrix3d> stiffness;         // per reply
   int64_t stop_at = -1;
   std::atomic<bool> stop{false};
 
@@ -37,8 +40,12 @@ class ScriptedLink : public LiveLink {
       p.received = LiveClock::now();
       sink.on_pose(p);
     }
+    for (const std::string& t : texts[tick]) sink.on_text({"Command", t, "test", LiveClock::now()});
   }
-  void send_reaction(int64_t, double t, const Vec3& force, const Vec3&) override { replies.push_back({t, force}); }
+  void send_reaction(int64_t, double t, const Vec3& force, const Vec3&, const Eigen::Matrix3d& k) override {
+    replies.push_back({t, force});
+    stiffness.push_back(k);
+  }
   void send_surface(double, const std::vector<Vec3>&, const std::vector<Tri>&) override {}
   void send_notice(const std::string&) override {}
   nlohmann::json report() const override { return nlohmann::json::object(); }
@@ -81,13 +88,26 @@ Scenario cube() {
 struct Served {
   RunResult result;
   std::vector<Keyframe> keyframes;
+  std::vector<CutEvent> cuts;
   double end_time = 0;
   nlohmann::json live;
 };
 
-Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
+// The contact stiffness at each tick's end, from the backend's positions as the session sees them.
+struct StiffnessProbe : RunObserver {
+  BackendTool tool;
+  std::vector<Eigen::Matrix3d> k;
+  std::vector<Vec3> x;
+  void on_tick(const Model& model, Backend& backend, const TickInfo& info) override {
+    backend.positions(x);
+    k.push_back(tool_contact_stiffness(model, x, tool, info.tool_center));
+  }
+};
+
+Served serve(const Scenario& s, const Model& model, ScriptedLink& link, StiffnessProbe* probe = nullptr) {
   auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   LiveOptions o;
+  o.tool = backend_tool(s);
   o.tick = s.time.tick();
   o.start = s.tool->spec.position_at(0);
   o.scene = scene_box(model.rest_position);
@@ -96,10 +116,15 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session";
   r.observers = {&session};
+  if (probe) {
+    probe->tool = backend_tool(s);
+    r.observers.push_back(probe);
+  }
   r.tool_driver = &session;
   Served out;
   out.result = run_scenario(s, model, *backend, r);
   out.keyframes = session.keyframes();
+  out.cuts = session.cuts();
   out.end_time = session.end_time();
   out.live = out.result.meta.extra["live"];
   return out;
@@ -108,6 +133,7 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link) {
 RunResult replay(Scenario s, const Model& model, const Served& served) {
   s.tool->spec.keyframes = served.keyframes;
   s.time.duration = served.end_time;
+  s.events.cuts.insert(s.events.cuts.end(), served.cuts.begin(), served.cuts.end());
   auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session_replay";
@@ -153,10 +179,25 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
   link.script[30].push_back(pose_mm("Tool", 21.234567, 19.5, 44.5));
   link.script[50] = {pose_mm("Tool", 20.5, 20, 45)};
   link.script[51] = {pose_mm("Tool", 20.5, 20, 45)};
-  const Served served = serve(s, model, link);
+  StiffnessProbe probe;
+  const Served served = serve(s, model, link, &probe);
 
   const ForceSamples& f = served.result.samples;
   ASSERT_EQ(f.size(), 80u);
+  // Each reply carries the contact's stiffness at the tick's end (zero
+  // without contact; in contact, pressing deeper pushes back harder).
+  ASSERT_EQ(link.stiffness.size(), 80u);
+  int in_contact = 0;
+  for (size_t k = 0; k < 80; ++k) {
+    ASSERT_EQ(link.stiffness[k], probe.k[k]) << "tick " << k;
+    if (f.contacts[k] == 0) {
+      ASSERT_EQ(link.stiffness[k], Eigen::Matrix3d::Zero()) << "tick " << k;
+    } else {
+      ++in_contact;
+      ASSERT_LT(link.stiffness[k](2, 2), 0) << "tick " << k;
+    }
+  }
+  EXPECT_GT(in_contact, 20);
   EXPECT_EQ(link.replies.size(), 80u);
   Vec3 held = s.tool->spec.position_at(0);
   for (int64_t k = 0; k < 80; ++k) {
@@ -198,6 +239,59 @@ TEST(LiveSession, RefusedPosesChangeNothingAndAStopEndsTheRunWithAReplayableReco
   EXPECT_EQ(f.tool_position[9], Vec3(0.02, 0.02, 0.046));
   EXPECT_EQ(served.end_time, f.t.back());
   expect_same_samples(replay(s, model, served).samples, f);
+}
+
+// A pose in mm whose z axis (the instrument's) points down into the cube and x axis along x.
+ClientPose pose_down_mm(double x, double y, double z) {
+  ClientPose p = pose_mm("Tool", x, y, z);
+  p.matrix[5] = p.matrix[10] = -1;
+  return p;
+}
+
+TEST(LiveSession, AClientCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  link.texts[1] = {"CUT"};                           // before any pose: refused
+  link.script[2] = {pose_down_mm(20, 21, 46)};       // 4 mm into the top
+  link.texts[4] = {"SLICE", "CUT 5", "cut -1 3"};    // not commands: refused
+  link.texts[10] = {" cut ", "CUT"};                 // the second while the first is not in: refused
+  link.script[20] = {pose_down_mm(22, 25, 46)};
+  const Served served = serve(s, model, link);
+
+  EXPECT_EQ(served.live["commands_refused"],
+            (nlohmann::json{{"cut_busy", 1}, {"cut_without_pose", 1}, {"unknown_command", 3}}));
+  ASSERT_EQ(served.cuts.size(), 1u);
+  // The default blade: 20 mm from the tool centre down its z axis, swept 20 mm along its x axis over tick 10.
+  const CutEvent& cut = served.cuts[0];
+  EXPECT_EQ(cut.name, "client_cut1");
+  ASSERT_EQ(cut.keyframes.size(), 2u);
+  EXPECT_EQ(cut.keyframes[0].t, 10 * s.time.tick());
+  EXPECT_EQ(cut.keyframes[1].t, 11 * s.time.tick());
+  const double tol = 1e-15;  // mm to m and the blade's sums round in the last bit
+  EXPECT_LT((cut.keyframes[0].a - Vec3(0.010, 0.021, 0.046)).norm(), tol);
+  EXPECT_LT((cut.keyframes[0].b - Vec3(0.010, 0.021, 0.026)).norm(), tol);
+  EXPECT_LT((cut.keyframes[1].a - Vec3(0.030, 0.021, 0.046)).norm(), tol);
+  EXPECT_LT((cut.keyframes[1].b - Vec3(0.030, 0.021, 0.026)).norm(), tol);
+
+  // Made from tick 10's positions on the worker and swapped in at a later
+  // tick (whichever followed the worker's end): recorded as applied_at.
+  const nlohmann::json& events = served.result.meta.extra["events"];
+  ASSERT_EQ(events.size(), 1u) << events;
+  EXPECT_EQ(events[0]["t"], 10 * s.time.tick());
+  EXPECT_EQ(events[0]["sources"][0]["name"], "client_cut1");
+  EXPECT_GT(events[0]["faces_separated"].get<int>(), 0);
+  EXPECT_GT(events[0]["points_added"].get<int>(), 0);
+  ASSERT_TRUE(cut.applied_at);
+  EXPECT_GE(*cut.applied_at, 11 * s.time.tick());
+  EXPECT_EQ(events[0]["applied_t"], *cut.applied_at);
+  EXPECT_EQ(served.live["cuts"][0]["applied_tick"], std::llround(*cut.applied_at / s.time.tick()));
+  EXPECT_GT(served.result.meta.extra["final_points"].get<int>(), model.npoint());
+
+  const RunResult again = replay(s, model, served);
+  expect_same_samples(again.samples, served.result.samples);
+  EXPECT_EQ(again.meta.extra["events"][0]["applied_t"], *cut.applied_at);
+  EXPECT_EQ(again.meta.extra["final_points"], served.result.meta.extra["final_points"]);
 }
 
 }  // namespace

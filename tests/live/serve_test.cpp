@@ -86,6 +86,7 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
   EXPECT_GT(replies_sent, 1000);
   EXPECT_EQ(client.bad_crc, 0);
   int64_t previous = -1;
+  int replies_in_contact = 0;
   for (const Reply& r : client.replies) {
     ASSERT_EQ(r.type, "SENSOR");
     ASSERT_EQ(r.device, "ToolReaction");
@@ -98,7 +99,18 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
       ASSERT_EQ(r.values[static_cast<size_t>(c)], samples["force"][i][c].get<double>()) << i;
       ASSERT_EQ(r.values[static_cast<size_t>(c + 3)], samples["torque"][i][c].get<double>()) << i;
     }
+    // Then the contact stiffness dF/dc row by row (N/m): zero out of contact,
+    // its zz entry (the press direction) negative in contact.
+    ASSERT_EQ(r.length, 15u);
+    const double kzz = r.values[14];
+    if (samples["contacts"][i] == 0) {
+      for (size_t v = 6; v < 15; ++v) ASSERT_EQ(r.values[v], 0) << i;
+    } else {
+      ASSERT_LT(kzz, 0) << i;
+      ++replies_in_contact;
+    }
   }
+  EXPECT_GT(replies_in_contact, 100);
   // Units and order: each applied pose (mm, as sent) is the tool centre in
   // metres from its tick on; ticks only grow.
   int64_t last_tick = -1;
@@ -240,6 +252,54 @@ TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
   EXPECT_LT(log["samples"]["t"].size(), 4000u);
   const nlohmann::json session = read_json(dir / "out/session.json");
   EXPECT_EQ(session["tool"]["keyframes"].back()["position"][2], 0.047);
+}
+
+TEST(Serve, AClientsCutIsBuiltOffTheTicksPathRecordedAsAScriptedCutAndReplaysBitForBit) {
+  // The box's top at 40 mm; the tool 4 mm into it with its z axis (the
+  // instrument's) pointing down; a CUT cuts 20 mm down from its centre.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_cut";
+  fs::remove_all(dir);
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "1"}, dir);
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  ASSERT_TRUE(client.send_text("Command", "CUT"));  // no pose yet: refused
+  igtl::Matrix4x4 down = {{1, 0, 0, 20}, {0, -1, 0, 21}, {0, 0, -1, 46}, {0, 0, 0, 1}};
+  ASSERT_TRUE(client.send_bytes(IgtlTestClient::transform("Tool", down)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_TRUE(client.send_text("Command", "SLICE"));  // not a command: refused
+  ASSERT_TRUE(client.send_text("Command", "CUT"));
+  client.read_until_closed(60);
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  const nlohmann::json& live = log["meta"]["live"];
+  EXPECT_EQ(live["commands_refused"], (nlohmann::json{{"cut_without_pose", 1}, {"unknown_command", 1}}));
+  ASSERT_EQ(live["cuts"].size(), 1u);
+  const int64_t tick = live["cuts"][0]["tick"];
+  ASSERT_EQ(log["meta"]["events"].size(), 1u);
+  ASSERT_GT(tick, 0);
+  EXPECT_EQ(log["meta"]["events"][0]["t"], log["samples"]["t"][tick - 1]) << "applied before the tick, at its start";
+  EXPECT_GT(log["meta"]["events"][0]["faces_separated"].get<int>(), 0);
+  const std::string err = serve.stderr_text();
+  EXPECT_NE(err.find("refused from 127.0.0.1:"), std::string::npos) << err;
+  // session.json holds it as an ordinary cut over the tick that applied it.
+  const nlohmann::json session = read_json(dir / "out/session.json");
+  ASSERT_EQ(session["events"].size(), 1u);
+  const nlohmann::json& frames = session["events"][0]["cut"]["keyframes"];
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0]["t"], log["meta"]["events"][0]["t"]);
+  EXPECT_EQ(frames[1]["t"], log["samples"]["t"][tick]);
+  EXPECT_NEAR(frames[0]["a"][0].get<double>(), 0.010, 1e-15);
+  EXPECT_NEAR(frames[1]["b"][2].get<double>(), 0.026, 1e-15);
+  // Built off the tick's path: in at a later tick, which the replay takes from applied_at.
+  const nlohmann::json& cut = session["events"][0]["cut"];
+  ASSERT_TRUE(cut.contains("applied_at")) << cut;
+  EXPECT_GE(cut["applied_at"].get<double>(), frames[1]["t"].get<double>());
+  EXPECT_EQ(log["meta"]["events"][0]["applied_t"], cut["applied_at"]);
+  expect_replay_identical(dir);
+  EXPECT_EQ(read_json(dir / "replay/forces.json")["meta"]["final_points"], log["meta"]["final_points"]);
 }
 
 TEST(Serve, SendsTheBoundarySurfaceAtItsRateInTheClientsFrame) {

@@ -2,10 +2,12 @@
 // streams a straight path of TRANSFORM poses at a fixed rate and reads every
 // reply (the library packs and unpacks). scripts/live_bench.sh drives the
 // liver with it; docs/live.md shows it as a first client.
-//   organsim_live_client PORT RATE_HZ SECONDS X0,Y0,Z0 X1,Y1,Z1 [DEVICE]
+//   organsim_live_client PORT RATE_HZ SECONDS X0,Y0,Z0 X1,Y1,Z1 [DEVICE] [--down] [--cut K [--cut-text TEXT]]
 // Positions in mm; the tool moves from the first to the second over the
-// first half of SECONDS and holds there. Prints the replies received and
-// the last force.
+// first half of SECONDS and holds there. --down turns the tool's z axis (the
+// instrument's, docs/live.md#commands) to -z instead of +z; --cut K sends
+// the STRING command CUT (or TEXT) right after the K-th pose (from 0). Prints the
+// replies received and the last force.
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -22,13 +24,33 @@ bool parse_point(const char* text, std::array<float, 3>& p) {
 
 int main(int argc, char** argv) {
   std::array<float, 3> from{}, to{};
-  if (argc < 6 || !parse_point(argv[4], from) || !parse_point(argv[5], to)) {
-    std::fprintf(stderr, "usage: %s PORT RATE_HZ SECONDS X0,Y0,Z0 X1,Y1,Z1 [DEVICE]  (positions in mm)\n", argv[0]);
+  std::string device = "Tool";
+  bool down = false;
+  long cut_at = -1;
+  std::string cut_text = "CUT";
+  bool usage = argc < 6 || !parse_point(argv[4], from) || !parse_point(argv[5], to);
+  for (int i = 6; !usage && i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--down") {
+      down = true;
+    } else if (a == "--cut" && i + 1 < argc) {
+      cut_at = std::atol(argv[++i]);
+    } else if (a == "--cut-text" && i + 1 < argc) {
+      cut_text = argv[++i];
+    } else if (a.rfind("--", 0) != 0) {
+      device = a;
+    } else {
+      usage = true;
+    }
+  }
+  if (usage) {
+    std::fprintf(stderr, "usage: %s PORT RATE_HZ SECONDS X0,Y0,Z0 X1,Y1,Z1 [DEVICE] [--down] [--cut K [--cut-text TEXT]]  (positions in mm)\n",
+                 argv[0]);
     return 2;
   }
   const int port = std::atoi(argv[1]);
   const double rate = std::atof(argv[2]), seconds = std::atof(argv[3]);
-  const std::string device = argc > 6 ? argv[6] : "Tool";
+  const float z_axis = down ? -1.0f : 1.0f;  // a rotation of 180 degrees about x when down
   organsim::test::IgtlTestClient client;
   if (!client.connect_to(port)) {
     std::fprintf(stderr, "cannot connect to 127.0.0.1:%d\n", port);
@@ -41,7 +63,9 @@ int main(int argc, char** argv) {
     const float s = std::min(1.0f, 2.0f * static_cast<float>(k) / static_cast<float>(n));
     const std::array<float, 3> p{from[0] + s * (to[0] - from[0]), from[1] + s * (to[1] - from[1]),
                                  from[2] + s * (to[2] - from[2])};
-    if (!client.send_pose(device, p) || !client.read_replies(0)) break;
+    igtl::Matrix4x4 m = {{1, 0, 0, p[0]}, {0, z_axis, 0, p[1]}, {0, 0, z_axis, p[2]}, {0, 0, 0, 1}};
+    if (!client.send_bytes(organsim::test::IgtlTestClient::transform(device, m)) || !client.read_replies(0)) break;
+    if (k == cut_at && !client.send_text("Command", cut_text)) break;
   }
   client.read_until_closed(5);
   std::printf("replies: %zu", client.replies.size());

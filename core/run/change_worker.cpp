@@ -1,0 +1,38 @@
+#include "core/run/change_worker.h"
+
+#include <chrono>
+
+namespace organsim {
+
+void ChangeWorker::start(TopologyEvents& events, const Model& current, std::vector<Vec3> x, double t0, double t1,
+                         const ToolSpec* tool, const OffPathPlan& when) {
+  at_ = when.at;
+  future_ = std::async(std::launch::async, [&events, &current, x = std::move(x), t0, t1, tool] {
+    Built b;
+    auto next = std::make_unique<Model>();
+    if (!events.before_tick(t0, t1, current, x, *next)) return b;
+    b.guaranteed = events.guaranteed_step(current, *next, critical_step_options(*next, tool));
+    b.next = std::move(next);
+    return b;
+  });
+}
+
+bool ChangeWorker::due(double t0, double dt) const {
+  if (!busy()) return false;
+  // As the run's tick events: the first tick that starts at or after the time, half a step of slack.
+  if (at_) return t0 >= *at_ - 0.5 * dt;
+  return future_.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+}
+
+ChangeWorker::Built ChangeWorker::take() { return future_.get(); }
+
+void ChangeWorker::abandon() {
+  if (!busy()) return;
+  try {
+    future_.get();
+  } catch (...) {
+    // The run is ending with its own result or error.
+  }
+}
+
+}  // namespace organsim

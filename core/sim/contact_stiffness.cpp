@@ -1,0 +1,79 @@
+#include "core/sim/contact_stiffness.h"
+
+#include "core/physics/force_law.h"
+
+namespace organsim {
+
+namespace {
+
+// dq/dc of a triangle's closest point q to c: the projector onto the feature
+// q lies on, read from its barycentric weights (three non-zero: the face;
+// two: an edge; one: a vertex, which stays put).
+Mat3 closest_point_follow(const double w[3], const Vec3& x0, const Vec3& x1, const Vec3& x2) {
+  const Vec3* x[3] = {&x0, &x1, &x2};
+  int on[3], n = 0;
+  for (int i = 0; i < 3; ++i)
+    if (w[i] > 0) on[n++] = i;
+  if (n == 3) {
+    const Vec3 m = (x1 - x0).cross(x2 - x0);
+    const double len = m.norm();
+    if (len > 0) return Mat3::Identity() - (m / len) * (m / len).transpose();
+    return Mat3::Zero();
+  }
+  if (n == 2) {
+    const Vec3 e = *x[on[1]] - *x[on[0]];
+    const double len = e.norm();
+    if (len > 0) return (e / len) * (e / len).transpose();
+  }
+  return Mat3::Zero();
+}
+
+}  // namespace
+
+Mat3 reference_push_stiffness(const std::vector<Vec3>& x, const Vec3& center, double radius, double stiffness,
+                              const std::vector<double>& scale) {
+  Mat3 k = Mat3::Zero();
+  for (size_t i = 0; i < x.size(); ++i) {
+    const Vec3 offset = x[i] - center;
+    const double dist = offset.norm();
+    if (!(dist < radius)) continue;
+    const Vec3 n = dist > 0 ? Vec3(offset / dist) : Vec3(0, 0, 1);  // as force_law::push_penalty
+    const double ks = stiffness * (scale.empty() ? 1.0 : scale[i]);
+    k -= force_law::push_penalty_center_jacobian(n, dist, radius, ks, Mat3::Zero().eval());
+  }
+  return k;
+}
+
+Mat3 reference_surface_stiffness(const Model& model, const std::vector<Vec3>& x, const Vec3& center, double radius,
+                                 double stiffness) {
+  Mat3 k = Mat3::Zero();
+  for (const Tri& t : model.surface) {
+    // A triangle whose box stays R away from c cannot touch (cheap: one pass per tick at liver size).
+    const Vec3 lo = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]), hi = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
+    if ((center.cwiseMax(lo).cwiseMin(hi) - center).squaredNorm() >= radius * radius) continue;
+    double share[3];
+    for (int i = 0; i < 3; ++i) share[i] = model.tool_scale(t[i]) / model.surface_count(t[i]);
+    Vec3 f;
+    double w[3];
+    const Vec3 &x0 = x[t[0]], &x1 = x[t[1]], &x2 = x[t[2]];
+    if (!force_law::sphere_triangle_penalty(center, radius, x0, x1, x2, stiffness, share, f, w)) continue;
+    // f = k_t (R - d) n: its direction and size give n and d back.
+    const double kt = stiffness * force_law::triangle_penalty_scale(share);
+    if (!(kt > 0)) continue;  // no force, no stiffness (and no direction to read back)
+    const Vec3 q = w[0] * x0 + w[1] * x1 + w[2] * x2;
+    const double dist = (q - center).norm();
+    const Vec3 n = f / (kt * (radius - dist));
+    k -= force_law::push_penalty_center_jacobian(n, dist, radius, kt, closest_point_follow(w, x0, x1, x2));
+  }
+  return k;
+}
+
+Mat3 tool_contact_stiffness(const Model& model, const std::vector<Vec3>& x, const BackendTool& tool,
+                            const Vec3& center) {
+  if (!tool.present || tool.mode != ToolMode::Push) return Mat3::Zero();
+  if (tool.contact == ToolContact::Surface)
+    return reference_surface_stiffness(model, x, center, tool.radius, tool.contact_stiffness);
+  return reference_push_stiffness(x, center, tool.radius, tool.contact_stiffness, model.tool_k_scale);
+}
+
+}  // namespace organsim
