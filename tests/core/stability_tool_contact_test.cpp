@@ -45,29 +45,36 @@ std::pair<int32_t, double> most_pressable_point(const Model& m) {
   return best;
 }
 
-// Does the motion from rest, the sphere already 0.2 mm into the top, grow
-// without bound at dt? At first touch the pressed vertex is every one of
-// its triangles' closest point, so its contact stiffness is the bound; a
-// stable run oscillates within a few depths of rest (undamped), an unstable
-// one passes 100 depths (or overflows).
-bool first_touch_motion_grows(const Model& m, const Vec3& center, double k, double dt) {
+// Does the motion started at x0 (at rest there) grow more than `limit` away
+// from `reference` within 10000 steps of dt, undamped, the sphere held at
+// `center`? A non-finite position counts as growing.
+bool motion_grows(const Model& m, std::vector<Vec3> x0, const std::vector<Vec3>& reference, double limit,
+                  const Vec3& center, double k, double dt) {
   const BackendTool tool{true, ToolMode::Push, kRadius, k, ToolContact::Surface};
   auto backend = make_cpu_backend(m, tool, testing::one_thread());
+  backend->set_state(x0, x0);
   TickRequest r;
   r.dt = dt;
   r.substeps = 50;
   r.tool_active = true;
   r.tool_from = r.tool_to = center;
-  std::vector<Vec3> x;
   for (int tick = 0; tick < 200; ++tick) {
     backend->tick(r);
-    backend->positions(x);
-    for (int32_t p = 0; p < m.npoint(); ++p) {
-      const double d = (x[p] - m.rest_position[p]).norm();
-      if (!std::isfinite(d) || d > 100 * kDepth) return true;
+    backend->positions(x0);
+    for (int32_t i = 0; i < m.npoint(); ++i) {
+      const double d = (x0[i] - reference[i]).norm();
+      if (!std::isfinite(d) || d > limit) return true;
     }
   }
   return false;
+}
+
+// From rest, the sphere already 0.2 mm into the top. At first touch the
+// pressed vertex is every one of its triangles' closest point, so its
+// contact stiffness is the bound; a stable run oscillates within a few
+// depths of rest, an unstable one passes 100 depths.
+bool first_touch_motion_grows(const Model& m, const Vec3& center, double k, double dt) {
+  return motion_grows(m, m.rest_position, m.rest_position, 100 * kDepth, center, k, dt);
 }
 
 // The model at rest under the pressing sphere: the same model with drag,
@@ -90,34 +97,18 @@ std::vector<Vec3> pressed_equilibrium(const Vec3& center, double k, double dt) {
   return x;
 }
 
-// Does a perturbation of 1e-4 of the depth about the pressed equilibrium
-// grow by 1e4 within 10000 steps of dt? Small enough that every pressed
-// point stays in contact (the penalty acts linearly), undamped.
-bool contact_perturbation_grows(const Model& m, const std::vector<Vec3>& rest, const Vec3& center, double k,
+// A perturbation of 1e-4 of the depth about the pressed equilibrium, grown
+// by 1e4? Small enough that every pressed point stays in contact (the
+// penalty acts linearly).
+bool contact_perturbation_grows(const Model& m, const std::vector<Vec3>& pressed, const Vec3& center, double k,
                                 double dt) {
-  const BackendTool tool{true, ToolMode::Push, kRadius, k, ToolContact::Surface};
-  auto backend = make_cpu_backend(m, tool, testing::one_thread());
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   const double scale = 1e-4 * kDepth;
-  std::vector<Vec3> x = rest;
+  std::vector<Vec3> x = pressed;
   for (int32_t i = 0; i < m.npoint(); ++i)
     if (!m.fixed[i]) x[i] += scale * Vec3(u(rng), u(rng), u(rng));
-  backend->set_state(x, x);
-  TickRequest r;
-  r.dt = dt;
-  r.substeps = 50;
-  r.tool_active = true;
-  r.tool_from = r.tool_to = center;
-  for (int tick = 0; tick < 200; ++tick) {
-    backend->tick(r);
-    backend->positions(x);
-    for (int32_t i = 0; i < m.npoint(); ++i) {
-      const double d = (x[i] - rest[i]).norm();
-      if (!std::isfinite(d) || d > 1e4 * scale) return true;
-    }
-  }
-  return false;
+  return motion_grows(m, x, pressed, 1e4 * scale, center, k, dt);
 }
 
 TEST(StabilityToolContact, SmallToolOnALightPointIsStableBelowDtCritAndCrossesOverWithin30Percent) {
