@@ -206,11 +206,12 @@ class CpuBackend final : public Backend {
                "), " + (fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
       case Pass::SurfaceContact:
-        return "sphere against " + std::to_string(m.nsurface()) +
-               " surface triangles, broad phase: the sphere against each triangle's box; each touching "
+        return std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
+               " surface triangles, broad phase: the " + shape_name(tool_.shape) +
+               " against each triangle's box; each touching "
                "triangle's penalty at its closest point, spread to its corners (one thread, triangle order)";
       case Pass::ToolContact:
-        return plan_.tool == ToolTerm::Push      ? "sphere penalty contact on the points"
+        return plan_.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"
                : plan_.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
                                                  : "grasp attachment springs";
       case Pass::Integrate:
@@ -280,10 +281,14 @@ class CpuBackend final : public Backend {
     refresh_suture_rest();
     Reaction reaction;
     auto substep = [&](int32_t s) {
-      // The force of substep s acts at its start: tool centre interpolated there.
-      const double f = static_cast<double>(s) / request.substeps;
-      const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
-      for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
+      // The force of substep s acts at its start: the tool's pose interpolated there.
+      const ToolPlacement placed = request.tool_at(tool_, s);
+      for (int k = 0; k < 3; ++k) {
+        ctx.tool_center[k] = static_cast<Real>(placed.origin[k]);
+        ctx.tool_a[k] = static_cast<Real>(placed.a[k]);
+        ctx.tool_b[k] = static_cast<Real>(placed.b[k]);
+      }
+      ctx.tool_reach = static_cast<Real>(placed.reach());
       if (ctx.tool == ToolTerm::Surface) surface_contact(ctx);
       reaction = fast_ ? fast_step(ctx) : step(ctx);
       time_ += request.dt;
@@ -446,13 +451,13 @@ class CpuBackend final : public Backend {
             fast_->get_point(p, u, d);
             x[0] = rest_.x[p] + u[0], x[1] = rest_.y[p] + u[1], x[2] = rest_.z[p] + u[2];
           },
-          ctx.tool_center, ctx.tool_radius, ctx.tool_k);
+          ctx.tool_a, ctx.tool_b, ctx.tool_radius, ctx.tool_k);
     } else {
       surface_.evaluate(
           [&](int32_t p, Real x[3]) {
             x[0] = rest_.x[p] + u_.x[p], x[1] = rest_.y[p] + u_.y[p], x[2] = rest_.z[p] + u_.z[p];
           },
-          ctx.tool_center, ctx.tool_radius, ctx.tool_k);
+          ctx.tool_a, ctx.tool_b, ctx.tool_radius, ctx.tool_k);
     }
     ctx.contact_slot = surface_.slot();
     ctx.contact_force = surface_.force();

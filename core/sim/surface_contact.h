@@ -1,14 +1,15 @@
 #pragma once
 // The surface-contact pass of the CPU backend (Pass::SurfaceContact): a
-// pushing sphere against the Model's boundary triangles
-// (force_law::sphere_triangle_penalty), giving each touched point the sum
+// pushing sphere or capsule against the Model's boundary triangles
+// (force_law::capsule_triangle_penalty, the sphere's when its segment has
+// zero length), giving each touched point the sum
 // of w_p(t) f(t) over its touching triangles t, in ascending t (the order
 // step.comp gathers them in). The kernels then add these forces in their
 // tool pass (add_tool_force with ToolTerm::Surface), which also sums the
 // reaction, so the reaction is minus exactly what the tissue receives.
 //
-// Broad phase: the sphere against each triangle's bounding box at the
-// current positions, so a triangle away from the tool costs a box test and
+// Broad phase: the tool (its segment's box grown by the radius) against
+// each triangle's bounding box at the current positions, so a triangle away from the tool costs a box test and
 // an untouched point nothing in the kernels. One thread, in triangle order:
 // the result does not depend on the thread count.
 #include <algorithm>
@@ -50,10 +51,11 @@ class SurfaceContact {
     touched_.clear();
   }
 
-  // Forces for the sphere (centre c, radius R, penalty k N/m) with every
-  // surface point at position(p, x[3]) (internal id p).
+  // Forces for the tool (the segment a-b, a == b for a sphere's centre;
+  // radius R, penalty k N/m) with every surface point at position(p, x[3])
+  // (internal id p).
   template <class Position>
-  void evaluate(Position position, const Real center[3], Real radius, Real k) {
+  void evaluate(Position position, const Real seg_a[3], const Real seg_b[3], Real radius, Real k) {
     for (int32_t p : touched_) slot_[p] = -1;
     touched_.clear();
     force_.clear();
@@ -64,10 +66,10 @@ class SurfaceContact {
       x_[i] = x[0], y_[i] = x[1], z_[i] = x[2];
     }
     using V3 = Eigen::Matrix<Real, 3, 1>;
-    const V3 c(center[0], center[1], center[2]);
+    const V3 sa(seg_a[0], seg_a[1], seg_a[2]), sb(seg_b[0], seg_b[1], seg_b[2]);
     const Real r2 = radius * radius;
     // Broad phase, vectorised over triangles: the squared distance from the
-    // centre to each triangle's box.
+    // segment's box (the centre, for a sphere) to each triangle's box.
     const int32_t ntri = static_cast<int32_t>(tris_.size());
     const int32_t* __restrict ta = corner_[0].data();
     const int32_t* __restrict tb = corner_[1].data();
@@ -76,16 +78,18 @@ class SurfaceContact {
     const Real* __restrict X = x_.data();
     const Real* __restrict Y = y_.data();
     const Real* __restrict Z = z_.data();
-    const Real cx = c[0], cy = c[1], cz = c[2];
+    const Real lx = std::min(sa[0], sb[0]), ly = std::min(sa[1], sb[1]), lz = std::min(sa[2], sb[2]);
+    const Real hx = std::max(sa[0], sb[0]), hy = std::max(sa[1], sb[1]), hz = std::max(sa[2], sb[2]);
 #pragma omp simd
     for (int32_t t = 0; t < ntri; ++t) {
-      auto gap = [](Real p, Real u, Real v, Real w) {
+      // The gap between [plo, phi] and the triangle's extent along one axis.
+      auto gap = [](Real plo, Real phi, Real u, Real v, Real w) {
         const Real lo = u < v ? (u < w ? u : w) : (v < w ? v : w), hi = u > v ? (u > w ? u : w) : (v > w ? v : w);
-        return p < lo ? lo - p : p > hi ? p - hi : Real(0);
+        return phi < lo ? lo - phi : plo > hi ? plo - hi : Real(0);
       };
-      const Real gx = gap(cx, X[ta[t]], X[tb[t]], X[tc[t]]);
-      const Real gy = gap(cy, Y[ta[t]], Y[tb[t]], Y[tc[t]]);
-      const Real gz = gap(cz, Z[ta[t]], Z[tb[t]], Z[tc[t]]);
+      const Real gx = gap(lx, hx, X[ta[t]], X[tb[t]], X[tc[t]]);
+      const Real gy = gap(ly, hy, Y[ta[t]], Y[tb[t]], Y[tc[t]]);
+      const Real gz = gap(lz, hz, Z[ta[t]], Z[tb[t]], Z[tc[t]]);
       near[t] = gx * gx + gy * gy + gz * gz < r2;
     }
     for (int32_t i = 0; i < ntri; ++i) {
@@ -95,7 +99,7 @@ class SurfaceContact {
       const Real share[3] = {share_[t[0]], share_[t[1]], share_[t[2]]};
       V3 f;
       Real w[3];
-      if (!force_law::sphere_triangle_penalty(c, radius, a, b, e, k, share, f, w)) continue;
+      if (!force_law::capsule_triangle_penalty(sa, sb, radius, a, b, e, k, share, f, w)) continue;
       for (int j = 0; j < 3; ++j) {
         const int32_t p = points_[t[j]];
         if (slot_[p] < 0) {
@@ -120,7 +124,7 @@ class SurfaceContact {
   std::vector<int32_t> local_of_point_;  // index into points_ or -1 (npoint)
   std::vector<std::array<int32_t, 3>> tris_;  // corners as indices into points_
   std::array<std::vector<int32_t>, 3> corner_;  // the same, one array per corner (the broad phase's gathers)
-  std::vector<uint8_t> near_;                  // per triangle: its box reaches into the sphere
+  std::vector<uint8_t> near_;                  // per triangle: its box comes within the radius of the segment's box
   std::vector<Real> share_;              // s_p / n_p per surface point (force_law::sphere_triangle_penalty)
   std::vector<Real> x_, y_, z_;          // surface points' positions this substep
   std::vector<int32_t> slot_;            // per lane
