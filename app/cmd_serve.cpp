@@ -56,6 +56,11 @@ bool write_session(const fs::path& path, const ServeArgs& args, const LiveSessio
 void serve_command(const ServeArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (!s.tool) throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve needs a \"tool\": the client drives it");
+  // A client sends the tool's position; its rotation is not applied, and the
+  // reply's local stiffness is the sphere's.
+  if (s.tool->spec.shape != ToolShape::Sphere)
+    throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve drives a sphere tool (tool.shape \"sphere\"); "
+                                                     "a capsule's orientation is not taken from the client");
   s.time.duration = args.duration;
   if (s.time.ticks() > 100'000'000) throw Error(ErrorKind::Usage, "--duration: more than 1e8 ticks");
   ClientFrame frame;

@@ -41,7 +41,7 @@
 #define ORGANSIM_GL_U_DT 0            // float dt, s
 #define ORGANSIM_GL_U_DAMPING 1       // float alpha dt (viscous drag in Verlet form: d *= 1 - alpha dt)
 #define ORGANSIM_GL_U_GRAVITY 2       // vec3 g, m/s^2
-#define ORGANSIM_GL_U_TOOL_CENTER 3   // vec3 tool centre during this step, m
+#define ORGANSIM_GL_U_TOOL_CENTER 3   // vec3 tool frame's origin during this step (torque reference), m
 #define ORGANSIM_GL_U_TOOL_ACTIVE 4   // int: 1 when the tool acts in this step
 #define ORGANSIM_GL_U_TOOL_RADIUS 5   // float R, m
 #define ORGANSIM_GL_U_TOOL_K 6        // float contact / attachment stiffness, N/m
@@ -49,5 +49,7 @@
 #define ORGANSIM_GL_U_NPARTIAL 8      // int: partials to sum (reduce kernel)
 #define ORGANSIM_GL_U_SLOT 9          // int: ring slot of this tick (reduce: reaction; step: status)
 #define ORGANSIM_GL_U_DT2 10          // float dt^2, s^2 (rounded once from double)
+#define ORGANSIM_GL_U_TOOL_A 11       // vec3 the tool shape's segment, first end, m (the centre for a sphere); push only
+#define ORGANSIM_GL_U_TOOL_B 12       // vec3 its second end, m (the centre for a sphere); push only
 
 #endif

@@ -107,5 +107,95 @@ bool sphere_triangle_penalty(vec3 center, float radius, vec3 x0, vec3 x1, vec3 x
   return true;
 }
 
+// The capsule tool (force_law.h's capsule section): the segment a-b swept by R.
+
+// The point of the segment a-b closest to p; exactly a when a == b.
+vec3 segment_closest_point(vec3 p, vec3 a, vec3 b) {
+  const vec3 ab = b - a;
+  const float len2 = dot(ab, ab);
+  if (!(len2 > 0.0)) return a;
+  return a + clamp(dot(ab, p - a) / len2, 0.0, 1.0) * ab;
+}
+
+// The closest points of the segments p1-q1 and p2-q2 as parameters (s, t)
+// (force_law::segments_closest).
+vec2 segments_closest(vec3 p1, vec3 q1, vec3 p2, vec3 q2) {
+  const vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const float a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+  if (!(a > 0.0)) return vec2(0.0, e > 0.0 ? clamp(f / e, 0.0, 1.0) : 0.0);
+  const float c = dot(d1, r);
+  if (!(e > 0.0)) return vec2(clamp(-c / a, 0.0, 1.0), 0.0);
+  const float b = dot(d1, d2), denom = a * e - b * b;
+  float s = denom > 0.0 ? clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+  float t = (b * s + f) / e;
+  if (t < 0.0) {
+    t = 0.0;
+    s = clamp(-c / a, 0.0, 1.0);
+  } else if (t > 1.0) {
+    t = 1.0;
+    s = clamp((b - c) / a, 0.0, 1.0);
+  }
+  return vec2(s, t);
+}
+
+float triangle_distance2(vec3 p, vec3 x0, vec3 x1, vec3 x2) {
+  const vec3 w = triangle_closest_weights(p, x0, x1, x2);
+  const vec3 d = w.x * x0 + w.y * x1 + w.z * x2 - p;
+  return dot(d, d);
+}
+
+// The point of the segment a-b closest to the triangle
+// (force_law::segment_point_closest_to_triangle): the crossing point when
+// the segment passes through it, else the nearest of the ends and the
+// closest points to the three edges, the first on a tie.
+vec3 segment_point_closest_to_triangle(vec3 a, vec3 b, vec3 x0, vec3 x1, vec3 x2, out bool crossing) {
+  crossing = false;
+  const vec3 outward = cross(x1 - x0, x2 - x0);
+  const float da = dot(outward, a - x0), db = dot(outward, b - x0);
+  if (((da <= 0.0 && db >= 0.0) || (da >= 0.0 && db <= 0.0)) && da != db) {
+    const vec3 p = a + (da / (da - db)) * (b - a);
+    if (dot(outward, cross(x1 - x0, p - x0)) >= 0.0 && dot(outward, cross(x2 - x1, p - x1)) >= 0.0 &&
+        dot(outward, cross(x0 - x2, p - x2)) >= 0.0) {
+      crossing = true;
+      return p;
+    }
+  }
+  vec3 best = a;
+  float best2 = triangle_distance2(a, x0, x1, x2);
+  const float b2 = triangle_distance2(b, x0, x1, x2);
+  if (b2 < best2) {
+    best = b;
+    best2 = b2;
+  }
+  for (int e = 0; e < 3; ++e) {
+    const vec3 u = e == 0 ? x0 : e == 1 ? x1 : x2;
+    const vec3 v = e == 0 ? x1 : e == 1 ? x2 : x0;
+    const vec2 st = segments_closest(a, b, u, v);
+    const vec3 ps = a + st.x * (b - a);
+    const vec3 d = u + st.y * (v - u) - ps;
+    const float d2 = dot(d, d);
+    if (d2 < best2) {
+      best = ps;
+      best2 = d2;
+    }
+  }
+  return best;
+}
+
+// Surface contact of a capsule with one triangle
+// (force_law::capsule_triangle_penalty): the sphere's contact centred at the
+// segment's closest point; a segment through the triangle pushes along the
+// inward normal with k_t R; a == b is the sphere.
+bool capsule_triangle_penalty(vec3 a, vec3 b, float radius, vec3 x0, vec3 x1, vec3 x2, float k, vec3 share,
+                              out vec3 f, out vec3 w) {
+  if (a == b) return sphere_triangle_penalty(a, radius, x0, x1, x2, k, share, f, w);
+  bool crossing;
+  const vec3 p = segment_point_closest_to_triangle(a, b, x0, x1, x2, crossing);
+  if (!crossing) return sphere_triangle_penalty(p, radius, x0, x1, x2, k, share, f, w);
+  w = triangle_closest_weights(p, x0, x1, x2);
+  f = k * min(min(share.x, share.y), share.z) * radius * -normalize(cross(x1 - x0, x2 - x0));
+  return true;
+}
+
 // A pulling tool's attachment spring: k (target - x).
 vec3 pull_attachment(vec3 target, vec3 x, float k) { return k * (target - x); }

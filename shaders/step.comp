@@ -95,6 +95,10 @@ layout(location = ORGANSIM_GL_U_TOOL_ACTIVE) uniform int u_tool_active;
 layout(location = ORGANSIM_GL_U_TOOL_RADIUS) uniform float u_tool_radius;
 layout(location = ORGANSIM_GL_U_TOOL_K) uniform float u_tool_k;
 layout(location = ORGANSIM_GL_U_REDUCE) uniform int u_reduce;
+#if defined(TOOL_PUSH) || defined(TOOL_SURFACE)
+layout(location = ORGANSIM_GL_U_TOOL_A) uniform vec3 u_tool_a;  // the shape's segment (a == b: a sphere)
+layout(location = ORGANSIM_GL_U_TOOL_B) uniform vec3 u_tool_b;
+#endif
 
 shared vec4 s_force[ORGANSIM_GL_CHUNK];   // {F.xyz, contacts}
 shared vec4 s_torque[ORGANSIM_GL_CHUNK];  // {T.xyz, 0}
@@ -212,7 +216,7 @@ void main() {
 #if defined(TOOL_PUSH)
     // Penalty contact inside the sphere, the point's share m.z of k_c.
     vec3 fc;
-    if (push_penalty(d, u_tool_radius, u_tool_k * m.z, fc)) {
+    if (push_penalty(xi - segment_closest_point(xi, u_tool_a, u_tool_b), u_tool_radius, u_tool_k * m.z, fc)) {
       f += fc;
       contact_force = vec4(-fc, 1.0);
       contact_torque = vec4(cross(d, -fc), 0.0);
@@ -225,15 +229,16 @@ void main() {
     vec3 fc = vec3(0.0);
     bool touching = false;
     const float r2 = u_tool_radius * u_tool_radius;
+    const vec3 seg_lo = min(u_tool_a, u_tool_b), seg_hi = max(u_tool_a, u_tool_b);
     for (int j = 0; j < range.y; ++j) {
       const ivec4 t = surface_tris[range.x + j];
       const vec3 a = x_cur[t.x].xyz, b = x_cur[t.y].xyz, c = x_cur[t.z].xyz;
-      const vec3 out_lo = max(min(min(a, b), c) - u_tool_center, vec3(0.0));
-      const vec3 out_hi = max(u_tool_center - max(max(a, b), c), vec3(0.0));
+      const vec3 out_lo = max(min(min(a, b), c) - seg_hi, vec3(0.0));
+      const vec3 out_hi = max(seg_lo - max(max(a, b), c), vec3(0.0));
       const vec3 gap = out_lo + out_hi;
       if (!(dot(gap, gap) < r2)) continue;
       vec3 ft, w;
-      if (sphere_triangle_penalty(u_tool_center, u_tool_radius, a, b, c, u_tool_k,
+      if (capsule_triangle_penalty(u_tool_a, u_tool_b, u_tool_radius, a, b, c, u_tool_k,
                                   vec3(mass[t.x].w, mass[t.y].w, mass[t.z].w), ft, w)) {
         fc += w[t.w] * ft;
         touching = true;

@@ -297,12 +297,12 @@ Plan GlBackend::plan() const {
         break;
       case Pass::Gravity: detail = "m g on every free point" + in_step; break;
       case Pass::SurfaceContact:
-        detail = "sphere against " + std::to_string(m.nsurface()) +
-                 " surface triangles, each surface point recomputing its own triangles (broad phase: the sphere "
-                 "against each triangle's box), w_p f summed in triangle order" + in_step;
+        detail = std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
+                 " surface triangles, each surface point recomputing its own triangles (broad phase: the " +
+                 shape_name(tool_.shape) + " against each triangle's box), w_p f summed in triangle order" + in_step;
         break;
       case Pass::ToolContact:
-        detail = (plan_.tool == ToolTerm::Push      ? "sphere penalty contact on the points"
+        detail = (plan_.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"
                   : plan_.tool == ToolTerm::Surface ? "the surface contact's force on each surface point"
                                                     : "grasp attachment springs") +
                  in_step + ", partial reaction per workgroup";
@@ -406,11 +406,14 @@ Reaction GlBackend::tick(const TickRequest& request) {
 
   for (int32_t s = 0; s < request.substeps; ++s) {
     if (tool_.present) {
-      // The force of substep s acts at its start (as on the CPU): centre there.
-      const double f = static_cast<double>(s) / request.substeps;
-      const Vec3 c = request.tool_from + f * (request.tool_to - request.tool_from);
-      glProgramUniform3f(program, ORGANSIM_GL_U_TOOL_CENTER, static_cast<float>(c.x()), static_cast<float>(c.y()),
-                         static_cast<float>(c.z()));
+      // The force of substep s acts at its start (as on the CPU): the pose there.
+      const ToolPlacement placed = request.tool_at(tool_, s);
+      auto set = [&](GLint location, const Vec3& v) {
+        glProgramUniform3f(program, location, static_cast<float>(v.x()), static_cast<float>(v.y()),
+                           static_cast<float>(v.z()));
+      };
+      set(ORGANSIM_GL_U_TOOL_CENTER, placed.origin);
+      if (plan_.tool != ToolTerm::Pull) set(ORGANSIM_GL_U_TOOL_A, placed.a), set(ORGANSIM_GL_U_TOOL_B, placed.b);
       glProgramUniform1i(program, ORGANSIM_GL_U_REDUCE, tool_acts && s == request.substeps - 1 ? 1 : 0);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_[cur_]);

@@ -54,7 +54,8 @@ void VtkSeriesRecorder::on_start(const Model& model, Backend& backend) {
   if (ec) throw Error(ErrorKind::Output, (outdir_ / "vtk").string() + ": cannot create the folder: " + ec.message());
   backend.positions(positions_);
   const double t = backend.time();
-  write_state(model, t, tool_ ? tool_->position_at(t) : Vec3::Zero(), false);
+  write_state(model, t, tool_ ? tool_->position_at(t) : Vec3::Zero(), tool_ ? tool_->orientation_at(t) : Quat::Identity(),
+              false);
   if (t + tick_ + 1e-9 >= next_due_ / def_.rate) previous_ = positions_;
 }
 
@@ -62,7 +63,7 @@ void VtkSeriesRecorder::on_tick(const Model& model, Backend& backend, const Tick
   const double due = next_due_ / def_.rate;
   if (info.t + 1e-9 >= due) {
     backend.positions(positions_);
-    write_state(model, info.t, info.tool_center, previous_.size() == positions_.size());
+    write_state(model, info.t, info.tool_center, info.tool_orientation, previous_.size() == positions_.size());
     previous_.clear();
   }
   // The velocity of the next state is its displacement over one tick: keep
@@ -70,7 +71,8 @@ void VtkSeriesRecorder::on_tick(const Model& model, Backend& backend, const Tick
   if (info.t + tick_ + 1e-9 >= next_due_ / def_.rate) backend.positions(previous_);
 }
 
-void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& tool_center, bool have_previous) {
+void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& tool_center, const Quat& tool_turn,
+                                    bool have_previous) {
   const auto n = static_cast<size_t>(model.npoint());
   // Internal id of each file point: the user's numbering, then (surface
   // files) only the points on the boundary.
@@ -104,12 +106,13 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   attributes.point_data.push_back(std::move(fixed));
   if (tool_ && tool_->mode == ToolMode::Push) {
     // The push contact as the backends apply it (the reference's evaluation
-    // of force_law::sphere_triangle_penalty or push_penalty, each point's
+    // of force_law::capsule_triangle_penalty or push_penalty, each point's
     // stiffness share included).
+    const ToolPlacement placed = place_tool(tool_->backend_tool(), tool_center, tool_turn);
     if (tool_->contact == ToolContact::Surface)
-      reference_surface_forces(model, positions_, tool_center, tool_->radius, tool_->contact_stiffness, force);
+      reference_surface_forces(model, positions_, placed, tool_->contact_stiffness, force);
     else
-      reference_push_forces(positions_, tool_center, tool_->radius, tool_->contact_stiffness, force, model.tool_k_scale);
+      reference_push_forces(positions_, placed, tool_->contact_stiffness, force, model.tool_k_scale);
     attributes.point_data.push_back(point_array("tool_force", order, force));
   }
 

@@ -37,7 +37,7 @@ class VtkSeriesRecorder : public RunObserver {
   int states_written() const { return static_cast<int>(steps_.size()); }
 
  private:
-  void write_state(const Model& model, double t, const Vec3& tool_center, bool have_previous);
+  void write_state(const Model& model, double t, const Vec3& tool_center, const Quat& tool_turn, bool have_previous);
 
   VtkSeriesDef def_;
   std::filesystem::path outdir_;

@@ -163,6 +163,8 @@ inline auto shear_rest_stiffness(const V3& gi, const V3& gj) {
 
 // Push contact of a sphere (radius R, penalty k N/m, the point's stiffness
 // share s): a point at `offset` = x - c from the centre with |offset| < R
+// (for a capsule, c is the segment's point closest to x,
+// segment_closest_point)
 // gets f = k s (R - |offset|) offset / |offset| (along +z at the exact
 // centre, where the direction is undefined). Returns false, f untouched,
 // for a point outside the sphere.
@@ -285,6 +287,125 @@ inline M3 push_penalty_center_jacobian(const V3& n, Real dist, Real radius, Real
   M3 df_do = -nn;
   if (dist > Real(0)) df_do += (radius - dist) / dist * (M3::Identity() - nn);
   return k * df_do * (follow - M3::Identity());
+}
+
+// --- Capsule tool -------------------------------------------------------------
+// A capsule is the set of points within R of the segment a-b in the world
+// (the tool frame's end points placed by its pose); a sphere is the capsule
+// whose segment has zero length (a == b == its centre).
+
+// The point of the segment a-b closest to p: a + s (b - a), s clamped to
+// [0, 1]; exactly a when a == b, so a sphere's offsets are those of its
+// centre bit for bit.
+template <class V3>
+inline V3 segment_closest_point(const V3& p, const V3& a, const V3& b) {
+  using Real = typename V3::Scalar;
+  const V3 ab = b - a;
+  const Real len2 = ab.dot(ab);
+  if (!(len2 > Real(0))) return a;
+  Real s = ab.dot(V3(p - a)) / len2;
+  s = s < Real(0) ? Real(0) : s > Real(1) ? Real(1) : s;
+  return a + s * ab;
+}
+
+// The closest points of the segments p1-q1 and p2-q2 as parameters s, t in
+// [0, 1] (Ericson, Real-Time Collision Detection 5.1.9; parallel segments
+// take s = 0, a degenerate segment its first end).
+template <class V3, class Real>
+inline void segments_closest(const V3& p1, const V3& q1, const V3& p2, const V3& q2, Real& s, Real& t) {
+  auto clamp01 = [](Real v) { return v < Real(0) ? Real(0) : v > Real(1) ? Real(1) : v; };
+  const V3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const Real a = d1.dot(d1), e = d2.dot(d2), f = d2.dot(r);
+  if (!(a > Real(0))) {
+    s = 0;
+    t = e > Real(0) ? clamp01(f / e) : Real(0);
+    return;
+  }
+  const Real c = d1.dot(r);
+  if (!(e > Real(0))) {
+    t = 0;
+    s = clamp01(-c / a);
+    return;
+  }
+  const Real b = d1.dot(d2), denom = a * e - b * b;
+  s = denom > Real(0) ? clamp01((b * f - c * e) / denom) : Real(0);
+  t = (b * s + f) / e;
+  if (t < Real(0)) {
+    t = 0;
+    s = clamp01(-c / a);
+  } else if (t > Real(1)) {
+    t = 1;
+    s = clamp01((b - c) / a);
+  }
+}
+
+// The point of the segment a-b (a != b) closest to the triangle (x0, x1,
+// x2), with `crossing` set when the segment passes through the triangle
+// (the point then lies on it). Otherwise the closest pair joins an end of
+// the segment to the triangle or the segment to one of its edges: the
+// nearest of those five candidates, the first one on a tie (ends a, b, then
+// edges x0-x1, x1-x2, x2-x0). Where the segment runs parallel to the
+// triangle the closest points are not unique and the chosen one can jump
+// along it as the tie flips (docs/physics.md, the capsule's limits).
+template <class V3>
+inline V3 segment_point_closest_to_triangle(const V3& a, const V3& b, const V3& x0, const V3& x1, const V3& x2,
+                                            bool& crossing) {
+  using Real = typename V3::Scalar;
+  crossing = false;
+  const V3 outward = (x1 - x0).cross(x2 - x0);
+  const Real da = outward.dot(V3(a - x0)), db = outward.dot(V3(b - x0));
+  if ((da <= Real(0) && db >= Real(0)) || (da >= Real(0) && db <= Real(0))) {
+    if (da != db) {
+      const V3 p = a + (da / (da - db)) * V3(b - a);
+      if (outward.dot(V3((x1 - x0).cross(p - x0))) >= Real(0) && outward.dot(V3((x2 - x1).cross(p - x1))) >= Real(0) &&
+          outward.dot(V3((x0 - x2).cross(p - x2))) >= Real(0)) {
+        crossing = true;
+        return p;
+      }
+    }
+  }
+  auto to_triangle2 = [&](const V3& p) {
+    Real w[3];
+    triangle_closest_weights(p, x0, x1, x2, w);
+    return V3(w[0] * x0 + w[1] * x1 + w[2] * x2 - p).squaredNorm();
+  };
+  V3 best = a;
+  Real best2 = to_triangle2(a);
+  const Real b2 = to_triangle2(b);
+  if (b2 < best2) best = b, best2 = b2;
+  const V3* corner[3] = {&x0, &x1, &x2};
+  for (int e = 0; e < 3; ++e) {
+    const V3& u = *corner[e];
+    const V3& v = *corner[(e + 1) % 3];
+    Real s, t;
+    segments_closest(a, b, u, v, s, t);
+    const V3 ps = a + s * V3(b - a);
+    const Real d2 = V3(u + t * V3(v - u) - ps).squaredNorm();
+    if (d2 < best2) best = ps, best2 = d2;
+  }
+  return best;
+}
+
+// Surface contact of a capsule (segment a-b, radius R) with one boundary
+// triangle: the sphere's contact (sphere_triangle_penalty) centred at the
+// segment's point closest to the triangle, so the penalty k_t (R - dist)
+// acts at the triangle's closest point along the separating direction and
+// is spread to the corners by the same weights and the same k_t (the
+// per-point stiffness bound dt_crit counts holds as for the sphere). A
+// segment through the triangle (its axis inside the tissue) pushes along
+// the inward normal with k_t R, the sphere's rule for a centre on the
+// triangle. a == b is the sphere itself, bit for bit.
+template <class V3, class Real>
+inline bool capsule_triangle_penalty(const V3& a, const V3& b, Real radius, const V3& x0, const V3& x1, const V3& x2,
+                                     Real k, const Real share[3], V3& f, Real w[3]) {
+  if (a == b) return sphere_triangle_penalty(a, radius, x0, x1, x2, k, share, f, w);
+  bool crossing = false;
+  const V3 p = segment_point_closest_to_triangle(a, b, x0, x1, x2, crossing);
+  if (!crossing) return sphere_triangle_penalty(p, radius, x0, x1, x2, k, share, f, w);
+  triangle_closest_weights(p, x0, x1, x2, w);
+  const V3 outward = (x1 - x0).cross(x2 - x0);
+  f = k * triangle_penalty_scale(share) * radius * V3(-outward / outward.norm());
+  return true;
 }
 
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o

@@ -36,7 +36,7 @@ FrameCost measure_frame_cost(const Model& model, int width, int height, int fram
   StyleOptions style;
   ToolDraw tool;
   tool.visible = true;
-  tool.center = model.rest_position.empty() ? Vec3::Zero() : model.rest_position[0];
+  tool.a = tool.b = model.rest_position.empty() ? Vec3::Zero() : model.rest_position[0];
   tool.radius = 0.01;
 
   // The video goes to a temporary file that is removed afterwards.

@@ -85,7 +85,7 @@ struct FrameRecorder::Impl {
   ColormapRange range;      // fixed for the run once known
   FrameRecorderTiming timing;
 
-  void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center) {
+  void render_frame(const Model& model, Backend& backend, double t, const Vec3& tool_center, const Quat& tool_turn) {
     // A scale over per-point values; labels are per face and set with the faces.
     const bool colormap = frames.style.colormap == Colormap::Strain || frames.style.colormap == Colormap::Displacement;
     auto start = Clock::now();
@@ -133,7 +133,10 @@ struct FrameRecorder::Impl {
 
     start = Clock::now();
     ToolDraw draw_tool;
-    if (tool) draw_tool = {true, tool_center, tool->radius};
+    if (tool) {
+      const ToolPlacement placed = place_tool(tool->backend_tool(), tool_center, tool_turn);
+      draw_tool = {true, placed.a, placed.b, placed.radius};
+    }
     renderer->draw(camera, frames.style, draw_tool);
     glFinish();  // so render and read-back are timed apart
     timing.render_ms += ms_since(start);
@@ -221,13 +224,15 @@ void FrameRecorder::on_start(const Model& model, Backend& backend) {
   std::vector<Vec3> tool_path;
   constexpr int kPathSamples = 50;
   for (int k = 0; s.tool && k <= kPathSamples; ++k) tool_path.push_back(s.tool->position_at(s.duration * k / kPathSamples));
-  s.camera = make_run_camera(s.frames.camera, s.start_positions, tool_path, s.tool ? s.tool->radius : 0.0,
+  s.camera = make_run_camera(s.frames.camera, s.start_positions, tool_path,
+                             s.tool ? s.tool->radius + s.tool->extent() : 0.0,
                              static_cast<double>(s.frames.width) / s.frames.height);
   s.range = colormap_range(s.frames.style, s.tool, s.start_positions, s.duration);
   s.writer = std::make_unique<FrameWriter>(s.outputs, s.outdir, expected_frame_count(s.duration, s.frames.rate),
                                            cv::Size(s.frames.width, s.frames.height));
   const double t = backend.time();
-  s.render_frame(model, backend, t, s.tool ? s.tool->position_at(t) : Vec3::Zero());
+  s.render_frame(model, backend, t, s.tool ? s.tool->position_at(t) : Vec3::Zero(),
+                 s.tool ? s.tool->orientation_at(t) : Quat::Identity());
 }
 
 void FrameRecorder::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
@@ -236,7 +241,7 @@ void FrameRecorder::on_tick(const Model& model, Backend& backend, const TickInfo
   // faster than ticks are skipped to the next due one).
   const double due = s.next_due / s.frames.rate;
   if (info.t + 1e-9 < due) return;
-  s.render_frame(model, backend, info.t, info.tool_center);
+  s.render_frame(model, backend, info.t, info.tool_center, info.tool_orientation);
 }
 
 void FrameRecorder::on_finish(const Model& /*model*/, Backend& /*backend*/) {

@@ -25,7 +25,7 @@ struct FrameRecorderTiming {
 
 class FrameRecorder : public RunObserver {
  public:
-  // tool: drawn as a sphere of its radius at the tick's tool centre; nullopt
+  // tool: drawn as its shape (sphere or capsule) at the tick's pose; nullopt
   // for scenes without a tool. duration (s) sizes the contact sheet.
   FrameRecorder(const FrameOutputs& outputs, const std::filesystem::path& outdir, double duration,
                 std::optional<ToolSpec> tool);

@@ -341,7 +341,8 @@ void SurfaceRenderer::draw(const Camera& camera, const StyleOptions& style, cons
   }
   if (tool.visible && tool.radius > 0) {
     const GLuint p = s.tool_program;
-    set_vec3(p, "u_center", tool.center);
+    set_vec3(p, "u_end_a", tool.a);
+    set_vec3(p, "u_end_b", tool.b);
     glProgramUniform1f(p, glGetUniformLocation(p, "u_radius"), static_cast<float>(tool.radius));
     set_vec3(p, "u_color", style.tool_color);
     glUseProgram(p);

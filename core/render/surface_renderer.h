@@ -13,10 +13,12 @@
 
 namespace organsim {
 
+// The tool as drawn: the points within `radius` of the segment a-b (a
+// sphere when a == b == its centre, else a capsule).
 struct ToolDraw {
   bool visible = false;
-  Vec3 center{0, 0, 0};  // m
-  double radius = 0;     // m
+  Vec3 a{0, 0, 0}, b{0, 0, 0};  // m
+  double radius = 0;            // m
 };
 
 class SurfaceRenderer {

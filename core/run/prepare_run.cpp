@@ -32,7 +32,7 @@ BlowupMonitor PreparedRun::blowup_monitor(const Scenario& scenario, double dt, i
   BlowupContext context;
   context.dt = dt;
   if (scenario.tool) {
-    context.tool_radius = scenario.tool->spec.radius;
+    context.tool_radius = scenario.tool->spec.radius + scenario.tool->spec.extent();  // the ball holding the tool
     context.tool_contact_stiffness = scenario.tool->spec.contact_stiffness;
   }
   context.stability = stability;

@@ -26,14 +26,7 @@ ModelOptions model_options(const Scenario& scenario) {
 }
 
 BackendTool backend_tool(const Scenario& scenario) {
-  BackendTool t;
-  if (!scenario.tool) return t;
-  t.present = true;
-  t.mode = scenario.tool->spec.mode;
-  t.radius = scenario.tool->spec.radius;
-  t.contact_stiffness = scenario.tool->spec.contact_stiffness;
-  t.contact = scenario.tool->spec.contact;
-  return t;
+  return scenario.tool ? scenario.tool->spec.backend_tool() : BackendTool{};
 }
 
 Attachment select_grasp(const Model& model, const std::vector<Vec3>& positions, const Vec3& center,
@@ -184,6 +177,8 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
         // A tick starts where the last one ended (the same double t0 as the
         // last tick's t1, so identical to position_at(t0) for keyframes).
         request.tool_from = i == 0 ? tool->position_at(t0) : request.tool_to;
+        request.turn_from = i == 0 ? tool->orientation_at(t0) : request.turn_to;
+        request.turn_to = tool->orientation_at(t1);
         if (options.tool_driver) {
           const std::optional<Vec3> to = options.tool_driver->tool_at_end_of(i, t1);
           if (!to) break;
@@ -248,6 +243,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       info.tick = i;
       info.t = t1;
       info.tool_center = request.tool_to;
+      info.tool_orientation = request.turn_to;
       info.tool_from = request.tool_from;
       info.tool_active = request.tool_active;
       info.reaction = r;

@@ -1,13 +1,45 @@
-// The scenario's `tool` section: a sphere following keyframes, push or pull.
+// The scenario's `tool` section: a sphere or capsule following keyframes
+// (position and orientation), push or pull.
 #include <nlohmann/json.hpp>
+
+#include <cmath>
 
 #include "core/scenario/scenario_sections.h"
 
 namespace organsim::scenario_detail {
 
 namespace {
+// A keyframe's orientation: "orientation": [w, x, y, z] (a unit quaternion;
+// normalised, so rounded decimals are fine) or "axis_angle": {"axis": [x, y,
+// z], "angle": rad}; identity when neither is given.
+Quat parse_orientation(ObjectReader& k) {
+  if (k.has("orientation") && k.has("axis_angle"))
+    throw k.at("axis_angle").error("give either \"orientation\" or \"axis_angle\", not both");
+  if (const nlohmann::json* j = k.get("orientation")) {
+    const std::vector<double> q = read_numbers(*j, k.at("orientation"), 4);
+    const Quat out(q[0], q[1], q[2], q[3]);
+    // A quaternion far from unit length is more likely a mistake (an axis
+    // or Euler angles) than rounding.
+    if (!(std::abs(out.norm() - 1) < 1e-3))
+      throw k.at("orientation").error("expected a unit quaternion [w, x, y, z] (got length " +
+                                      std::to_string(out.norm()) + ")");
+    return out.normalized();
+  }
+  if (const nlohmann::json* j = k.get("axis_angle")) {
+    const JsonPath at = k.at("axis_angle");
+    ObjectReader a(*j, at);
+    const Vec3 axis = read_vec3(a.require("axis"), a.at("axis"));
+    const double angle = read_number(a.require("angle"), a.at("angle"));
+    a.finish();
+    const double length = axis.stableNorm();  // no overflow for huge components
+    if (!(length > 0) || !std::isfinite(length)) throw a.at("axis").error("expected a non-zero axis [x, y, z]");
+    return Quat(Eigen::AngleAxisd(angle, axis / length));
+  }
+  return Quat::Identity();
+}
+
 std::vector<Keyframe> parse_keyframes(const nlohmann::json& j, const JsonPath& at) {
-  if (!j.is_array()) throw at.error("expected an array of {\"t\": s, \"position\": [x, y, z]}");
+  if (!j.is_array()) throw at.error("expected an array of {\"t\": s, \"position\": [x, y, z]} (optional \"orientation\": [w, x, y, z])");
   if (j.empty()) throw at.error("expected at least one keyframe");
   std::vector<Keyframe> out;
   for (size_t i = 0; i < j.size(); ++i) {
@@ -16,6 +48,7 @@ std::vector<Keyframe> parse_keyframes(const nlohmann::json& j, const JsonPath& a
     Keyframe f;
     f.t = require_non_negative(read_number(k.require("t"), k.at("t")), k.at("t"));
     f.position = read_vec3(k.require("position"), k.at("position"));
+    f.orientation = parse_orientation(k);
     k.finish();
     // Interpolation needs strictly increasing times.
     if (!out.empty() && !(f.t > out.back().t)) {
@@ -33,9 +66,28 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
   ToolDef tool;
   ToolSpec& s = tool.spec;
   if (auto shape = r.string("shape")) {
-    if (*shape != "sphere") throw r.at("shape").error("expected \"sphere\" (the only tool shape so far; got \"" + *shape + "\")");
+    if (*shape == "sphere") {
+      s.shape = ToolShape::Sphere;
+    } else if (*shape == "capsule") {
+      s.shape = ToolShape::Capsule;
+    } else {
+      throw r.at("shape").error("expected " + one_of({"sphere", "capsule"}) + " (got \"" + *shape + "\")");
+    }
   }
   if (auto v = r.number("radius")) s.radius = require_positive(*v, r.at("radius"));
+  // A capsule's segment in the tool frame: "ends": [[x, y, z], [x, y, z]], m.
+  if (s.shape == ToolShape::Capsule) {
+    const JsonPath eat = r.at("ends");
+    const nlohmann::json& ends = r.require("ends");
+    if (!ends.is_array() || ends.size() != 2)
+      throw eat.error("expected two end points [[x, y, z], [x, y, z]] in the tool frame, m");
+    s.end_a = read_vec3(ends[0], eat.index(0));
+    s.end_b = read_vec3(ends[1], eat.index(1));
+    if (!((s.end_b - s.end_a).norm() > 0))
+      throw eat.error("expected two different end points (a capsule of zero length is \"shape\": \"sphere\")");
+  } else if (r.has("ends")) {
+    throw r.at("ends").error("only used with \"shape\": \"capsule\"");
+  }
   if (auto v = r.number("contact_stiffness")) s.contact_stiffness = require_positive(*v, r.at("contact_stiffness"));
   if (auto mode = r.string("mode")) {
     if (*mode == "push") {
@@ -66,6 +118,9 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
     if (!(*v > s.grasp_time)) throw r.at("release_time").error("expected a time after grasp_time (" + std::to_string(s.grasp_time) + " s)");
     s.release_time = *v;
   }
+  // A pulling tool grasps the points near its origin; a capsule's shape would mean nothing to it.
+  if (s.shape == ToolShape::Capsule && s.mode != ToolMode::Push)
+    throw r.at("shape").error("\"capsule\" is a pushing tool (\"mode\": \"push\")");
   s.keyframes = parse_keyframes(r.require("keyframes"), r.at("keyframes"));
   r.finish();
   return tool;

@@ -4,21 +4,54 @@
 
 namespace organsim {
 
-Vec3 ToolSpec::position_at(double t) const {
-  if (keyframes.empty()) return Vec3::Zero();
-  if (t <= keyframes.front().t) return keyframes.front().position;
-  if (t >= keyframes.back().t) return keyframes.back().position;
+BackendTool ToolSpec::backend_tool() const {
+  BackendTool t;
+  t.present = true;
+  t.mode = mode;
+  t.radius = radius;
+  t.contact_stiffness = contact_stiffness;
+  t.contact = contact;
+  t.shape = shape;
+  t.end_a = end_a;
+  t.end_b = end_b;
+  return t;
+}
+
+namespace {
+// The keyframe at or before t (`a`) and, strictly between two keyframes,
+// the next one (`b`, else null) and how far t lies from a to b (s in (0, 1)).
+// Exactly a keyframe at its time: a + 1 * (b - a) can differ from b in the
+// last bit, and a replayed live session must put the tool exactly where the
+// client did.
+struct Bracket {
+  const Keyframe* a = nullptr;
+  const Keyframe* b = nullptr;
+  double s = 0;
+};
+Bracket bracket(const std::vector<Keyframe>& keyframes, double t) {
+  if (t <= keyframes.front().t) return {&keyframes.front()};
+  if (t >= keyframes.back().t) return {&keyframes.back()};
   // The first keyframe at or after t (a recorded live session has one per
   // tick, so a scan per tick would make its replay quadratic).
   const auto b = std::lower_bound(keyframes.begin(), keyframes.end(), t,
                                   [](const Keyframe& k, double time) { return k.t < time; });
-  // Exactly the keyframe's position at its time: a + 1 * (b - a) can differ
-  // from b in the last bit, and a replayed live session must put the tool
-  // exactly where the client did.
-  if (b->t == t) return b->position;
+  if (b->t == t) return {&*b};
   const Keyframe& a = *(b - 1);
-  const double s = (t - a.t) / (b->t - a.t);
-  return a.position + s * (b->position - a.position);
+  return {&a, &*b, (t - a.t) / (b->t - a.t)};
+}
+}  // namespace
+
+Vec3 ToolSpec::position_at(double t) const {
+  if (keyframes.empty()) return Vec3::Zero();
+  const Bracket k = bracket(keyframes, t);
+  return k.b ? Vec3(k.a->position + k.s * (k.b->position - k.a->position)) : k.a->position;
+}
+
+Quat ToolSpec::orientation_at(double t) const {
+  if (keyframes.empty()) return Quat::Identity();
+  const Bracket k = bracket(keyframes, t);
+  // Eigen's slerp takes the shorter of the two arcs (q and -q are one rotation).
+  return k.b ? k.a->orientation.slerp(k.s, k.b->orientation) : k.a->orientation;
 }
 
 }  // namespace organsim

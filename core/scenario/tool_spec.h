@@ -1,7 +1,10 @@
 #pragma once
-// The scripted virtual tool as a scenario describes it: a sphere whose centre
-// follows keyframes (time, position), linearly interpolated and held constant
-// outside them. What a backend needs of it per step is in core/sim/tool.h.
+// The scripted virtual tool as a scenario describes it: a shape (sphere or
+// capsule) in the tool's own frame, whose origin follows keyframes (time,
+// position), linearly interpolated, and whose orientation is interpolated
+// along the shortest arc (slerp); both held constant outside the keyframes.
+// What a backend needs of it per step is in core/sim/tool.h.
+#include <algorithm>
 #include <optional>
 #include <vector>
 
@@ -12,11 +15,14 @@ namespace organsim {
 
 struct Keyframe {
   double t = 0;            // s
-  Vec3 position{0, 0, 0};  // tool centre, m
+  Vec3 position{0, 0, 0};  // the tool frame's origin (a sphere's centre), m
+  Quat orientation = Quat::Identity();  // the tool frame's rotation into the world
 };
 
 struct ToolSpec {
-  double radius = 0.01;                 // sphere radius, m
+  ToolShape shape = ToolShape::Sphere;
+  double radius = 0.01;                 // sphere or capsule radius, m
+  Vec3 end_a{0, 0, 0}, end_b{0, 0, 0};  // capsule: its segment's ends in the tool frame, m
   double contact_stiffness = 200.0;     // push: penalty N/m per m of penetration; pull: attachment springs N/m
   ToolMode mode = ToolMode::Push;
   ToolContact contact = ToolContact::Surface;  // push: penalty on the surface triangles or on the points
@@ -25,7 +31,17 @@ struct ToolSpec {
   std::optional<double> release_time;   // pull: s; held to the end when absent
   std::vector<Keyframe> keyframes;      // sorted by t, at least one
 
+  // The distance from the frame's origin to the farthest end of the
+  // capsule's segment (0 for a sphere): the tool lies within radius + this
+  // of the origin in any orientation.
+  double extent() const { return shape == ToolShape::Capsule ? std::max(end_a.norm(), end_b.norm()) : 0.0; }
+
+  // What a backend needs of this tool besides its per-tick pose.
+  BackendTool backend_tool() const;
+
   Vec3 position_at(double t) const;
+  // Slerp between the keyframes around t, exactly a keyframe's at its time.
+  Quat orientation_at(double t) const;
 };
 
 }  // namespace organsim

@@ -206,12 +206,13 @@ class CpuBackend final : public Backend {
                "), " + (fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
       case Pass::SurfaceContact:
-        return "sphere against " + std::to_string(m.nsurface()) +
-               " surface triangles, broad phase: the sphere against each triangle's box; each touching "
+        return std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
+               " surface triangles, broad phase: the " + shape_name(tool_.shape) +
+               " against each triangle's box; each touching "
                "triangle's penalty at its closest point, spread to its corners (box tests on the step's threads, "
                "penalties on one thread in triangle order)";
       case Pass::ToolContact:
-        return plan_.tool == ToolTerm::Push      ? "sphere penalty contact on the points"
+        return plan_.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"
                : plan_.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
                                                  : "grasp attachment springs";
       case Pass::Integrate:
@@ -278,10 +279,14 @@ class CpuBackend final : public Backend {
     refresh_suture_rest();
     Reaction reaction;
     auto substep = [&](int32_t s) {
-      // The force of substep s acts at its start: tool centre interpolated there.
-      const double f = static_cast<double>(s) / request.substeps;
-      const Vec3 center = request.tool_from + f * (request.tool_to - request.tool_from);
-      for (int k = 0; k < 3; ++k) ctx.tool_center[k] = static_cast<Real>(center[k]);
+      // The force of substep s acts at its start: the tool's pose interpolated there.
+      const ToolPlacement placed = request.tool_at(tool_, s);
+      for (int k = 0; k < 3; ++k) {
+        ctx.tool_center[k] = static_cast<Real>(placed.origin[k]);
+        ctx.tool_a[k] = static_cast<Real>(placed.a[k]);
+        ctx.tool_b[k] = static_cast<Real>(placed.b[k]);
+      }
+      ctx.tool_reach = static_cast<Real>(placed.reach());
       if (ctx.tool == ToolTerm::Surface) surface_contact(ctx);
       reaction = fast_ ? fast_step(ctx) : step(ctx);
       time_ += request.dt;
@@ -441,7 +446,7 @@ class CpuBackend final : public Backend {
     const std::array<const Real*, 3> u =
         fast_ ? std::array<const Real*, 3>{fast_->displacement(0), fast_->displacement(1), fast_->displacement(2)}
               : std::array<const Real*, 3>{u_.x.data(), u_.y.data(), u_.z.data()};
-    surface_.evaluate(rest, u, ctx.tool_center, ctx.tool_radius, ctx.tool_k, threads_);
+    surface_.evaluate(rest, u, ctx.tool_a, ctx.tool_b, ctx.tool_radius, ctx.tool_k, threads_);
     ctx.contact_slot = surface_.slot();
     ctx.contact_force = surface_.force();
   }

@@ -322,8 +322,10 @@ void chunk_step(Data<Real>& D, const KernelStepInputs<Real>& in, int32_t c, Chun
         V3<Real> o;
         for (int k = 0; k < 3; ++k) o[k] = x[k] - splat(in.tool_center[k]);
         const V<Real> dist2 = fmadd(o[2], o[2], fmadd(o[1], o[1], o[0] * o[0]));
-        // A margin so that no lane the exact test accepts is missed.
-        const Real r = in.tool_radius * Real(1.001);
+        // The ball about the centre that holds the tool (the sphere itself
+        // for a sphere), with a margin so that no lane the exact test accepts
+        // is missed.
+        const Real r = in.tool_reach * Real(1.001);
         touching = dist2 < splat(r * r);
       } else {
         touching = nonnegative(tool_lane_flags<Tool>(in) + p0, Real(0));

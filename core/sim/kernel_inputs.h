@@ -15,8 +15,10 @@ struct KernelStepInputs {
   Real dt = 0, dt2 = 0, inv_dt = 0, drag = 1;  // dt, dt^2, 1/dt, 1 - alpha dt
   Real shear_damping = 0;                      // tau / dt: the shear element's damper on the increments d = dt v
   Real gravity[3] = {0, 0, 0};
-  Real tool_center[3] = {0, 0, 0};
+  Real tool_center[3] = {0, 0, 0};           // the tool frame's origin: the torque's reference point
+  Real tool_a[3] = {0, 0, 0}, tool_b[3] = {0, 0, 0};  // the shape's segment (a == b == centre: a sphere)
   Real tool_radius = 0, tool_k = 0;
+  Real tool_reach = 0;  // a ball about the centre holding the whole tool (the AVX-512 kernels' point filter)
   ToolTerm tool = ToolTerm::None;       // this substep's tool pass (none while the tool is inactive)
   const int32_t* attached = nullptr;    // pull: attachment index per point or -1
   const Real* attach_offset = nullptr;  // pull: 3 per attachment
@@ -43,7 +45,8 @@ struct ChunkReaction {
   int32_t contacts = 0;
 };
 
-// The tool's force on point p at x (force_law::push_penalty or
+// The tool's force on point p at x (force_law::push_penalty from the
+// shape's segment, or
 // pull_attachment, or the surface contact's force on p from its triangles'
 // force_law::sphere_triangle_penalty), added to f and (negated) to the
 // chunk's reaction; false when p does not touch the tool. One lane at a time: few points touch the
@@ -55,7 +58,9 @@ bool add_tool_force(const KernelStepInputs<Real>& in, int32_t p, const Real x[3]
   const Real k = in.tool_k * in.tool_scale[p];
   V3 fc;
   if constexpr (Tool == ToolTerm::Push) {
-    if (!force_law::push_penalty(V3(xl - ctr), in.tool_radius, k, fc)) return false;
+    const V3 a(in.tool_a[0], in.tool_a[1], in.tool_a[2]), b(in.tool_b[0], in.tool_b[1], in.tool_b[2]);
+    if (!force_law::push_penalty(V3(xl - force_law::segment_closest_point(xl, a, b)), in.tool_radius, k, fc))
+      return false;
   } else if constexpr (Tool == ToolTerm::Surface) {
     const int32_t slot = in.contact_slot[p];
     if (slot < 0) return false;

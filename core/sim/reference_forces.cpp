@@ -50,23 +50,28 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
     for (int32_t i = 0; i < model.npoint(); ++i) force[i] += model.mass[i] * model.gravity;
 }
 
-Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius, double stiffness,
+Reaction reference_push_forces(const std::vector<Vec3>& x, const ToolPlacement& tool, double stiffness,
                                std::vector<Vec3>& force, const std::vector<double>& scale) {
   Reaction reaction;
   for (size_t i = 0; i < x.size(); ++i) {
-    const Vec3 offset = x[i] - center;
+    const Vec3 offset = x[i] - force_law::segment_closest_point(x[i], tool.a, tool.b);
     Vec3 f;
-    if (!force_law::push_penalty(offset, radius, stiffness * (scale.empty() ? 1.0 : scale[i]), f)) continue;
+    if (!force_law::push_penalty(offset, tool.radius, stiffness * (scale.empty() ? 1.0 : scale[i]), f)) continue;
     force[i] += f;
     reaction.force -= f;
-    reaction.torque += offset.cross(-f);
+    reaction.torque += (x[i] - tool.origin).cross(-f);
     ++reaction.contacts;
   }
   return reaction;
 }
 
-Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
-                                  double radius, double stiffness, std::vector<Vec3>& force) {
+Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius, double stiffness,
+                               std::vector<Vec3>& force, const std::vector<double>& scale) {
+  return reference_push_forces(x, ToolPlacement{center, center, center, radius}, stiffness, force, scale);
+}
+
+Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const ToolPlacement& tool,
+                                  double stiffness, std::vector<Vec3>& force) {
   Reaction reaction;
   std::vector<uint8_t> touched(x.size(), 0);
   for (const Tri& t : model.surface) {
@@ -74,7 +79,8 @@ Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x
     for (int i = 0; i < 3; ++i) share[i] = model.tool_scale(t[i]) / model.surface_count(t[i]);
     Vec3 f;
     double w[3];
-    if (!force_law::sphere_triangle_penalty(center, radius, x[t[0]], x[t[1]], x[t[2]], stiffness, share, f, w))
+    if (!force_law::capsule_triangle_penalty(tool.a, tool.b, tool.radius, x[t[0]], x[t[1]], x[t[2]], stiffness, share,
+                                             f, w))
       continue;
     const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
     for (int i = 0; i < 3; ++i) {
@@ -82,10 +88,15 @@ Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x
       touched[t[i]] = 1;
     }
     reaction.force -= f;
-    reaction.torque += (q - center).cross(-f);
+    reaction.torque += (q - tool.origin).cross(-f);
   }
   for (uint8_t b : touched) reaction.contacts += b;
   return reaction;
+}
+
+Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
+                                  double radius, double stiffness, std::vector<Vec3>& force) {
+  return reference_surface_forces(model, x, ToolPlacement{center, center, center, radius}, stiffness, force);
 }
 
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment, const Vec3& center,

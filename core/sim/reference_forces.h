@@ -24,6 +24,10 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x,
 // reaction on the tool.
 Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, double radius,
                                double stiffness, std::vector<Vec3>& force, const std::vector<double>& scale = {});
+// Any shape: the offset from the segment's closest point, the torque about
+// the tool frame's origin.
+Reaction reference_push_forces(const std::vector<Vec3>& x, const ToolPlacement& tool, double stiffness,
+                               std::vector<Vec3>& force, const std::vector<double>& scale = {});
 
 // Surface contact of a sphere tool with the Model's boundary triangles
 // (force_law::sphere_triangle_penalty): each touching triangle's penalty f_t
@@ -33,6 +37,10 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
 // received a force.
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
                                   double radius, double stiffness, std::vector<Vec3>& force);
+// Any shape (force_law::capsule_triangle_penalty; the torque about the
+// tool frame's origin).
+Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const ToolPlacement& tool,
+                                  double stiffness, std::vector<Vec3>& force);
 
 // Pull attachments: f_i = k s_i (c + o_i - x_i). Adds into force, returns reaction.
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment,

@@ -11,6 +11,7 @@ struct TickInfo {
   int64_t tick = 0;       // 0-based tick index
   double t = 0;           // simulated time at the end of the tick, s
   Vec3 tool_center{0, 0, 0};  // at the end of the tick, m
+  Quat tool_orientation = Quat::Identity();  // at the end of the tick
   Vec3 tool_from{0, 0, 0};    // at its start, m
   bool tool_active = false;
   Reaction reaction;      // as returned by Backend::tick (latency applies)

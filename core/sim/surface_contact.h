@@ -1,18 +1,19 @@
 #pragma once
 // The surface-contact pass of the CPU backend (Pass::SurfaceContact): a
-// pushing sphere against the Model's boundary triangles
-// (force_law::sphere_triangle_penalty), giving each touched point the sum
+// pushing sphere or capsule against the Model's boundary triangles
+// (force_law::capsule_triangle_penalty, the sphere's when its segment has
+// zero length), giving each touched point the sum
 // of w_p(t) f(t) over its touching triangles t, in ascending t (the order
 // step.comp gathers them in). The kernels then add these forces in their
 // tool pass (add_tool_force with ToolTerm::Surface), which also sums the
 // reaction, so the reaction is minus exactly what the tissue receives.
 //
-// Broad phase: the sphere against each triangle's bounding box at the
-// current positions, so a triangle away from the tool costs a box test and
-// an untouched point nothing in the kernels. The box tests are independent
-// per triangle and may run on several threads; the penalties are summed on
-// one thread, in triangle order: the result does not depend on the thread
-// count.
+// Broad phase: the tool (its segment's box grown by the radius) against
+// each triangle's bounding box at the current positions, so a triangle away
+// from the tool costs a box test and an untouched point nothing in the
+// kernels. The box tests are independent per triangle and may run on
+// several threads; the penalties are summed on one thread, in triangle
+// order: the result does not depend on the thread count.
 #include <omp.h>
 
 #include <algorithm>
@@ -56,16 +57,17 @@ class SurfaceContact {
     touched_.clear();
   }
 
-  // Forces for the sphere (centre c, radius R, penalty k N/m) with every
-  // point p at rest[axis][p] + u[axis][p] (internal ids, the backend's
-  // streams); the positions and box tests on up to `threads` threads.
-  void evaluate(const std::array<const Real*, 3>& rest, const std::array<const Real*, 3>& u, const Real center[3],
-                Real radius, Real k, int threads) {
+  // Forces for the tool (the segment a-b, a == b for a sphere's centre;
+  // radius R, penalty k N/m) with every point p at rest[axis][p] +
+  // u[axis][p] (internal ids, the backend's streams); the positions and box
+  // tests on up to `threads` threads.
+  void evaluate(const std::array<const Real*, 3>& rest, const std::array<const Real*, 3>& u, const Real seg_a[3],
+                const Real seg_b[3], Real radius, Real k, int threads) {
     for (int32_t p : touched_) slot_[p] = -1;
     touched_.clear();
     force_.clear();
     using V3 = Eigen::Matrix<Real, 3, 1>;
-    const V3 c(center[0], center[1], center[2]);
+    const V3 sa(seg_a[0], seg_a[1], seg_a[2]), sb(seg_b[0], seg_b[1], seg_b[2]);
     const Real r2 = radius * radius;
     const int32_t npoint = static_cast<int32_t>(points_.size()), ntri = triangles();
     const int32_t* ta = corner_[0].data();
@@ -75,6 +77,8 @@ class SurfaceContact {
     const Real* X = x_.data();
     const Real* Y = y_.data();
     const Real* Z = z_.data();
+    const Real lo[3] = {std::min(sa[0], sb[0]), std::min(sa[1], sb[1]), std::min(sa[2], sb[2])};
+    const Real hi[3] = {std::max(sa[0], sb[0]), std::max(sa[1], sb[1]), std::max(sa[2], sb[2])};
 #pragma omp parallel num_threads(threads) if (threads > 1)
     {
       // Each thread its share of the points, then of the triangles (the
@@ -83,7 +87,7 @@ class SurfaceContact {
       const int32_t n = omp_get_num_threads(), i = omp_get_thread_num();
       gather_positions(i * npoint / n, (i + 1) * npoint / n, rest, u);
 #pragma omp barrier
-      box_tests(i * ntri / n, (i + 1) * ntri / n, c[0], c[1], c[2], r2);
+      box_tests(i * ntri / n, (i + 1) * ntri / n, lo, hi, r2);
     }
     for (int32_t word = 0; word < ntri; word += 8) {
       uint64_t any;
@@ -96,7 +100,8 @@ class SurfaceContact {
         const Real share[3] = {share_[corner[0]], share_[corner[1]], share_[corner[2]]};
         V3 f;
         Real w[3];
-        if (!force_law::sphere_triangle_penalty(c, radius, at(corner[0]), at(corner[1]), at(corner[2]), k, share, f, w))
+        if (!force_law::capsule_triangle_penalty(sa, sb, radius, at(corner[0]), at(corner[1]), at(corner[2]), k,
+                                                 share, f, w))
           continue;
         for (int j = 0; j < 3; ++j) {
           const int32_t p = points_[corner[j]];
@@ -134,8 +139,9 @@ class SurfaceContact {
   }
 
   // Broad phase for triangles [begin, end), vectorised: whether the squared
-  // distance from the centre to each triangle's box is below r2.
-  __attribute__((noinline)) void box_tests(int32_t begin, int32_t end, Real cx, Real cy, Real cz, Real r2) {
+  // distance from the segment's box [lo, hi] (the centre, for a sphere) to
+  // each triangle's box is below r2.
+  __attribute__((noinline)) void box_tests(int32_t begin, int32_t end, const Real lo[3], const Real hi[3], Real r2) {
     const int32_t* __restrict ta = corner_[0].data();
     const int32_t* __restrict tb = corner_[1].data();
     const int32_t* __restrict tc = corner_[2].data();
@@ -143,15 +149,17 @@ class SurfaceContact {
     const Real* __restrict X = x_.data();
     const Real* __restrict Y = y_.data();
     const Real* __restrict Z = z_.data();
+    const Real lx = lo[0], ly = lo[1], lz = lo[2], hx = hi[0], hy = hi[1], hz = hi[2];
 #pragma omp simd
     for (int32_t t = begin; t < end; ++t) {
-      auto gap = [](Real p, Real u, Real v, Real w) {
-        const Real lo = u < v ? (u < w ? u : w) : (v < w ? v : w), hi = u > v ? (u > w ? u : w) : (v > w ? v : w);
-        return p < lo ? lo - p : p > hi ? p - hi : Real(0);
+      // The gap between [plo, phi] and the triangle's extent along one axis.
+      auto gap = [](Real plo, Real phi, Real u, Real v, Real w) {
+        const Real mn = u < v ? (u < w ? u : w) : (v < w ? v : w), mx = u > v ? (u > w ? u : w) : (v > w ? v : w);
+        return phi < mn ? mn - phi : plo > mx ? plo - mx : Real(0);
       };
-      const Real gx = gap(cx, X[ta[t]], X[tb[t]], X[tc[t]]);
-      const Real gy = gap(cy, Y[ta[t]], Y[tb[t]], Y[tc[t]]);
-      const Real gz = gap(cz, Z[ta[t]], Z[tb[t]], Z[tc[t]]);
+      const Real gx = gap(lx, hx, X[ta[t]], X[tb[t]], X[tc[t]]);
+      const Real gy = gap(ly, hy, Y[ta[t]], Y[tb[t]], Y[tc[t]]);
+      const Real gz = gap(lz, hz, Z[ta[t]], Z[tb[t]], Z[tc[t]]);
       near[t] = gx * gx + gy * gy + gz * gz < r2;
     }
   }
@@ -167,7 +175,7 @@ class SurfaceContact {
   std::vector<int32_t> points_;          // surface points' internal ids, ascending
   std::vector<int32_t> local_of_point_;  // index into points_ or -1 (npoint)
   std::array<std::vector<int32_t>, 3> corner_;  // each triangle's corners as indices into points_, one array per corner
-  std::vector<uint8_t> near_;            // per triangle: its box reaches into the sphere (8-byte words)
+  std::vector<uint8_t> near_;            // per triangle: its box comes within the radius of the segment's box (8-byte words)
   std::vector<Real> share_;              // s_p / n_p per surface point (force_law::sphere_triangle_penalty)
   std::vector<Real> x_, y_, z_;          // surface points' positions this substep
   std::vector<int32_t> slot_;            // per lane

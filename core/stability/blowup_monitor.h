@@ -41,7 +41,7 @@ struct BlowupMonitorOptions {
 // What the monitor knows about the run, for naming the likely cause.
 struct BlowupContext {
   double dt = 0;                         // s
-  double tool_radius = 0;                // m; 0 = no tool
+  double tool_radius = 0;                // m: the ball about the tool origin that holds the tool; 0 = no tool
   double tool_contact_stiffness = 0;     // N/m
   std::optional<StabilityReport> stability;  // dt_crit and limiting points, when estimated
 };

@@ -395,7 +395,8 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
 }
 
 std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool) {
-  const double reach = 2 * std::max(tool.radius, tool.mode == ToolMode::Pull ? tool.grasp_radius : 0.0);
+  // A capsule's segment reaches up to its extent from the path, in any orientation.
+  const double reach = 2 * std::max(tool.radius, tool.mode == ToolMode::Pull ? tool.grasp_radius : 0.0) + tool.extent();
   std::vector<uint8_t> near(model.npoint(), 0);
   std::vector<double> path_distance(model.npoint());
   const auto& kf = tool.keyframes;

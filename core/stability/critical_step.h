@@ -119,7 +119,8 @@ double critical_step_for_mode(double omega2, double damping_rate);
 
 // Points whose rest position lies within reach of the tool's path (keyframe
 // polyline), internal numbering: radius (or grasp radius for pull) plus one
-// more radius of margin for the material the tool drags along; with surface
+// more radius of margin for the material the tool drags along, plus a
+// capsule's extent (ToolSpec::extent, any orientation); with surface
 // contact also every corner of a surface triangle that may come that close.
 std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& tool);
 

@@ -38,6 +38,7 @@ struct ScenarioKernel {
 constexpr ScenarioKernel kExpectedKernels[] = {
     {"default", "avx512", "avx512"},
     {"liver_push", "avx512", "avx512"},
+    {"liver_probe", "avx512", "avx512"},
     {"liver_pull", "avx512", "avx512"},
     {"liver7750_push", "avx512", "avx512"},
     {"liver7750_realtime", "avx512", "avx512"},

@@ -119,8 +119,10 @@ inline void for_each_one_step_against_the_reference(const CpuBackendOptions& opt
 }
 
 // Push: the sphere against the surface triangles (the default contact);
-// PushPoints: the same motion with the penalty on the points.
-enum class Scene { Lean, Full, Push, PushPoints, Pull };
+// PushPoints: the same motion with the penalty on the points. Capsule and
+// CapsulePoints: a capsule (radius 8 mm, a 3 cm shaft rising from its tip,
+// the tool's origin) pressed in while it turns a quarter turn about z.
+enum class Scene { Lean, Full, Push, PushPoints, Capsule, CapsulePoints, Pull };
 
 // 1000 steps (50 ticks of 20) of a scene; returns the positions and the last reaction.
 inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBackendOptions& options, Reaction& last,
@@ -128,6 +130,12 @@ inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBac
   BackendTool tool;
   if (scene == Scene::Push) tool = {true, ToolMode::Push, 0.02, 500, ToolContact::Surface};
   if (scene == Scene::PushPoints) tool = {true, ToolMode::Push, 0.02, 500, ToolContact::Points};
+  const bool capsule = scene == Scene::Capsule || scene == Scene::CapsulePoints;
+  if (capsule) {
+    tool = {true, ToolMode::Push, 0.008, 500, scene == Scene::Capsule ? ToolContact::Surface : ToolContact::Points};
+    tool.shape = ToolShape::Capsule;
+    tool.end_b = Vec3(0.03, 0, 0.012);
+  }
   if (scene == Scene::Pull) tool = {true, ToolMode::Pull, 0.01, 200};
   auto backend = make_cpu_backend(model, tool, options);
   const Vec3 top(0.025, 0.025, kSize);
@@ -151,8 +159,14 @@ inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBac
     // Push: the sphere's centre comes down to 1.5 cm inside the box; pull: the top is lifted 5 mm.
     const double s0 = i / 50.0, s1 = (i + 1) / 50.0;
     const bool push = scene == Scene::Push || scene == Scene::PushPoints;
-    const Vec3 from = push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s0)) : Vec3(top + Vec3(0, 0, 0.005 * s0));
-    const Vec3 to = push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s1)) : Vec3(top + Vec3(0, 0, 0.005 * s1));
+    Vec3 from = push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s0)) : Vec3(top + Vec3(0, 0, 0.005 * s0));
+    Vec3 to = push ? Vec3(top + Vec3(0, 0, 0.02 - 0.035 * s1)) : Vec3(top + Vec3(0, 0, 0.005 * s1));
+    if (capsule) {
+      // The tip comes down to 6 mm inside the box.
+      from = top + Vec3(0, 0, 0.012 - 0.026 * s0), to = top + Vec3(0, 0, 0.012 - 0.026 * s1);
+      request.turn_from = Quat(Eigen::AngleAxisd(1.5708 * s0, Vec3::UnitZ()));
+      request.turn_to = Quat(Eigen::AngleAxisd(1.5708 * s1, Vec3::UnitZ()));
+    }
     request.tool_from = from;
     request.tool_to = to;
     last = backend->tick(request);
@@ -168,6 +182,8 @@ inline const char* scene_name(Scene s) {
     case Scene::Full: return "volume + gravity";
     case Scene::Push: return "push (surface contact)";
     case Scene::PushPoints: return "push (point contact)";
+    case Scene::Capsule: return "turning capsule (surface contact)";
+    case Scene::CapsulePoints: return "turning capsule (point contact)";
     case Scene::Pull: return "pull";
   }
   return "";
@@ -181,7 +197,8 @@ inline const char* scene_name(Scene s) {
 // of its size.
 inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, double position_tol,
                                               double reaction_tol, VolumeTerm volume = VolumeTerm::PerTet) {
-  for (Scene scene : {Scene::Lean, Scene::Full, Scene::Push, Scene::PushPoints, Scene::Pull}) {
+  for (Scene scene :
+       {Scene::Lean, Scene::Full, Scene::Push, Scene::PushPoints, Scene::Capsule, Scene::CapsulePoints, Scene::Pull}) {
     const bool lean = scene == Scene::Lean;
     if (lean && volume != VolumeTerm::PerTet) continue;
     SCOPED_TRACE(volume_term_name(volume));
@@ -211,7 +228,7 @@ inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, 
 inline void expect_two_threads_bit_identical_to_one(Precision precision) {
   for (VolumeTerm volume : kEveryTerm) {
     const Model model = random_model(3, 6, volume, true);
-    for (Scene scene : {Scene::Full, Scene::Push, Scene::PushPoints, Scene::Pull}) {
+    for (Scene scene : {Scene::Full, Scene::Push, Scene::PushPoints, Scene::Capsule, Scene::Pull}) {
       SCOPED_TRACE(volume_term_name(volume));
       Reaction r1, r2;
       const auto x1 = run_scene(model, scene, {precision, 1, CpuKernel::Avx512}, r1, 10);

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
 
 #include "core/scenario/scenario.h"
@@ -312,6 +313,80 @@ TEST(ScenarioParse, ToolContactIsReadAndChecked) {
   j["tool"]["contact"] = "points";
   j["tool"]["mode"] = "pull";
   EXPECT_EQ(error_of(j), "scene.json: tool.contact: only used with \"mode\": \"push\"");
+}
+
+// The capsule's fields and the keyframes' orientation: read, and every
+// mistake refused with the path and what was expected.
+TEST(ScenarioParse, CapsuleAndOrientationAreReadAndChecked) {
+  json j = minimal();
+  j["tool"] = json::parse(R"({"shape": "capsule", "radius": 0.0015, "ends": [[0, 0, 0], [0, 0, 0.1]],
+                               "keyframes": [{"t": 0, "position": [0, 0, 0]},
+                                             {"t": 1, "position": [0, 0, 0], "orientation": [0.7071068, 0, 0, 0.7071068]},
+                                             {"t": 2, "position": [0, 0, 0],
+                                              "axis_angle": {"axis": [0, 0, 2], "angle": 3.14159265358979}}]})");
+  const ToolSpec s = parse(j).tool->spec;
+  EXPECT_EQ(s.shape, ToolShape::Capsule);
+  EXPECT_EQ(s.end_b, Vec3(0, 0, 0.1));
+  EXPECT_DOUBLE_EQ(s.extent(), 0.1);
+  EXPECT_EQ(s.keyframes[0].orientation.coeffs(), Quat::Identity().coeffs());  // absent: identity
+  EXPECT_NEAR(s.keyframes[1].orientation.angularDistance(Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))), 0, 1e-7);
+  EXPECT_NEAR(s.keyframes[2].orientation.angularDistance(Quat(Eigen::AngleAxisd(M_PI, Vec3::UnitZ()))), 0, 1e-12);
+  EXPECT_NEAR(s.keyframes[1].orientation.norm(), 1, 1e-15);  // normalised
+
+  auto refused = [&](const char* patch, const std::string& want) {
+    json k = j;
+    k["tool"].merge_patch(json::parse(patch));
+    EXPECT_EQ(error_of(k), want) << patch;
+  };
+  refused(R"({"shape": "cone"})", "scene.json: tool.shape: expected \"sphere\" or \"capsule\" (got \"cone\")");
+  refused(R"({"ends": [[0, 0, 0]]})",
+          "scene.json: tool.ends: expected two end points [[x, y, z], [x, y, z]] in the tool frame, m");
+  refused(R"({"ends": [[0, 0, 0.1], [0, 0, 0.1]]})",
+          "scene.json: tool.ends: expected two different end points (a capsule of zero length is \"shape\": "
+          "\"sphere\")");
+  refused(R"({"shape": "sphere"})", "scene.json: tool.ends: only used with \"shape\": \"capsule\"");
+  refused(R"({"mode": "pull"})", "scene.json: tool.shape: \"capsule\" is a pushing tool (\"mode\": \"push\")");
+  refused(R"({"ends": null})", "scene.json: tool.ends: missing (required)");
+  auto refused_key = [&](const json& keyframe, const std::string& want) {
+    json k = j;
+    k["tool"]["keyframes"][1] = keyframe;
+    EXPECT_EQ(error_of(k), want) << keyframe.dump();
+  };
+  refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "orientation": [1, 0, 0]})"),
+              "scene.json: tool.keyframes[1].orientation: expected an array of 4 numbers, got an array of 3");
+  refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "orientation": [0, 90, 0, 0]})"),
+              "scene.json: tool.keyframes[1].orientation: expected a unit quaternion [w, x, y, z] (got length "
+              "90.000000)");
+  refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "orientation": [1, 0, 0, 0], "axis_angle": {}})"),
+              "scene.json: tool.keyframes[1].axis_angle: give either \"orientation\" or \"axis_angle\", not both");
+  refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "axis_angle": {"axis": [0, 0, 0], "angle": 1}})"),
+              "scene.json: tool.keyframes[1].axis_angle.axis: expected a non-zero axis [x, y, z]");
+  refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "axis_angle": {"axis": [0, 0, 1]}})"),
+              "scene.json: tool.keyframes[1].axis_angle.angle: missing (required)");
+  refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "axis_angle": {"axis": [0, 0, 1], "angle": 1, "deg": 1}})"),
+              "scene.json: tool.keyframes[1].axis_angle.deg: unknown field");
+}
+
+// Orientation between keyframes: slerp, so a quarter turn is an eighth
+// halfway (45 degrees about the same axis), and exactly each keyframe's
+// orientation at its time and outside the keyframes.
+TEST(ToolSpec, OrientationIsSlerpedBetweenKeyframesAndExactAtThem) {
+  ToolSpec s;
+  const Quat start(Eigen::AngleAxisd(0.2, Vec3(1, 2, 3).normalized()));
+  const Quat quarter = Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())) * start;
+  s.keyframes = {{0.5, Vec3::Zero(), start}, {1.5, Vec3::Zero(), quarter}, {2.5, Vec3::Zero()}};
+  const Quat half = s.orientation_at(1.0);
+  const Quat turned = half * start.inverse();  // the turn made so far
+  EXPECT_NEAR(Eigen::AngleAxisd(turned).angle(), M_PI / 4, 1e-12);
+  EXPECT_NEAR(std::abs(Eigen::AngleAxisd(turned).axis().z()), 1, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(s.orientation_at(0.75) * start.inverse()).angle(), M_PI / 8, 1e-12);
+  for (double t : {0.0, 0.5}) EXPECT_EQ(s.orientation_at(t).coeffs(), start.coeffs()) << t;
+  EXPECT_EQ(s.orientation_at(1.5).coeffs(), quarter.coeffs());
+  for (double t : {2.5, 9.0}) EXPECT_EQ(s.orientation_at(t).coeffs(), Quat::Identity().coeffs()) << t;
+  // q and -q are one rotation: slerp takes the short way between them.
+  ToolSpec flipped;
+  flipped.keyframes = {{0, Vec3::Zero(), Quat::Identity()}, {1, Vec3::Zero(), Quat(-1, 0, 0, 0)}};
+  EXPECT_NEAR(flipped.orientation_at(0.5).angularDistance(Quat::Identity()), 0, 1e-12);
 }
 
 }  // namespace

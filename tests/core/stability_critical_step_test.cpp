@@ -116,6 +116,32 @@ TEST(StabilityCriticalStep, ToolContactShrinksTheStepNearItsPath) {
     EXPECT_TRUE(options.tool_may_touch[model.internal_of_input[p.point]]) << "point " << p.point;
 }
 
+// A capsule reaches its extent beyond its origin's path in any
+// orientation: the points that may feel it are those within 2 R + extent
+// of the path (the sphere's rule with the shaft added), so a light point
+// under the shaft, far from the tip's path, is counted in dt_crit too.
+TEST(StabilityCriticalStep, CapsuleReachesItsShaftsExtentFromThePath) {
+  const Model model = testing::stability_box(3, 0.03, testing::undamped_material(), 0, 1);
+  ToolSpec sphere;
+  sphere.radius = 0.003;
+  sphere.contact = ToolContact::Points;
+  sphere.keyframes = {{0, Vec3(0.015, 0.015, 0.035)}};
+  ToolSpec capsule = sphere;
+  capsule.shape = ToolShape::Capsule;
+  capsule.end_b = Vec3(0, 0, 0.02);
+  const std::vector<uint8_t> near_sphere = points_near_tool_path(model, sphere);
+  const std::vector<uint8_t> near_capsule = points_near_tool_path(model, capsule);
+  int sphere_count = 0, capsule_count = 0;
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    const double d = (model.rest_position[i] - sphere.keyframes[0].position).norm();
+    EXPECT_EQ(near_sphere[i] != 0, d <= 2 * sphere.radius) << "point " << i;
+    EXPECT_EQ(near_capsule[i] != 0, d <= 2 * capsule.radius + 0.02) << "point " << i;
+    sphere_count += near_sphere[i];
+    capsule_count += near_capsule[i];
+  }
+  EXPECT_GT(capsule_count, sphere_count);
+}
+
 // Refusal keeps the haptic tick and names dt_crit; --allow-unstable warns.
 TEST(StabilityCriticalStep, CheckRefusesAndSuggestsSameTick) {
   const Model model = testing::stability_box(3, 0.03, testing::undamped_material(), 0, 1);

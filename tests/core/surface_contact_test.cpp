@@ -10,42 +10,24 @@
 #include "core/physics/force_law.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/reference_forces.h"
-#include "tests/core/test_models.h"
+#include "tests/core/contact_test_util.h"
 
 namespace organsim {
 namespace {
 
-using testing::fixed_bottom_options;
-using testing::jittered_box;
+using testing::Contact;
+using testing::largest_change;
 
-constexpr double kSize = 0.04;  // m, box edge
-constexpr double kK = 500;      // N/m, contact stiffness
+constexpr double kSize = testing::kContactBox;
+constexpr double kK = testing::kContactK;
 
-Model box(int cells) {
-  Material material;
-  material.density = 1000;
-  material.young_modulus = 4000;
-  material.spring_damping_time = 0.01;
-  material.viscous_damping = 5;
-  return build_model(jittered_box(cells, kSize, 0.2, 5), material, fixed_bottom_options());
-}
-
-struct Contact {
-  Reaction reaction;
-  std::vector<Vec3> force;  // per point
-};
+Model box(int cells) { return testing::contact_box(cells); }
 
 Contact at_rest(const Model& m, const Vec3& center, double radius) {
   Contact c;
   c.force.assign(m.npoint(), Vec3::Zero());
   c.reaction = reference_surface_forces(m, m.rest_position, center, radius, kK, c.force);
   return c;
-}
-
-double largest_change(const Contact& a, const Contact& b) {
-  double worst = 0;
-  for (size_t i = 0; i < a.force.size(); ++i) worst = std::max(worst, (a.force[i] - b.force[i]).norm());
-  return worst;
 }
 
 // A finite-difference check: the sphere's centre moved by +-h across a

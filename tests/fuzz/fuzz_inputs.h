@@ -75,6 +75,13 @@ inline Scenario scenario_input(std::string_view text, const std::string& source)
   require(s.time.dt > 0 && s.time.substeps > 0 && s.time.duration > 0, "scenario accepted a non-positive time");
   require(s.time.ticks() >= 1, "scenario accepted a run of no ticks");
   require(std::isfinite(s.mesh.scale) && s.mesh.scale > 0, "scenario accepted a bad mesh.scale");
+  if (s.tool) {
+    for (const Keyframe& k : s.tool->spec.keyframes)
+      require(k.orientation.coeffs().allFinite() && std::abs(k.orientation.norm() - 1) < 1e-12,
+              "scenario accepted an orientation that is not a unit quaternion");
+    if (s.tool->spec.shape == ToolShape::Capsule)
+      require(s.tool->spec.end_a != s.tool->spec.end_b, "scenario accepted a capsule of zero length");
+  }
   return s;
 }
 

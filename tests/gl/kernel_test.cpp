@@ -84,41 +84,56 @@ TEST_P(GlKernel, SpringsVolumeAndGravityMatchTheReferenceScatter) {
 // recomputing its own triangles) and on the points.
 TEST_P(GlKernel, PushContactAndReactionMatchTheReference) {
   const Model model = gl_test::box_model(5, 5, 3, true, 0, Vec3(0, 0, 0));
+  for (const ToolShape shape : {ToolShape::Sphere, ToolShape::Capsule})
   for (const ToolContact contact : {ToolContact::Surface, ToolContact::Points}) {
-    SCOPED_TRACE(contact == ToolContact::Surface ? "surface contact" : "point contact");
+    SCOPED_TRACE(std::string(shape_name(shape)) + (contact == ToolContact::Surface ? ", surface contact" : ", point contact"));
     BackendTool tool{true, ToolMode::Push, 0.02, 300.0, contact};
+    // The capsule: a 4 cm shaft of the sphere's radius whose tip is the
+    // tool's origin, turned 30 degrees about x, so its closest points lie
+    // off the origin and the reaction has a torque about it.
+    const Quat turn(Eigen::AngleAxisd(0.5236, Vec3::UnitX()));
+    if (shape == ToolShape::Capsule) tool.shape = shape, tool.end_b = Vec3(0.04, 0, 0.01);
     const GlBackendOptions options = recording();
     GlBackend gl(model, tool, options);
     const gl_test::MovingState s = gl_test::moving_state(model, kDt);
     gl.set_state(s.x, s.x_prev);
     // Tool centre 1.2 cm above the top face's centre: the top points nearest the
-    // centre are inside the 2 cm sphere.
+    // centre are inside the 2 cm sphere (the capsule's tip).
     const Vec3 center(0.05, 0.05, 0.062);
     TickRequest request;
     request.dt = kDt;
     request.substeps = 1;
     request.tool_active = true;
     request.tool_from = request.tool_to = center;
+    request.turn_from = request.turn_to = turn;
     EXPECT_EQ(gl.tick(request).contacts, 0);  // latency: nothing read yet
     std::vector<Vec3> got, want;
     gl.forces(got);
     reference_internal_forces(model, s.x, s.v, want);
+    const ToolPlacement placed = request.tool_at(tool, 0);
     const Reaction expect =
         contact == ToolContact::Surface
-            ? reference_surface_forces(model, s.x, center, tool.radius, tool.contact_stiffness, want)
-            : reference_push_forces(s.x, center, tool.radius, tool.contact_stiffness, want, model.tool_k_scale);
+            ? reference_surface_forces(model, s.x, placed, tool.contact_stiffness, want)
+            : reference_push_forces(s.x, placed, tool.contact_stiffness, want, model.tool_k_scale);
     ASSERT_GT(expect.contacts, 0);
     EXPECT_LT(relative_difference(got, want), 1e-5);
     // The reaction of that tick comes back with the next one.
     request.tool_active = false;
     const Reaction r = gl.tick(request);
     EXPECT_EQ(r.contacts, expect.contacts);
-    std::cout << "push reaction " << r.force.transpose() << " N, reference " << expect.force.transpose() << " N, "
-              << r.contacts << " contacts\n";
+    std::cout << shape_name(shape) << " push reaction " << r.force.transpose() << " N, reference "
+              << expect.force.transpose() << " N, torque " << r.torque.transpose() << " N m, reference "
+              << expect.torque.transpose() << " N m, " << r.contacts << " contacts\n";
     // The reaction sums tens of float terms of one sign: 1e-5 relative.
     EXPECT_LT((r.force - expect.force).norm(), 1e-5 * expect.force.norm());
-    // Torque about the centre of forces along (contact point - centre) is 0 up to rounding.
-    EXPECT_LT(r.torque.norm(), 1e-6 * expect.force.norm() * tool.radius);
+    if (shape == ToolShape::Sphere) {
+      // Torque about the centre of forces along (contact point - centre) is 0 up to rounding.
+      EXPECT_LT(r.torque.norm(), 1e-6 * expect.force.norm() * tool.radius);
+    } else {
+      // The capsule's torque about its origin: lever arms up to the 4 cm shaft.
+      ASSERT_GT(expect.torque.norm(), 1e-3 * expect.force.norm() * tool.radius);
+      EXPECT_LT((r.torque - expect.torque).norm(), 1e-5 * expect.force.norm() * 0.04);
+    }
   }
 }
 

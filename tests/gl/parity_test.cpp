@@ -137,6 +137,41 @@ TEST(GlParity, PushOnThePointsMatchesTheDoubleReference) {
   }
 }
 
+// A capsule (a 4 cm shaft, radius 12 mm, its tip the tool's origin) pressed
+// into the top while it turns a quarter turn about z, against the surface
+// triangles and on the points: the closest points between segment and
+// triangle, and the pose's slerp per substep, on both backends.
+TEST(GlParity, TurningCapsuleMatchesTheDoubleReference) {
+  const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
+  const Vec3 start(0.05, 0.05, 0.068), end(0.05, 0.05, 0.056);
+  // Tilted so that the shaft rises from the tip; the tip ends 6 mm deep.
+  const Quat from(Eigen::AngleAxisd(-0.3, Vec3::UnitY())), to = Quat(Eigen::AngleAxisd(1.5708, Vec3::UnitZ())) * from;
+  auto request_at = [&](int n) {
+    TickRequest r = tool_request(n, start, end);
+    r.turn_from = from.slerp(static_cast<double>(n) / kTicks, to);
+    r.turn_to = from.slerp(static_cast<double>(n + 1) / kTicks, to);
+    return r;
+  };
+  for (const ToolContact contact : {ToolContact::Surface, ToolContact::Points})
+    for (const int32_t threads_per_point : {1, 8}) {
+      SCOPED_TRACE(std::string(contact == ToolContact::Surface ? "surface" : "points") + ", " +
+                   std::to_string(threads_per_point) + " invocation(s) per point");
+      BackendTool tool{true, ToolMode::Push, 0.012, 200.0, contact};
+      tool.shape = ToolShape::Capsule;
+      tool.end_b = Vec3(0.04, 0, 0);
+      const Comparison c = compare(model, tool, request_at, nullptr, threads_per_point);
+      std::cout << "capsule, " << (contact == ToolContact::Surface ? "surface" : "points") << ", "
+                << threads_per_point << " invocation(s) per point: position " << c.position << " of diagonal, force "
+                << c.force << " of peak " << c.peak_force << " N, " << c.max_contacts << " contacts\n";
+      // On the points the tissue gives way under the tip: one point carries it
+      // (the surface contact spreads it over several triangles' corners).
+      ASSERT_GT(c.max_contacts, contact == ToolContact::Surface ? 3 : 0);
+      ASSERT_GT(c.peak_force, 0.1);
+      EXPECT_LT(c.position, 1e-5);
+      EXPECT_LT(c.force, 1e-4);
+    }
+}
+
 // Above 4,096 points there are more than 64 chunks, so the reduction's 64
 // lanes each sum several workgroup partials before the tree: the contacts
 // must be counted whichever chunk they fall in. Same tolerances as above.

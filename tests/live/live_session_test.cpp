@@ -3,10 +3,12 @@
 // same ticks bit for bit, and refused poses must change nothing.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <thread>
 
 #include "core/live/live_session.h"
 #include "core/mesh/tet_mesh.h"
@@ -25,6 +27,7 @@ class ScriptedLink : public LiveLink {
  public:
   std::map<int64_t, std::vector<ClientPose>> script;
   std::map<int64_t, std::vector<std::string>> texts;  // STRING commands, after the tick's poses
+  std::map<int64_t, int> pause_ms;  // a slow client: waits this long before delivering the tick's messages
   std::vector<std::pair<double, Vec3>> replies;  // (t, force)
   std::vector<Eigen::Matrix3d> stiffness;         // per reply
   int64_t stop_at = -1;
@@ -36,6 +39,7 @@ class ScriptedLink : public LiveLink {
     if (tick == stop_at) stop = true;
     if (delivered_ > tick) return;
     delivered_ = tick + 1;
+    if (pause_ms.count(tick)) std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms[tick]));
     for (ClientPose p : script[tick]) {
       p.received = LiveClock::now();
       sink.on_pose(p);
@@ -257,6 +261,11 @@ TEST(LiveSession, AClientCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
   link.texts[4] = {"SLICE", "CUT 5", "cut -1 3"};    // not commands: refused
   link.texts[10] = {" cut ", "CUT"};                 // the second while the first is not in: refused
   link.script[20] = {pose_down_mm(22, 25, 46)};
+  // The session does not wait for the worker (a change not in by the last
+  // tick never is), and this one is paced by the script alone: a client
+  // slow for a second after the cut gives the worker time even on a loaded
+  // machine.
+  for (int64_t tick = 11; tick < 31; ++tick) link.pause_ms[tick] = 50;
   const Served served = serve(s, model, link);
 
   EXPECT_EQ(served.live["commands_refused"],

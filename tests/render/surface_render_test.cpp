@@ -111,9 +111,16 @@ TEST(SurfaceRenderer, WireframeAndToolAddPixels) {
   EXPECT_GT(dark(wire), dark(plain) + 200);
   // The tool sphere next to the box adds object pixels.
   style.wireframe = false;
-  const cv::Mat with_tool = renderer.render(cam, style, ToolDraw{true, Vec3(0.05, 0.05, 0.13), 0.02});
-  EXPECT_GT(cv::countNonZero(differs_from(with_tool, cv::Vec3b(255, 255, 255), 8)),
-            cv::countNonZero(differs_from(plain, cv::Vec3b(255, 255, 255), 8)) + 100);
+  const Vec3 centre(0.05, 0.05, 0.13);
+  const cv::Mat with_tool = renderer.render(cam, style, ToolDraw{true, centre, centre, 0.02});
+  const auto object = [&](const cv::Mat& m) { return cv::countNonZero(differs_from(m, cv::Vec3b(255, 255, 255), 8)); };
+  EXPECT_GT(object(with_tool), object(plain) + 100);
+  // A capsule of the same radius with a 6 cm shaft across the view adds its
+  // shaft: clearly more pixels than the sphere (a capsule drawn as its
+  // sphere, or with the shaft collapsed, would not).
+  const cv::Mat with_capsule =
+      renderer.render(cam, style, ToolDraw{true, centre - Vec3(0.03, 0, 0), centre + Vec3(0.03, 0, 0), 0.02});
+  EXPECT_GT(object(with_capsule), object(with_tool) + 300);
 }
 
 }  // namespace
