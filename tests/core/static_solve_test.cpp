@@ -6,6 +6,7 @@
 #include "core/sim/cpu_backend.h"
 #include "core/util/error.h"
 #include "core/validation/static_solve.h"
+#include "tests/core/stability_test_util.h"
 #include "tests/core/test_models.h"
 
 namespace organsim {
@@ -80,16 +81,9 @@ TEST_P(StaticSolveRelaxed, MatchesTheCpuBackendRelaxedUnderGravity) {
 // to 1e-3; a surface spring with all its weight on one corner is that
 // point's spring.
 TEST(StaticSolve, StiffSpringsAddedToTheFactorActAsPrescribedCoordinates) {
-  Material material;
-  material.young_modulus = 5000;
+  Material material = testing::undamped_material(5000);
   material.poisson_ratio = 0.45;
-  ModelOptions options;
-  FixedSelector base;
-  base.kind = FixedSelector::Kind::Plane;
-  base.point = Vec3(0, 0, 1e-6);
-  base.normal = Vec3(0, 0, -1);
-  options.fixed = {base};
-  const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 3, 3, 3), material, options);
+  const Model model = testing::stability_box(3, 0.04, material);  // bottom face held
   int32_t top = 0;  // the corner (0.04, 0.04, 0.04)
   for (int32_t p = 0; p < model.npoint(); ++p)
     if (model.rest_position[p].sum() > model.rest_position[top].sum()) top = p;
