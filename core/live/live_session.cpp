@@ -180,7 +180,7 @@ void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
 void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
   // The contact's stiffness at the tissue's end-of-tick positions; only in
   // contact (a copy of the positions and one pass over the surface).
-  Mat3 stiffness = Mat3::Zero();
+  Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
     backend.positions(stiffness_positions_);
     stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, info.tool_center);

@@ -10,6 +10,7 @@
 
 #include "core/model/material_summary.h"
 #include "core/run/change_worker.h"
+#include "core/sim/contact_stiffness.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/run_events.h"
 #include "core/util/error.h"
@@ -106,6 +107,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   std::vector<Vec3> positions;
   if (pull) positions.reserve(static_cast<size_t>(model.npoint()));
   bool grasped = false, released = false;
+  Mat3 held_stiffness = Mat3::Zero();  // TickInfo::held_stiffness
 
   // Topology changes: only for a scenario with events. `current` is the
   // Model the backend steps now; versions after `model` are owned here.
@@ -214,11 +216,13 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
         const Attachment a = select_grasp(*current, positions, request.tool_from, tool->grasp_radius);
         result.grasped_points = static_cast<int32_t>(a.points.size());
         backend.attach(a);
+        held_stiffness = attachment_stiffness(*current, a, tool->contact_stiffness);
         grasped = true;
       }
       if (pull && grasped && !released && tool->release_time &&
           starts_at_or_after(t0, *tool->release_time, time.dt)) {
         backend.release();
+        held_stiffness.setZero();
         released = true;
       }
 
@@ -247,6 +251,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       info.tool_from = request.tool_from;
       info.tool_active = request.tool_active;
       info.reaction = r;
+      info.held_stiffness = held_stiffness;
       for (RunObserver* o : options.observers) o->on_tick(*current, backend, info);
     }
     off_path.abandon();  // a change not swapped in by the last tick never is

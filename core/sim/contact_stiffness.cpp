@@ -68,6 +68,12 @@ Mat3 reference_surface_stiffness(const Model& model, const std::vector<Vec3>& x,
   return k;
 }
 
+Mat3 attachment_stiffness(const Model& model, const Attachment& held, double stiffness) {
+  double k = 0;
+  for (int32_t p : held.points) k += stiffness * model.tool_scale(p);
+  return -k * Mat3::Identity();
+}
+
 Mat3 tool_contact_stiffness(const Model& model, const std::vector<Vec3>& x, const BackendTool& tool,
                             const Vec3& center) {
   if (!tool.present || tool.mode != ToolMode::Push) return Mat3::Zero();

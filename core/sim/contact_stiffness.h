@@ -26,8 +26,13 @@ Mat3 reference_push_stiffness(const std::vector<Vec3>& x, const Vec3& center, do
 Mat3 reference_surface_stiffness(const Model& model, const std::vector<Vec3>& x, const Vec3& center, double radius,
                                  double stiffness);
 
+// A pulling tool's K: each held point's attachment spring, f = k s_i (c +
+// o_i - x_i) on the tissue (force_law::pull_attachment), gives dF/dc =
+// -k s_i I, whatever the positions.
+Mat3 attachment_stiffness(const Model& model, const Attachment& held, double stiffness);
+
 // The pushing tool's K at positions x (internal ids) by its contact kind;
-// zero for a pulling tool (its attachment is not known here).
+// zero for a pulling tool (attachment_stiffness: the attachment is not known here).
 Mat3 tool_contact_stiffness(const Model& model, const std::vector<Vec3>& x, const BackendTool& tool,
                             const Vec3& center);
 

@@ -15,6 +15,9 @@ struct TickInfo {
   Vec3 tool_from{0, 0, 0};    // at its start, m
   bool tool_active = false;
   Reaction reaction;      // as returned by Backend::tick (latency applies)
+  // A pulling tool: dF/dc of its attachment springs while it holds points
+  // (attachment_stiffness, N/m), zero otherwise.
+  Eigen::Matrix3d held_stiffness = Eigen::Matrix3d::Zero();
 };
 
 class RunObserver {

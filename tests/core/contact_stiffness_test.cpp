@@ -141,5 +141,25 @@ TEST(ContactStiffness, PointContactStiffnessIsTheCentralDifferenceOfTheReactionW
   EXPECT_EQ(tool_contact_stiffness(p.model, p.x, tool, p.center), Mat3::Zero());
 }
 
+// A pulling tool's attachment springs: K = -sum k s_i I, the central
+// difference of the pull reaction with the tissue held.
+TEST(ContactStiffness, HeldPointsStiffnessIsTheCentralDifferenceOfThePullReaction) {
+  const Pressed p = pressed_box();
+  Attachment held;
+  for (int32_t i = 0; i < p.model.npoint(); ++i)
+    if ((p.x[i] - p.center).norm() < 0.02) {
+      held.points.push_back(i);
+      held.offsets.push_back(p.model.rest_position[i] - p.center);
+    }
+  ASSERT_GT(held.points.size(), 3u);
+  const auto reaction = [&](const Vec3& c) {
+    std::vector<Vec3> force(p.x.size(), Vec3::Zero());
+    return reference_pull_forces(p.x, held, c, kK, force, p.model.tool_k_scale).force;
+  };
+  const Mat3 k = attachment_stiffness(p.model, held, kK);
+  expect_close(k, central_differences(p.center, reaction), 1e-6 * kK);
+  EXPECT_LT(k(0, 0), -kK) << "several points held: stiffer than one spring";
+}
+
 }  // namespace
 }  // namespace organsim

@@ -221,6 +221,57 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
   expect_same_samples(replay(s, model, served).samples, f);
 }
 
+// What the run loop hands each observer as a pulling tool's stiffness.
+struct HeldStiffnessProbe : RunObserver {
+  std::vector<Eigen::Matrix3d> k;
+  void on_tick(const Model&, Backend&, const TickInfo& info) override { k.push_back(info.held_stiffness); }
+};
+
+// A pulling tool's reply carries its attachment springs' stiffness
+// (-k sum s_i I) from the grasp to the release, and zero outside.
+TEST(LiveSession, APullingToolsReplyCarriesItsAttachmentsStiffnessWhileItHolds) {
+  Scenario s = cube();
+  s.tool->spec.mode = ToolMode::Pull;
+  s.tool->spec.keyframes = {{0.0, Vec3(0.02, 0.02, 0.04)}};  // on the top face
+  s.tool->spec.grasp_radius = 0.012;
+  s.tool->spec.grasp_time = 0.02;
+  s.tool->spec.release_time = 0.05;
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  link.script[30] = {pose_mm("Tool", 20, 20, 45)};  // lift 5 mm while holding
+  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  LiveOptions o;
+  o.tool = backend_tool(s);
+  o.tick = s.time.tick();
+  o.start = s.tool->spec.position_at(0);
+  o.scene = scene_box(model.rest_position);
+  o.stop = &link.stop;
+  LiveSession session(link, o);
+  HeldStiffnessProbe probe;
+  RunOptions r;
+  r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session_pull";
+  r.observers = {&session, &probe};
+  r.tool_driver = &session;
+  const RunResult result = run_scenario(s, model, *backend, r);
+
+  ASSERT_GT(result.grasped_points, 0);
+  ASSERT_EQ(link.stiffness.size(), probe.k.size());
+  const double k = s.tool->spec.contact_stiffness;
+  for (size_t tick = 0; tick < link.stiffness.size(); ++tick) {
+    const Eigen::Matrix3d& got = link.stiffness[tick];
+    EXPECT_EQ(got, probe.k[tick]) << "tick " << tick;  // the client's frame is the scene's here
+    const bool holding = tick >= 20 && tick < 50;
+    if (!holding) {
+      EXPECT_EQ(got, Eigen::Matrix3d::Zero()) << "tick " << tick;
+      continue;
+    }
+    // Each held point adds -k s_i, s_i in (0, 1] (Model::tool_k_scale).
+    EXPECT_TRUE(got.isApprox(got(0, 0) * Eigen::Matrix3d::Identity())) << "tick " << tick;
+    EXPECT_LT(got(0, 0), -0.1 * k * result.grasped_points) << "tick " << tick;
+    EXPECT_GE(got(0, 0), -k * result.grasped_points) << "tick " << tick;
+  }
+}
+
 TEST(LiveSession, RefusedPosesChangeNothingAndAStopEndsTheRunWithAReplayableRecord) {
   const Scenario s = cube();
   const Model model = cube_model(s);
