@@ -108,7 +108,8 @@ struct StiffnessProbe : RunObserver {
   }
 };
 
-Served serve(const Scenario& s, const Model& model, ScriptedLink& link, StiffnessProbe* probe = nullptr) {
+// `probe`, if given, watches the run beside the session.
+Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObserver* probe = nullptr) {
   auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   LiveOptions o;
   o.tool = backend_tool(s);
@@ -120,10 +121,7 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link, Stiffnes
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session";
   r.observers = {&session};
-  if (probe) {
-    probe->tool = backend_tool(s);
-    r.observers.push_back(probe);
-  }
+  if (probe) r.observers.push_back(probe);
   r.tool_driver = &session;
   Served out;
   out.result = run_scenario(s, model, *backend, r);
@@ -184,6 +182,7 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
   link.script[50] = {pose_mm("Tool", 20.5, 20, 45)};
   link.script[51] = {pose_mm("Tool", 20.5, 20, 45)};
   StiffnessProbe probe;
+  probe.tool = backend_tool(s);
   const Served served = serve(s, model, link, &probe);
 
   const ForceSamples& f = served.result.samples;
@@ -239,20 +238,9 @@ TEST(LiveSession, APullingToolsReplyCarriesItsAttachmentsStiffnessWhileItHolds) 
   const Model model = cube_model(s);
   ScriptedLink link;
   link.script[30] = {pose_mm("Tool", 20, 20, 45)};  // lift 5 mm while holding
-  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
-  LiveOptions o;
-  o.tool = backend_tool(s);
-  o.tick = s.time.tick();
-  o.start = s.tool->spec.position_at(0);
-  o.scene = scene_box(model.rest_position);
-  o.stop = &link.stop;
-  LiveSession session(link, o);
   HeldStiffnessProbe probe;
-  RunOptions r;
-  r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session_pull";
-  r.observers = {&session, &probe};
-  r.tool_driver = &session;
-  const RunResult result = run_scenario(s, model, *backend, r);
+  const Served served = serve(s, model, link, &probe);
+  const RunResult& result = served.result;
 
   ASSERT_GT(result.grasped_points, 0);
   ASSERT_EQ(link.stiffness.size(), probe.k.size());
