@@ -57,10 +57,13 @@ void serve_command(const ServeArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (!s.tool) throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve needs a \"tool\": the client drives it");
   // A client sends the tool's position; its rotation is not applied, and the
-  // reply's local stiffness is the sphere's.
+  // reply's local stiffness is the frictionless sphere's.
   if (s.tool->spec.shape != ToolShape::Sphere)
     throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve drives a sphere tool (tool.shape \"sphere\"); "
-                                                     "a capsule's orientation is not taken from the client");
+                                                     "a capsule's orientation and a grasper's jaws are not taken from the client");
+  if (s.tool->spec.friction.on())
+    throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve's local stiffness has no friction term: "
+                                                     "remove tool.friction");
   s.time.duration = args.duration;
   if (s.time.ticks() > 100'000'000) throw Error(ErrorKind::Usage, "--duration: more than 1e8 ticks");
   ClientFrame frame;

@@ -25,7 +25,7 @@
 #define ORGANSIM_GL_B_SPRINGS 6   // {int other; float rest, k, d} per (chunk, slot, lane) (nspring_entry)
 #define ORGANSIM_GL_B_TETS 7      // {int a, b, c; float k_v, V_r} per (chunk, slot, lane) (ntet_entry)
 #define ORGANSIM_GL_B_ATTACH 8    // vec4 {offset from tool centre (m), attached 0/1} (npad)
-#define ORGANSIM_GL_B_PARTIALS 9  // vec4 pairs {F.xyz, contacts}, {T.xyz, 0} per workgroup (nchunk x 2)
+#define ORGANSIM_GL_B_PARTIALS 9  // vec4 pairs {F.xyz, contacts}, {T.xyz, grip} per workgroup (nchunk x 2)
 #define ORGANSIM_GL_B_REACTION 10 // vec4 pairs as above per ring slot (READBACK_SLOTS x 2), mapped
 #define ORGANSIM_GL_B_FORCE 11    // vec4 total force per point, N (npad); RECORD_FORCE variant (tests) only
 #define ORGANSIM_GL_B_STATUS 12   // uint per ring slot: lowest point whose x_{t+1} is not finite, or ~0u; mapped
@@ -36,6 +36,7 @@
 #define ORGANSIM_GL_B_SHEAR_STRESS 17  // vec4 x 3 per point: P(Fbar_p)'s columns (npad x 3); shear_smoothing.comp
 #define ORGANSIM_GL_B_SURFACE 18  // ivec2 {first entry, count} of each point's surface triangles (npad); surface contact
 #define ORGANSIM_GL_B_SURFACE_TRIS 19  // ivec4 {corners 0, 1, 2, the point's corner} per (point, triangle), ascending
+#define ORGANSIM_GL_B_ANCHOR 20   // vec4 {friction anchor in the tool frame (m), anchored 0/1} (npad); FRICTION
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
@@ -51,5 +52,10 @@
 #define ORGANSIM_GL_U_DT2 10          // float dt^2, s^2 (rounded once from double)
 #define ORGANSIM_GL_U_TOOL_A 11       // vec3 the tool shape's segment, first end, m (the centre for a sphere); push only
 #define ORGANSIM_GL_U_TOOL_B 12       // vec3 its second end, m (the centre for a sphere); push only
+#define ORGANSIM_GL_U_TOOL_A2 13      // vec3 a grasper's second jaw, first end, m; GRASPER
+#define ORGANSIM_GL_U_TOOL_B2 14      // vec3 its second end, m; GRASPER
+#define ORGANSIM_GL_U_FRICTION 15     // vec2 {mu_s, mu_k}; FRICTION
+#define ORGANSIM_GL_U_TOOL_ROTATION 16  // mat3 the tool frame's rotation into the world (locations 16-18); FRICTION
+#define ORGANSIM_GL_U_JAW_AXIS 19     // vec3 the grasper's jaw axis in the world (its first jaw closes along -it); GRASPER
 
 #endif

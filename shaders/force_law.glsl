@@ -199,3 +199,30 @@ bool capsule_triangle_penalty(vec3 a, vec3 b, float radius, vec3 x0, vec3 x1, ve
 
 // A pulling tool's attachment spring: k (target - x).
 vec3 pull_attachment(vec3 target, vec3 x, float k) { return k * (target - x); }
+
+// Coulomb friction with a stick anchor (force_law::anchor_friction): f_t =
+// k_t P (anchor - x) while |f_t| <= mu_s N (sticking) or mu_k N (slipping),
+// else the point slips and the anchor trails it where |f_t| = mu_k N.
+// `anchor` (world) and `slipping` are updated in place.
+vec3 anchor_friction(vec3 x, vec3 normal_force, float k_t, float mu_s, float mu_k, inout vec3 anchor,
+                     inout bool slipping) {
+  const float N = length(normal_force);
+  if (!(N > 0.0)) {
+    anchor = x;
+    slipping = false;
+    return vec3(0.0);
+  }
+  const vec3 n = normal_force / N;
+  const vec3 d = anchor - x;
+  const vec3 tangential = d - dot(d, n) * n;
+  const vec3 f = k_t * tangential;
+  const float ft = length(f);
+  if (ft <= (slipping ? mu_k : mu_s) * N) {
+    slipping = false;
+    return f;
+  }
+  slipping = true;
+  const float slip = mu_k * N / ft;
+  anchor = x + slip * tangential;
+  return slip * f;
+}

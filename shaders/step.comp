@@ -67,6 +67,9 @@ layout(std430, binding = ORGANSIM_GL_B_ATTACH) readonly buffer Attach { vec4 att
 layout(std430, binding = ORGANSIM_GL_B_SURFACE) readonly buffer Surface { ivec2 surface_range[]; };
 layout(std430, binding = ORGANSIM_GL_B_SURFACE_TRIS) readonly buffer SurfaceTris { ivec4 surface_tris[]; };
 #endif
+#ifdef FRICTION
+layout(std430, binding = ORGANSIM_GL_B_ANCHOR) buffer Anchors { vec4 anchors[]; };  // each point's own
+#endif
 #if defined(TOOL_PUSH) || defined(TOOL_PULL) || defined(TOOL_SURFACE)
 layout(std430, binding = ORGANSIM_GL_B_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
 #endif
@@ -99,9 +102,18 @@ layout(location = ORGANSIM_GL_U_REDUCE) uniform int u_reduce;
 layout(location = ORGANSIM_GL_U_TOOL_A) uniform vec3 u_tool_a;  // the shape's segment (a == b: a sphere)
 layout(location = ORGANSIM_GL_U_TOOL_B) uniform vec3 u_tool_b;
 #endif
+#ifdef GRASPER
+layout(location = ORGANSIM_GL_U_TOOL_A2) uniform vec3 u_tool_a2;  // the second jaw
+layout(location = ORGANSIM_GL_U_TOOL_B2) uniform vec3 u_tool_b2;
+layout(location = ORGANSIM_GL_U_JAW_AXIS) uniform vec3 u_jaw_axis;
+#endif
+#ifdef FRICTION
+layout(location = ORGANSIM_GL_U_FRICTION) uniform vec2 u_friction;  // {mu_s, mu_k}
+layout(location = ORGANSIM_GL_U_TOOL_ROTATION) uniform mat3 u_tool_rotation;
+#endif
 
 shared vec4 s_force[ORGANSIM_GL_CHUNK];   // {F.xyz, contacts}
-shared vec4 s_torque[ORGANSIM_GL_CHUNK];  // {T.xyz, 0}
+shared vec4 s_torque[ORGANSIM_GL_CHUNK];  // {T.xyz, grip}
 #endif
 
 void main() {
@@ -223,13 +235,25 @@ void main() {
     }
 #elif defined(TOOL_SURFACE)
     // Surface contact: w_p(t) f(t) over the point's triangles in ascending
-    // order (the CPU's surface-contact pass sums them in the same order),
-    // after the broad phase (the sphere against the triangle's box).
+    // order and jaw by jaw (the CPU's surface-contact pass sums them in the
+    // same order), after the broad phase (the tool's segments' box against
+    // the triangle's box).
     const ivec2 range = surface_range[p];
     vec3 fc = vec3(0.0);
     bool touching = false;
     const float r2 = u_tool_radius * u_tool_radius;
+#ifdef GRASPER
+    const int jaws = 2;
+    const vec3 seg_a[2] = vec3[2](u_tool_a, u_tool_a2), seg_b[2] = vec3[2](u_tool_b, u_tool_b2);
+    const vec3 seg_lo = min(min(u_tool_a, u_tool_b), min(u_tool_a2, u_tool_b2));
+    const vec3 seg_hi = max(max(u_tool_a, u_tool_b), max(u_tool_a2, u_tool_b2));
+    const vec3 closing[2] = vec3[2](-u_jaw_axis, u_jaw_axis);
+    float grip = 0.0;  // this point's share of the jaws' closing forces
+#else
+    const int jaws = 1;
+    const vec3 seg_a[1] = vec3[1](u_tool_a), seg_b[1] = vec3[1](u_tool_b);
     const vec3 seg_lo = min(u_tool_a, u_tool_b), seg_hi = max(u_tool_a, u_tool_b);
+#endif
     for (int j = 0; j < range.y; ++j) {
       const ivec4 t = surface_tris[range.x + j];
       const vec3 a = x_cur[t.x].xyz, b = x_cur[t.y].xyz, c = x_cur[t.z].xyz;
@@ -237,17 +261,39 @@ void main() {
       const vec3 out_hi = max(seg_lo - max(max(a, b), c), vec3(0.0));
       const vec3 gap = out_lo + out_hi;
       if (!(dot(gap, gap) < r2)) continue;
-      vec3 ft, w;
-      if (capsule_triangle_penalty(u_tool_a, u_tool_b, u_tool_radius, a, b, c, u_tool_k,
-                                  vec3(mass[t.x].w, mass[t.y].w, mass[t.z].w), ft, w)) {
-        fc += w[t.w] * ft;
-        touching = true;
+      for (int jaw = 0; jaw < jaws; ++jaw) {
+        vec3 ft, w;
+        if (capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], u_tool_radius, a, b, c, u_tool_k,
+                                    vec3(mass[t.x].w, mass[t.y].w, mass[t.z].w), ft, w)) {
+          fc += w[t.w] * ft;
+          touching = true;
+#ifdef GRASPER
+          grip += w[t.w] * dot(ft, closing[jaw]);
+#endif
+        }
       }
     }
+#ifdef FRICTION
+    // The point's anchor, kept in the tool's frame (force_law::anchor_friction);
+    // w: 0 none, 1 sticking, 2 slipping.
+    const vec4 held = anchors[p];
+    if (touching) {
+      vec3 anchor = held.w > 0.0 ? u_tool_center + u_tool_rotation * held.xyz : xi;
+      bool slipping = held.w > 1.5;
+      const vec3 normal = fc;
+      fc += anchor_friction(xi, normal, u_tool_k * m.z, u_friction.x, u_friction.y, anchor, slipping);
+      anchors[p] = vec4(transpose(u_tool_rotation) * (anchor - u_tool_center), slipping ? 2.0 : 1.0);
+    } else if (held.w > 0.0) {
+      anchors[p] = vec4(0.0);
+    }
+#endif
+#ifdef GRASPER
+    contact_torque.w = grip;
+#endif
     if (touching) {
       f += fc;
       contact_force = vec4(-fc, 1.0);
-      contact_torque = vec4(cross(d, -fc), 0.0);
+      contact_torque.xyz = cross(d, -fc);
     }
 #else
     // Grasped points follow centre + offset through springs of stiffness k_c.

@@ -48,6 +48,8 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (plan_.tool == ToolTerm::Push) defines.push_back("TOOL_PUSH");
   if (plan_.tool == ToolTerm::Pull) defines.push_back("TOOL_PULL");
   if (plan_.tool == ToolTerm::Surface) defines.push_back("TOOL_SURFACE");
+  if (plan_.tool == ToolTerm::Surface && tool.shape == ToolShape::Grasper) defines.push_back("GRASPER");
+  if (plan_.tool == ToolTerm::Surface && tool.friction.on()) defines.push_back("FRICTION");
   if (options.record_forces) defines.push_back("RECORD_FORCE");
   if (options.threads_per_point < 0 || options.threads_per_point > 16) {
     // 16 x 64 = 1024 invocations, the largest workgroup every GL 4.5 driver must run.
@@ -101,10 +103,14 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
     glProgramUniform1f(step_.id(), ORGANSIM_GL_U_TOOL_RADIUS, static_cast<float>(tool.radius));
     glProgramUniform1f(step_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
   }
+  if (anchors_)
+    glProgramUniform2f(step_.id(), ORGANSIM_GL_U_FRICTION, static_cast<float>(tool.friction.mu_s),
+                       static_cast<float>(tool.friction.mu_k));
   context_->check_errors("GL backend setup");
 }
 
-void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d) {
+void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
+                             std::vector<float> anchors) {
   npoint_ = packed.npoint;
   nchunk_ = packed.nchunk;
   npad_ = packed.npad;
@@ -155,6 +161,12 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
     surface_tris_ = create_buffer("surface triangle entries {corners, which}", entries.size() * sizeof(int32_t),
                                   entries.data(), 0);
   }
+  if (plan_.tool == ToolTerm::Surface && tool_.friction.on()) {
+    // Friction anchors are per point id, which a rebuild keeps: a grip holds through a cut.
+    anchors.resize(static_cast<size_t>(npad_) * 4, 0.0f);
+    anchors_ = create_buffer("friction anchors {in the tool frame, anchored}", anchors.size() * sizeof(float),
+                             anchors.data(), 0);
+  }
   if (tool_.present) {
     partials_ = create_buffer("reaction partials per workgroup", static_cast<size_t>(nchunk_) * 8 * sizeof(float),
                               nullptr, 0);
@@ -179,12 +191,13 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   if (attach_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ATTACH, attach_);
   if (surface_range_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SURFACE, surface_range_);
   if (surface_tris_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_SURFACE_TRIS, surface_tris_);
+  if (anchors_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ANCHOR, anchors_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
 }
 
 void GlBackend::delete_model_buffers() {
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &anchors_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -204,6 +217,11 @@ void GlBackend::rebuild(const Model& next) {
   const GLsizeiptr old_bytes = static_cast<GLsizeiptr>(static_cast<size_t>(old_n) * 4 * sizeof(float));
   glGetNamedBufferSubData(x_[cur_], 0, old_bytes, x.data());
   glGetNamedBufferSubData(d_[cur_], 0, old_bytes, d.data());
+  std::vector<float> anchors;
+  if (anchors_) {
+    anchors.resize(static_cast<size_t>(old_n) * 4);
+    glGetNamedBufferSubData(anchors_, 0, old_bytes, anchors.data());
+  }
   for (int32_t i = old_n; i < packed.npad; ++i) {
     // Padding lanes copy the last point, as pack_model's rest state does.
     const int32_t from = i < n ? next.origin[static_cast<size_t>(i)] : n - 1;
@@ -221,7 +239,7 @@ void GlBackend::rebuild(const Model& next) {
     throw Error(ErrorKind::Backend, "GL backend: a rebuild changed the step's passes beyond sutures");
   plan_ = next_plan;
   model_ = &next;
-  upload_model(packed, x, d);
+  upload_model(packed, x, d, std::move(anchors));
   context_->check_errors("GL backend rebuild");
 }
 
@@ -414,6 +432,14 @@ Reaction GlBackend::tick(const TickRequest& request) {
       };
       set(ORGANSIM_GL_U_TOOL_CENTER, placed.origin);
       if (plan_.tool != ToolTerm::Pull) set(ORGANSIM_GL_U_TOOL_A, placed.a), set(ORGANSIM_GL_U_TOOL_B, placed.b);
+      if (placed.jaws == 2) {
+        set(ORGANSIM_GL_U_TOOL_A2, placed.a2), set(ORGANSIM_GL_U_TOOL_B2, placed.b2);
+        set(ORGANSIM_GL_U_JAW_AXIS, placed.rotation * kJawAxis);
+      }
+      if (anchors_) {
+        const Eigen::Matrix3f r = placed.rotation.toRotationMatrix().cast<float>();
+        glProgramUniformMatrix3fv(program, ORGANSIM_GL_U_TOOL_ROTATION, 1, GL_FALSE, r.data());  // column-major
+      }
       glProgramUniform1i(program, ORGANSIM_GL_U_REDUCE, tool_acts && s == request.substeps - 1 ? 1 : 0);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_[cur_]);
@@ -490,6 +516,7 @@ Reaction GlBackend::read_slot(int slot) {
   reaction.force = Vec3(r[0], r[1], r[2]);
   reaction.contacts = static_cast<int32_t>(r[3] + 0.5f);
   reaction.torque = Vec3(r[4], r[5], r[6]);
+  reaction.grip = r[7];
   return reaction;
 }
 

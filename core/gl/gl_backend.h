@@ -76,7 +76,9 @@ class GlBackend final : public Backend {
   GLuint create_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags);
   Reaction read_slot(int slot);
   // Creates the buffers sized by the model (state x_t, d_t given, npad x 4).
-  void upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d);
+  // `anchors`: friction anchors carried over a rebuild (4 floats per old point; empty: none yet).
+  void upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
+                    std::vector<float> anchors = {});
   void delete_model_buffers();
   // Writes the sutures' rest lengths at time_ into their spring entries.
   void refresh_suture_rest();
@@ -97,7 +99,7 @@ class GlBackend final : public Backend {
   std::array<GLuint, 2> x_{}, d_{};
   int cur_ = 0;
   GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, nodal_params_ = 0, pressure_ = 0, rest_ = 0, shear_params_ = 0,
-         shear_stress_ = 0, attach_ = 0, surface_range_ = 0, surface_tris_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
+         shear_stress_ = 0, attach_ = 0, surface_range_ = 0, surface_tris_ = 0, anchors_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;

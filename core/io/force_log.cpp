@@ -56,15 +56,20 @@ nlohmann::json force_log_json(const ForceLogMeta& meta, const ForceSamples& samp
       {"units", {{"t", "s"}, {"force", "N"}, {"torque", "N m"}, {"tool_position", "m"}, {"contacts", "points"}}},
   };
   for (const auto& item : meta.extra.items()) m[item.key()] = item.value();
-  return {
-      {"meta", std::move(m)},
-      {"samples",
-       {{"t", samples.t},
-        {"force", vec3_column(samples.force)},
-        {"torque", vec3_column(samples.torque)},
-        {"tool_position", vec3_column(samples.tool_position)},
-        {"contacts", samples.contacts}}},
-  };
+  nlohmann::json columns = {{"t", samples.t},
+                             {"force", vec3_column(samples.force)},
+                             {"torque", vec3_column(samples.torque)},
+                             {"tool_position", vec3_column(samples.tool_position)},
+                             {"contacts", samples.contacts}};
+  if (!samples.grip.empty()) {
+    columns["grip"] = samples.grip;
+    m["units"]["grip"] = "N";
+  }
+  if (!samples.jaw_gap.empty()) {
+    columns["jaw_gap"] = samples.jaw_gap;
+    m["units"]["jaw_gap"] = "m";
+  }
+  return {{"meta", std::move(m)}, {"samples", std::move(columns)}};
 }
 
 void write_force_log(const std::filesystem::path& path, const ForceLogMeta& meta,

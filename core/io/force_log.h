@@ -2,6 +2,8 @@
 // The force log: OUTDIR/forces.json, one sample per haptic tick.
 //   {"meta": {...}, "samples": {"t": [...], "force": [[x,y,z], ...], "torque": [...],
 //                               "tool_position": [...], "contacts": [...]}}
+// and, for a grasper, "grip" (its jaws' closing forces summed, N) and
+// "jaw_gap" (m).
 // Columns rather than rows so that a reader loads each quantity as one array.
 // Units: t s, force N, torque N m (about the tool centre), tool_position m.
 #include <nlohmann/json.hpp>
@@ -22,6 +24,8 @@ struct ForceSamples {
   std::vector<Vec3> torque;           // about the tool centre, N m (nsample)
   std::vector<Vec3> tool_position;    // tool centre at the end of the tick, m (nsample)
   std::vector<int32_t> contacts;      // points in contact or attached (nsample)
+  std::vector<double> grip;           // grasper: its jaws' closing forces summed, N (nsample, or empty)
+  std::vector<double> jaw_gap;        // grasper: its jaws' gap, m (nsample, or empty)
 
   void reserve(size_t n);
   void push(double time, const Vec3& f, const Vec3& tq, const Vec3& tool, int32_t ncontact);

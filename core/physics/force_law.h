@@ -415,4 +415,45 @@ inline V3 pull_attachment(const V3& target, const V3& x, Real k) {
   return k * (target - x);
 }
 
+// --- Friction ----------------------------------------------------------------
+// Coulomb friction of a point in contact, regularised by a stick anchor so
+// that the step stays explicit. The anchor is where the point stuck to the
+// tool (kept in the tool's frame by the caller, so it moves with the tool);
+// a tangential spring k_t pulls the point toward it:
+//   f_t = k_t P (anchor - x),  P = I - n n^T,  n = f_n / N, N = |f_n|
+// (f_n the contact's normal force on the point). A sticking point holds
+// while |f_t| <= mu_s N; beyond, it slips. A slipping point keeps slipping
+// while |f_t| would exceed mu_k N, and sticks again once it would not (the
+// tool stopped or turned back). While it slips the anchor is moved along the
+// tangent to x + (mu_k N / |f_t|) P (anchor - x), so that |f_t| = mu_k N: it
+// trails the point. A point without normal force has no friction; its
+// anchor is put where it is and it sticks. A velocity-clamped law (f_t
+// against v_t, at most mu N) would only cancel the velocity already there
+// and let a steadily pulled point creep by about F dt / m per step; the
+// anchor holds it. Returns f_t; `anchor` (world, m) and `slipping` are the
+// point's state, updated in place.
+template <class V3, class Real>
+inline V3 anchor_friction(const V3& x, const V3& normal_force, Real k_t, Real mu_s, Real mu_k, V3& anchor,
+                          bool& slipping) {
+  const Real N = normal_force.norm();
+  if (!(N > Real(0))) {
+    anchor = x;
+    slipping = false;
+    return Real(0) * normal_force;
+  }
+  const V3 n = normal_force / N;
+  const V3 d = anchor - x;
+  const V3 tangential = d - d.dot(n) * n;
+  const V3 f = k_t * tangential;
+  const Real ft = f.norm();
+  if (ft <= (slipping ? mu_k : mu_s) * N) {
+    slipping = false;
+    return f;
+  }
+  slipping = true;
+  const Real slip = mu_k * N / ft;
+  anchor = x + slip * tangential;
+  return slip * f;
+}
+
 }  // namespace organsim::force_law

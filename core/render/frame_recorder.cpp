@@ -134,8 +134,8 @@ struct FrameRecorder::Impl {
     start = Clock::now();
     ToolDraw draw_tool;
     if (tool) {
-      const ToolPlacement placed = place_tool(tool->backend_tool(), tool_center, tool_turn);
-      draw_tool = {true, placed.a, placed.b, placed.radius};
+      const ToolPlacement placed = place_tool(tool->backend_tool(), tool_center, tool_turn, tool->gap_at(t));
+      draw_tool = {true, placed.a, placed.b, placed.radius, placed.jaws, placed.a2, placed.b2};
     }
     renderer->draw(camera, frames.style, draw_tool);
     glFinish();  // so render and read-back are timed apart

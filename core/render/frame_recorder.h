@@ -25,7 +25,7 @@ struct FrameRecorderTiming {
 
 class FrameRecorder : public RunObserver {
  public:
-  // tool: drawn as its shape (sphere or capsule) at the tick's pose; nullopt
+  // tool: drawn as its shape (sphere, capsule or a grasper's jaws) at the tick's pose; nullopt
   // for scenes without a tool. duration (s) sizes the contact sheet.
   FrameRecorder(const FrameOutputs& outputs, const std::filesystem::path& outdir, double duration,
                 std::optional<ToolSpec> tool);

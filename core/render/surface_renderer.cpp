@@ -339,10 +339,10 @@ void SurfaceRenderer::draw(const Camera& camera, const StyleOptions& style, cons
     }
     glProgramUniform1i(p, glGetUniformLocation(p, "u_face_colors"), 0);
   }
-  if (tool.visible && tool.radius > 0) {
+  for (int k = 0; tool.visible && tool.radius > 0 && k < tool.segments; ++k) {
     const GLuint p = s.tool_program;
-    set_vec3(p, "u_end_a", tool.a);
-    set_vec3(p, "u_end_b", tool.b);
+    set_vec3(p, "u_end_a", k == 0 ? tool.a : tool.a2);
+    set_vec3(p, "u_end_b", k == 0 ? tool.b : tool.b2);
     glProgramUniform1f(p, glGetUniformLocation(p, "u_radius"), static_cast<float>(tool.radius));
     set_vec3(p, "u_color", style.tool_color);
     glUseProgram(p);

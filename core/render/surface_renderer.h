@@ -14,11 +14,14 @@
 namespace organsim {
 
 // The tool as drawn: the points within `radius` of the segment a-b (a
-// sphere when a == b == its centre, else a capsule).
+// sphere when a == b == its centre, else a capsule), and of a2-b2 when
+// there are two (a grasper's jaws).
 struct ToolDraw {
   bool visible = false;
   Vec3 a{0, 0, 0}, b{0, 0, 0};  // m
   double radius = 0;            // m
+  int segments = 1;
+  Vec3 a2{0, 0, 0}, b2{0, 0, 0};  // m
 };
 
 class SurfaceRenderer {

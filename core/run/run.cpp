@@ -102,6 +102,10 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   const ToolSpec* tool = scenario.tool ? &scenario.tool->spec : nullptr;
   const bool pull = tool && tool->mode == ToolMode::Pull;
   result.samples.reserve(static_cast<size_t>(nticks));
+  if (tool && tool->shape == ToolShape::Grasper) {
+    result.samples.grip.reserve(static_cast<size_t>(nticks));
+    result.samples.jaw_gap.reserve(static_cast<size_t>(nticks));
+  }
 
   // Sized once here: the loop itself allocates nothing except at a grasp.
   std::vector<Vec3> positions;
@@ -181,6 +185,8 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
         request.tool_from = i == 0 ? tool->position_at(t0) : request.tool_to;
         request.turn_from = i == 0 ? tool->orientation_at(t0) : request.turn_to;
         request.turn_to = tool->orientation_at(t1);
+        request.gap_from = i == 0 ? tool->gap_at(t0) : request.gap_to;
+        request.gap_to = tool->gap_at(t1);
         if (options.tool_driver) {
           const std::optional<Vec3> to = options.tool_driver->tool_at_end_of(i, t1);
           if (!to) break;
@@ -239,6 +245,10 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
       }
 
       result.samples.push(t1, r.force, r.torque, request.tool_to, r.contacts);
+      if (tool && tool->shape == ToolShape::Grasper) {
+        result.samples.grip.push_back(r.grip);
+        result.samples.jaw_gap.push_back(request.gap_to);
+      }
       if (current->nsuture() > 0) {
         backend.positions(event_positions);
         suture_tension_peak = std::max(suture_tension_peak, suture_tension_max(*current, event_positions, t1));

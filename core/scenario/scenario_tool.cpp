@@ -1,5 +1,6 @@
-// The scenario's `tool` section: a sphere or capsule following keyframes
-// (position and orientation), push or pull.
+// The scenario's `tool` section: a sphere, capsule or grasper following
+// keyframes (position, orientation, a grasper's jaw gap), push or pull,
+// with optional friction.
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -38,7 +39,10 @@ Quat parse_orientation(ObjectReader& k) {
   return Quat::Identity();
 }
 
-std::vector<Keyframe> parse_keyframes(const nlohmann::json& j, const JsonPath& at) {
+// A grasper's keyframes: "gap" (m, the distance between its jaws' axes) on
+// the first, optional on the others (a keyframe without it keeps the one
+// before); refused on any other shape.
+std::vector<Keyframe> parse_keyframes(const nlohmann::json& j, const JsonPath& at, bool grasper) {
   if (!j.is_array()) throw at.error("expected an array of {\"t\": s, \"position\": [x, y, z]} (optional \"orientation\": [w, x, y, z])");
   if (j.empty()) throw at.error("expected at least one keyframe");
   std::vector<Keyframe> out;
@@ -49,6 +53,13 @@ std::vector<Keyframe> parse_keyframes(const nlohmann::json& j, const JsonPath& a
     f.t = require_non_negative(read_number(k.require("t"), k.at("t")), k.at("t"));
     f.position = read_vec3(k.require("position"), k.at("position"));
     f.orientation = parse_orientation(k);
+    if (k.has("gap") && !grasper) throw k.at("gap").error("only used with \"shape\": \"grasper\"");
+    if (auto gap = k.number("gap")) {
+      f.gap = require_non_negative(*gap, k.at("gap"));
+    } else if (grasper) {
+      if (out.empty()) throw k.at("gap").error("expected the grasper's jaw gap (m) on its first keyframe");
+      f.gap = out.back().gap;
+    }
     k.finish();
     // Interpolation needs strictly increasing times.
     if (!out.empty() && !(f.t > out.back().t)) {
@@ -57,6 +68,24 @@ std::vector<Keyframe> parse_keyframes(const nlohmann::json& j, const JsonPath& a
     }
     out.push_back(f);
   }
+  return out;
+}
+// "friction": {"static": mu_s, "kinetic": mu_k} (mu_k <= mu_s; kinetic
+// defaults to static), for surface contact.
+Friction parse_friction(const nlohmann::json& j, const JsonPath& at, const ToolSpec& s) {
+  if (s.mode != ToolMode::Push || s.contact != ToolContact::Surface)
+    throw at.error("friction acts on surface contact (\"mode\": \"push\", \"contact\": \"surface\")");
+  ObjectReader f(j, at);
+  Friction out;
+  out.mu_s = require_positive(read_number(f.require("static"), f.at("static")), f.at("static"));
+  out.mu_k = out.mu_s;
+  if (auto v = f.number("kinetic")) {
+    out.mu_k = require_non_negative(*v, f.at("kinetic"));
+    if (out.mu_k > out.mu_s)
+      throw f.at("kinetic").error("expected a kinetic coefficient at most the static one (" +
+                                  std::to_string(out.mu_s) + ")");
+  }
+  f.finish();
   return out;
 }
 }  // namespace
@@ -70,13 +99,16 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
       s.shape = ToolShape::Sphere;
     } else if (*shape == "capsule") {
       s.shape = ToolShape::Capsule;
+    } else if (*shape == "grasper") {
+      s.shape = ToolShape::Grasper;
     } else {
-      throw r.at("shape").error("expected " + one_of({"sphere", "capsule"}) + " (got \"" + *shape + "\")");
+      throw r.at("shape").error("expected " + one_of({"sphere", "capsule", "grasper"}) + " (got \"" + *shape + "\")");
     }
   }
   if (auto v = r.number("radius")) s.radius = require_positive(*v, r.at("radius"));
-  // A capsule's segment in the tool frame: "ends": [[x, y, z], [x, y, z]], m.
-  if (s.shape == ToolShape::Capsule) {
+  // A capsule's segment (a grasper's jaws' midline) in the tool frame:
+  // "ends": [[x, y, z], [x, y, z]], m.
+  if (s.shape != ToolShape::Sphere) {
     const JsonPath eat = r.at("ends");
     const nlohmann::json& ends = r.require("ends");
     if (!ends.is_array() || ends.size() != 2)
@@ -86,7 +118,7 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
     if (!((s.end_b - s.end_a).norm() > 0))
       throw eat.error("expected two different end points (a capsule of zero length is \"shape\": \"sphere\")");
   } else if (r.has("ends")) {
-    throw r.at("ends").error("only used with \"shape\": \"capsule\"");
+    throw r.at("ends").error("only used with \"shape\": \"capsule\" or \"grasper\"");
   }
   if (auto v = r.number("contact_stiffness")) s.contact_stiffness = require_positive(*v, r.at("contact_stiffness"));
   if (auto mode = r.string("mode")) {
@@ -119,9 +151,15 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
     s.release_time = *v;
   }
   // A pulling tool grasps the points near its origin; a capsule's shape would mean nothing to it.
-  if (s.shape == ToolShape::Capsule && s.mode != ToolMode::Push)
-    throw r.at("shape").error("\"capsule\" is a pushing tool (\"mode\": \"push\")");
-  s.keyframes = parse_keyframes(r.require("keyframes"), r.at("keyframes"));
+  if (s.shape != ToolShape::Sphere && s.mode != ToolMode::Push)
+    throw r.at("shape").error(std::string("\"") + shape_name(s.shape) + "\" is a pushing tool (\"mode\": \"push\")");
+  if (s.shape == ToolShape::Grasper && s.contact != ToolContact::Surface)
+    throw r.at("contact").error("a grasper's jaws touch the surface (\"contact\": \"surface\")");
+  if (const nlohmann::json* f = r.get("friction")) s.friction = parse_friction(*f, r.at("friction"), s);
+  // Without friction a grasper's jaws only squeeze: it could hold nothing.
+  if (s.shape == ToolShape::Grasper && !s.friction.on())
+    throw r.at("friction").error("a grasper holds by friction: expected \"friction\": {\"static\": mu_s, \"kinetic\": mu_k}");
+  s.keyframes = parse_keyframes(r.require("keyframes"), r.at("keyframes"), s.shape == ToolShape::Grasper);
   r.finish();
   return tool;
 }

@@ -14,7 +14,16 @@ BackendTool ToolSpec::backend_tool() const {
   t.shape = shape;
   t.end_a = end_a;
   t.end_b = end_b;
+  t.friction = friction;
   return t;
+}
+
+double ToolSpec::extent() const {
+  if (shape == ToolShape::Sphere) return 0.0;
+  double widest = 0;
+  if (shape == ToolShape::Grasper)
+    for (const Keyframe& k : keyframes) widest = std::max(widest, k.gap);
+  return std::max(end_a.norm(), end_b.norm()) + widest / 2;
 }
 
 namespace {
@@ -45,6 +54,12 @@ Vec3 ToolSpec::position_at(double t) const {
   if (keyframes.empty()) return Vec3::Zero();
   const Bracket k = bracket(keyframes, t);
   return k.b ? Vec3(k.a->position + k.s * (k.b->position - k.a->position)) : k.a->position;
+}
+
+double ToolSpec::gap_at(double t) const {
+  if (keyframes.empty()) return 0.0;
+  const Bracket k = bracket(keyframes, t);
+  return k.b ? k.a->gap + k.s * (k.b->gap - k.a->gap) : k.a->gap;
 }
 
 Quat ToolSpec::orientation_at(double t) const {

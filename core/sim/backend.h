@@ -15,20 +15,21 @@ namespace organsim {
 // One haptic tick: `substeps` Verlet steps of `dt`; the tool frame's origin
 // moves linearly from tool_from (start of tick) to tool_to (end of tick) and
 // its orientation turns by slerp from turn_from to turn_to (a sphere
-// ignores it).
+// ignores it), and a grasper's jaws move linearly from gap_from to gap_to.
 struct TickRequest {
   double dt = 1e-4;  // s
   int32_t substeps = 10;
   bool tool_active = false;
   Vec3 tool_from{0, 0, 0}, tool_to{0, 0, 0};  // m
   Quat turn_from = Quat::Identity(), turn_to = Quat::Identity();
+  double gap_from = 0, gap_to = 0;  // grasper: the jaws' gap, m
 
   // The tool at the start of substep s (of `substeps`): where its force acts.
   ToolPlacement tool_at(const BackendTool& tool, int32_t s) const {
     const double f = static_cast<double>(s) / substeps;
     const Vec3 origin = tool_from + f * (tool_to - tool_from);
     if (tool.shape == ToolShape::Sphere) return place_tool(tool, origin, Quat::Identity());
-    return place_tool(tool, origin, turn_from.slerp(f, turn_to));
+    return place_tool(tool, origin, turn_from.slerp(f, turn_to), gap_from + f * (gap_to - gap_from));
   }
 };
 

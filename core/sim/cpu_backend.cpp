@@ -287,8 +287,9 @@ class CpuBackend final : public Backend {
         ctx.tool_b[k] = static_cast<Real>(placed.b[k]);
       }
       ctx.tool_reach = static_cast<Real>(placed.reach());
-      if (ctx.tool == ToolTerm::Surface) surface_contact(ctx);
+      if (ctx.tool == ToolTerm::Surface) surface_contact(ctx, placed);
       reaction = fast_ ? fast_step(ctx) : step(ctx);
+      if (ctx.tool == ToolTerm::Surface) reaction.grip = static_cast<double>(surface_.grip());
       time_ += request.dt;
     };
     if (!choice_) {
@@ -441,12 +442,12 @@ class CpuBackend final : public Backend {
 
   // The surface-contact pass at this substep's positions (X + u): the
   // kernels' tool pass then adds its per-point forces.
-  void surface_contact(KernelStepInputs<Real>& ctx) {
+  void surface_contact(KernelStepInputs<Real>& ctx, const ToolPlacement& placed) {
     const std::array<const Real*, 3> rest = {rest_.x.data(), rest_.y.data(), rest_.z.data()};
     const std::array<const Real*, 3> u =
         fast_ ? std::array<const Real*, 3>{fast_->displacement(0), fast_->displacement(1), fast_->displacement(2)}
               : std::array<const Real*, 3>{u_.x.data(), u_.y.data(), u_.z.data()};
-    surface_.evaluate(rest, u, ctx.tool_a, ctx.tool_b, ctx.tool_radius, ctx.tool_k, threads_);
+    surface_.evaluate(rest, u, placed, ctx.tool_k, tool_.friction, threads_);
     ctx.contact_slot = surface_.slot();
     ctx.contact_force = surface_.force();
   }

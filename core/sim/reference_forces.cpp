@@ -73,24 +73,33 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const ToolPlacement& tool,
                                   double stiffness, std::vector<Vec3>& force) {
   Reaction reaction;
+  std::vector<Vec3> received(x.size(), Vec3::Zero());
   std::vector<uint8_t> touched(x.size(), 0);
+  const Vec3 seg_a[2] = {tool.a, tool.a2}, seg_b[2] = {tool.b, tool.b2};
+  const Vec3 axis = tool.rotation * kJawAxis, closing[2] = {-axis, axis};
   for (const Tri& t : model.surface) {
     double share[3];
     for (int i = 0; i < 3; ++i) share[i] = model.tool_scale(t[i]) / model.surface_count(t[i]);
-    Vec3 f;
-    double w[3];
-    if (!force_law::capsule_triangle_penalty(tool.a, tool.b, tool.radius, x[t[0]], x[t[1]], x[t[2]], stiffness, share,
-                                             f, w))
-      continue;
-    const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
-    for (int i = 0; i < 3; ++i) {
-      force[t[i]] += w[i] * f;
-      touched[t[i]] = 1;
+    for (int jaw = 0; jaw < tool.jaws; ++jaw) {
+      Vec3 f;
+      double w[3];
+      if (!force_law::capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], tool.radius, x[t[0]], x[t[1]], x[t[2]],
+                                               stiffness, share, f, w))
+        continue;
+      const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
+      for (int i = 0; i < 3; ++i) {
+        received[t[i]] += w[i] * f;
+        touched[t[i]] = 1;
+      }
+      reaction.force -= f;
+      reaction.torque += (q - tool.origin).cross(-f);
+      if (tool.jaws == 2) reaction.grip += f.dot(closing[jaw]);
     }
-    reaction.force -= f;
-    reaction.torque += (q - tool.origin).cross(-f);
   }
-  for (uint8_t b : touched) reaction.contacts += b;
+  for (size_t p = 0; p < x.size(); ++p) {
+    force[p] += received[p];
+    reaction.contacts += touched[p];
+  }
   return reaction;
 }
 

@@ -37,8 +37,10 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const ToolPlacement& 
 // received a force.
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
                                   double radius, double stiffness, std::vector<Vec3>& force);
-// Any shape (force_law::capsule_triangle_penalty; the torque about the
-// tool frame's origin).
+// Any shape (force_law::capsule_triangle_penalty, jaw by jaw for a
+// grasper; the torque about the tool frame's origin; a grasper's grip its
+// jaws' penalties along their closing directions). No friction: it has state (the anchors), which
+// the CPU backend in double precision keeps as the reference.
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const ToolPlacement& tool,
                                   double stiffness, std::vector<Vec3>& force);
 

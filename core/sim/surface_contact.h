@@ -1,10 +1,11 @@
 #pragma once
 // The surface-contact pass of the CPU backend (Pass::SurfaceContact): a
-// pushing sphere or capsule against the Model's boundary triangles
-// (force_law::capsule_triangle_penalty, the sphere's when its segment has
-// zero length), giving each touched point the sum
-// of w_p(t) f(t) over its touching triangles t, in ascending t (the order
-// step.comp gathers them in). The kernels then add these forces in their
+// pushing sphere or capsule, or a grasper's two capsule jaws, against the
+// Model's boundary triangles (force_law::capsule_triangle_penalty, the
+// sphere's when its segment has zero length), giving each touched point the
+// sum of w_p(t) f(t) over its touching triangles t, in ascending t and jaw
+// by jaw (the order step.comp gathers them in), then, with friction, its
+// anchor_friction force. The kernels then add these forces in their
 // tool pass (add_tool_force with ToolTerm::Surface), which also sums the
 // reaction, so the reaction is minus exactly what the tissue receives.
 //
@@ -24,6 +25,7 @@
 
 #include "core/model/model.h"
 #include "core/physics/force_law.h"
+#include "core/sim/tool.h"
 
 namespace organsim {
 
@@ -55,30 +57,49 @@ class SurfaceContact {
     slot_.assign(lanes, -1);
     force_.clear();
     touched_.clear();
+    point_scale_.assign(scale.begin(), scale.begin() + model.npoint());
+    // Anchors are per point id, which a rebuild keeps: a grip holds through a cut.
+    anchor_.resize(model.npoint(), V3::Zero());
+    has_anchor_.resize(model.npoint(), 0);
   }
 
-  // Forces for the tool (the segment a-b, a == b for a sphere's centre;
-  // radius R, penalty k N/m) with every point p at rest[axis][p] +
-  // u[axis][p] (internal ids, the backend's streams); the positions and box
-  // tests on up to `threads` threads.
-  void evaluate(const std::array<const Real*, 3>& rest, const std::array<const Real*, 3>& u, const Real seg_a[3],
-                const Real seg_b[3], Real radius, Real k, int threads) {
+  // Forces for the tool placed as `placed` (its one segment, or a
+  // grasper's two jaws; radius R), penalty k N/m, with every point p at
+  // rest[axis][p] + u[axis][p] (internal ids, the backend's streams); the
+  // positions and box tests on up to `threads` threads. With `friction`
+  // on, every touched point also gets anchor_friction's f_t (its anchor
+  // kept in the tool's frame from substep to substep; a point that leaves
+  // the contact drops its anchor).
+  void evaluate(const std::array<const Real*, 3>& rest, const std::array<const Real*, 3>& u, const ToolPlacement& placed,
+                Real k, const Friction& friction, int threads) {
     for (int32_t p : touched_) slot_[p] = -1;
     touched_.clear();
     force_.clear();
-    using V3 = Eigen::Matrix<Real, 3, 1>;
-    const V3 sa(seg_a[0], seg_a[1], seg_a[2]), sb(seg_b[0], seg_b[1], seg_b[2]);
+    const int jaws = placed.jaws;
+    const V3 seg_a[2] = {placed.a.cast<Real>(), placed.a2.cast<Real>()};
+    const V3 seg_b[2] = {placed.b.cast<Real>(), placed.b2.cast<Real>()};
+    const Real radius = static_cast<Real>(placed.radius);
     const Real r2 = radius * radius;
+    // A grasper's jaws close along -+ its jaw axis: the first (at +gap/2)
+    // toward -axis. What a penalty presses along that is grip.
+    const V3 axis = (placed.rotation * kJawAxis).cast<Real>();
+    const V3 closing[2] = {-axis, axis};
+    grip_ = 0;
     const int32_t npoint = static_cast<int32_t>(points_.size()), ntri = triangles();
     const int32_t* ta = corner_[0].data();
     const int32_t* tb = corner_[1].data();
     const int32_t* tc = corner_[2].data();
     const uint8_t* near = near_.data();
-    const Real* X = x_.data();
-    const Real* Y = y_.data();
-    const Real* Z = z_.data();
-    const Real lo[3] = {std::min(sa[0], sb[0]), std::min(sa[1], sb[1]), std::min(sa[2], sb[2])};
-    const Real hi[3] = {std::max(sa[0], sb[0]), std::max(sa[1], sb[1]), std::max(sa[2], sb[2])};
+    // The broad phase's box holds every jaw's segment.
+    Real lo[3], hi[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      lo[axis] = std::min(seg_a[0][axis], seg_b[0][axis]);
+      hi[axis] = std::max(seg_a[0][axis], seg_b[0][axis]);
+      for (int j = 1; j < jaws; ++j) {
+        lo[axis] = std::min({lo[axis], seg_a[j][axis], seg_b[j][axis]});
+        hi[axis] = std::max({hi[axis], seg_a[j][axis], seg_b[j][axis]});
+      }
+    }
 #pragma omp parallel num_threads(threads) if (threads > 1)
     {
       // Each thread its share of the points, then of the triangles (the
@@ -96,25 +117,65 @@ class SurfaceContact {
       for (int32_t i = word; i < word + 8; ++i) {
         if (!near[i]) continue;
         const int32_t corner[3] = {ta[i], tb[i], tc[i]};
-        auto at = [&](int32_t j) { return V3(X[j], Y[j], Z[j]); };
         const Real share[3] = {share_[corner[0]], share_[corner[1]], share_[corner[2]]};
-        V3 f;
-        Real w[3];
-        if (!force_law::capsule_triangle_penalty(sa, sb, radius, at(corner[0]), at(corner[1]), at(corner[2]), k,
-                                                 share, f, w))
-          continue;
-        for (int j = 0; j < 3; ++j) {
-          const int32_t p = points_[corner[j]];
-          if (slot_[p] < 0) {
-            slot_[p] = static_cast<int32_t>(touched_.size());
-            touched_.push_back(p);
-            force_.insert(force_.end(), 3, Real(0));
+        for (int jaw = 0; jaw < jaws; ++jaw) {
+          V3 f;
+          Real w[3];
+          if (!force_law::capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], radius, at(corner[0]), at(corner[1]),
+                                                   at(corner[2]), k, share, f, w))
+            continue;
+          if (jaws == 2) grip_ += f.dot(closing[jaw]);
+          for (int j = 0; j < 3; ++j) {
+            const int32_t p = points_[corner[j]];
+            if (slot_[p] < 0) {
+              slot_[p] = static_cast<int32_t>(touched_.size());
+              touched_.push_back(p);
+              force_.insert(force_.end(), 3, Real(0));
+            }
+            Real* fp = &force_[3 * static_cast<size_t>(slot_[p])];
+            for (int axis = 0; axis < 3; ++axis) fp[axis] += w[j] * f[axis];
           }
-          Real* fp = &force_[3 * static_cast<size_t>(slot_[p])];
-          for (int axis = 0; axis < 3; ++axis) fp[axis] += w[j] * f[axis];
         }
       }
     }
+    if (friction.on()) add_friction(placed, k, friction);
+  }
+
+  // A grasper's grip at the last evaluate: its jaws' penalties along their
+  // closing directions, summed over both jaws, N (0 for one segment).
+  Real grip() const { return grip_; }
+
+ private:
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+  V3 at(int32_t local) const { return V3(x_[local], y_[local], z_[local]); }
+  Eigen::Map<V3> force_at(size_t slot) { return Eigen::Map<V3>(&force_[3 * slot]); }
+
+  // anchor_friction on every touched point, in the order of first touch
+  // (each point's is its own: the order changes nothing but is fixed), its
+  // stick spring k_t = k s_p; anchors of points no longer touched dropped.
+  void add_friction(const ToolPlacement& placed, Real k, const Friction& friction) {
+    const Eigen::Matrix<Real, 3, 3> R = placed.rotation.toRotationMatrix().cast<Real>();
+    const V3 origin = placed.origin.cast<Real>();
+    const Real mu_s = static_cast<Real>(friction.mu_s), mu_k = static_cast<Real>(friction.mu_k);
+    for (size_t i = 0; i < touched_.size(); ++i) {
+      const int32_t p = touched_[i];
+      const V3 x = at(local_of_point_[p]);
+      const V3 normal = force_at(i);
+      V3 anchor = has_anchor_[p] ? V3(origin + R * anchor_[p]) : x;
+      bool slipping = has_anchor_[p] == kSlipping;
+      force_at(i) += force_law::anchor_friction(x, normal, k * point_scale_[p], mu_s, mu_k, anchor, slipping);
+      anchor_[p] = R.transpose() * (anchor - origin);
+      if (!has_anchor_[p]) anchored_.push_back(p);
+      has_anchor_[p] = slipping ? kSlipping : kSticking;
+    }
+    size_t kept = 0;
+    for (int32_t p : anchored_) {
+      if (slot_[p] >= 0)
+        anchored_[kept++] = p;
+      else
+        has_anchor_[p] = 0;
+    }
+    anchored_.resize(kept);
   }
 
  private:
@@ -181,6 +242,12 @@ class SurfaceContact {
   std::vector<int32_t> slot_;            // per lane
   std::vector<Real> force_;              // per touched point, 3 each
   std::vector<int32_t> touched_;         // touched points in order of first touch
+  Real grip_ = 0;                        // a grasper's jaws' closing forces, summed, N
+  std::vector<Real> point_scale_;        // s_p per point (npoint)
+  std::vector<V3> anchor_;               // friction: each point's anchor in the tool's frame, m (npoint)
+  static constexpr uint8_t kSticking = 1, kSlipping = 2;
+  std::vector<uint8_t> has_anchor_;      // 0 none, kSticking or kSlipping (npoint)
+  std::vector<int32_t> anchored_;        // points with an anchor
 };
 
 }  // namespace organsim

@@ -433,7 +433,8 @@ std::vector<uint8_t> points_near_tool_path(const Model& model, const ToolSpec& t
 CriticalStepOptions critical_step_options(const Model& model, const ToolSpec* tool) {
   CriticalStepOptions o;
   if (tool) {
-    o.tool_contact_stiffness = tool->contact_stiffness;
+    // A grasper's two jaws and friction's stick spring stiffen a point beyond one penalty share.
+    o.tool_contact_stiffness = tool->contact_stiffness * tool->backend_tool().stiffness_factor();
     o.tool_may_touch = points_near_tool_path(model, *tool);
   }
   return o;

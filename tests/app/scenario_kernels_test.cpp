@@ -39,6 +39,7 @@ constexpr ScenarioKernel kExpectedKernels[] = {
     {"default", "avx512", "avx512"},
     {"liver_push", "avx512", "avx512"},
     {"liver_probe", "avx512", "avx512"},
+    {"liver_grasp", "avx512", "avx512"},
     {"liver_pull", "avx512", "avx512"},
     {"liver7750_push", "avx512", "avx512"},
     {"liver7750_realtime", "avx512", "avx512"},

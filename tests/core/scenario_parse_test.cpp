@@ -338,13 +338,14 @@ TEST(ScenarioParse, CapsuleAndOrientationAreReadAndChecked) {
     k["tool"].merge_patch(json::parse(patch));
     EXPECT_EQ(error_of(k), want) << patch;
   };
-  refused(R"({"shape": "cone"})", "scene.json: tool.shape: expected \"sphere\" or \"capsule\" (got \"cone\")");
+  refused(R"({"shape": "cone"})",
+          "scene.json: tool.shape: expected \"sphere\", \"capsule\" or \"grasper\" (got \"cone\")");
   refused(R"({"ends": [[0, 0, 0]]})",
           "scene.json: tool.ends: expected two end points [[x, y, z], [x, y, z]] in the tool frame, m");
   refused(R"({"ends": [[0, 0, 0.1], [0, 0, 0.1]]})",
           "scene.json: tool.ends: expected two different end points (a capsule of zero length is \"shape\": "
           "\"sphere\")");
-  refused(R"({"shape": "sphere"})", "scene.json: tool.ends: only used with \"shape\": \"capsule\"");
+  refused(R"({"shape": "sphere"})", "scene.json: tool.ends: only used with \"shape\": \"capsule\" or \"grasper\"");
   refused(R"({"mode": "pull"})", "scene.json: tool.shape: \"capsule\" is a pushing tool (\"mode\": \"push\")");
   refused(R"({"ends": null})", "scene.json: tool.ends: missing (required)");
   auto refused_key = [&](const json& keyframe, const std::string& want) {
@@ -365,6 +366,68 @@ TEST(ScenarioParse, CapsuleAndOrientationAreReadAndChecked) {
               "scene.json: tool.keyframes[1].axis_angle.angle: missing (required)");
   refused_key(json::parse(R"({"t": 1, "position": [0, 0, 0], "axis_angle": {"axis": [0, 0, 1], "angle": 1, "deg": 1}})"),
               "scene.json: tool.keyframes[1].axis_angle.deg: unknown field");
+}
+
+// A grasper: its jaws' midline, friction (required: it holds by friction;
+// kinetic defaults to static), a gap on its first keyframe held by the
+// keyframes without one and linear between them; friction on other shapes
+// only with surface contact.
+TEST(ScenarioParse, GrasperAndFrictionAreReadAndChecked) {
+  json j = minimal();
+  j["tool"] = json::parse(R"({"shape": "grasper", "radius": 0.0025, "ends": [[0, 0, 0], [0.02, 0, 0]],
+                               "friction": {"static": 0.8, "kinetic": 0.5},
+                               "keyframes": [{"t": 0, "position": [0, 0, 0], "gap": 0.03},
+                                             {"t": 1, "position": [0, 0, 0], "gap": 0.01},
+                                             {"t": 2, "position": [0, 0, 0.02]}]})");
+  const ToolSpec s = parse(j).tool->spec;
+  EXPECT_EQ(s.shape, ToolShape::Grasper);
+  EXPECT_EQ(s.friction.mu_s, 0.8);
+  EXPECT_EQ(s.friction.mu_k, 0.5);
+  EXPECT_EQ(s.keyframes[2].gap, 0.01);  // held
+  EXPECT_DOUBLE_EQ(s.gap_at(0.25), 0.025);
+  EXPECT_DOUBLE_EQ(s.extent(), 0.02 + 0.015);  // the midline's far end and half the widest gap
+  EXPECT_EQ(s.backend_tool().jaws(), 2);
+  EXPECT_DOUBLE_EQ(s.backend_tool().stiffness_factor(), 2 + 1 + 2 * 0.8);
+  {
+    json k = j;
+    k["tool"]["friction"] = json::parse(R"({"static": 0.6})");
+    EXPECT_EQ(parse(k).tool->spec.friction.mu_k, 0.6);
+  }
+  auto refused = [&](const char* patch, const std::string& want) {
+    json k = j;
+    k["tool"].merge_patch(json::parse(patch));
+    EXPECT_EQ(error_of(k), want) << patch;
+  };
+  refused(R"({"friction": null})", "scene.json: tool.friction: a grasper holds by friction: expected \"friction\": "
+                                   "{\"static\": mu_s, \"kinetic\": mu_k}");
+  refused(R"({"friction": {"static": 0.5, "kinetic": 0.7}})",
+          "scene.json: tool.friction.kinetic: expected a kinetic coefficient at most the static one (0.500000)");
+  refused(R"({"friction": {"static": null}})", "scene.json: tool.friction.static: missing (required)");
+  refused(R"({"friction": {"static": 0.5, "dynamic": 0.3}})", "scene.json: tool.friction.dynamic: unknown field");
+  refused(R"({"contact": "points"})",
+          "scene.json: tool.contact: a grasper's jaws touch the surface (\"contact\": \"surface\")");
+  refused(R"({"mode": "pull"})", "scene.json: tool.shape: \"grasper\" is a pushing tool (\"mode\": \"push\")");
+  {
+    json k = j;
+    k["tool"]["keyframes"][0].erase("gap");
+    EXPECT_EQ(error_of(k), "scene.json: tool.keyframes[0].gap: expected the grasper's jaw gap (m) on its first keyframe");
+    k = j;
+    k["tool"]["keyframes"][1]["gap"] = -0.01;
+    EXPECT_EQ(error_of(k).rfind("scene.json: tool.keyframes[1].gap: ", 0), 0u) << error_of(k);
+  }
+  // Friction on a sphere: surface contact only; a gap means nothing to it.
+  json sphere = minimal();
+  sphere["tool"] = json::parse(R"({"radius": 0.01, "friction": {"static": 0.3},
+                                    "keyframes": [{"t": 0, "position": [0, 0, 0]}]})");
+  EXPECT_EQ(parse(sphere).tool->spec.friction.mu_s, 0.3);
+  EXPECT_EQ(parse(sphere).tool->spec.backend_tool().stiffness_factor(), 1 + 1 + 2 * 0.3);
+  json points = sphere;
+  points["tool"]["contact"] = "points";
+  EXPECT_EQ(error_of(points), "scene.json: tool.friction: friction acts on surface contact (\"mode\": \"push\", "
+                              "\"contact\": \"surface\")");
+  json gap = sphere;
+  gap["tool"]["keyframes"][0]["gap"] = 0.01;
+  EXPECT_EQ(error_of(gap), "scene.json: tool.keyframes[0].gap: only used with \"shape\": \"grasper\"");
 }
 
 // Orientation between keyframes: slerp, so a quarter turn is an eighth

@@ -203,17 +203,20 @@ TEST(Serve, MalformedMessagesAreRefusedAClientMayReconnectAndSigintEndsCleanly) 
 }
 
 // The client sends positions only and the reply's stiffness is the
-// sphere's: a capsule scenario is refused before a port is opened.
+// frictionless sphere's: a capsule or grasper scenario is refused before a
+// port is opened.
 TEST(Serve, ACapsuleToolIsRefusedBeforeListening) {
-  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_capsule";
-  fs::remove_all(dir);
-  const CliResult r = run_organsim("serve '" + std::string(ORGANSIM_SOURCE_DIR) + "/scenarios/liver_probe.json' -o '" +
-                                       (dir / "out").string() + "' --port 0 --duration 0.01",
-                                   dir / "log");
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("liver_probe.json"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("sphere"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir / "out" / "forces.json"));
+  for (const std::string name : {"liver_probe", "liver_grasp"}) {
+    const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / ("serve_" + name);
+    fs::remove_all(dir);
+    const CliResult r = run_organsim("serve '" + std::string(ORGANSIM_SOURCE_DIR) + "/scenarios/" + name +
+                                         ".json' -o '" + (dir / "out").string() + "' --port 0 --duration 0.01",
+                                     dir / "log");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.err.find(name + ".json"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("sphere"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "forces.json"));
+  }
 }
 
 TEST(Serve, AClientThatNeverReadsDoesNotStallTheLoop) {

@@ -121,6 +121,12 @@ TEST(SurfaceRenderer, WireframeAndToolAddPixels) {
   const cv::Mat with_capsule =
       renderer.render(cam, style, ToolDraw{true, centre - Vec3(0.03, 0, 0), centre + Vec3(0.03, 0, 0), 0.02});
   EXPECT_GT(object(with_capsule), object(with_tool) + 300);
+  // A grasper's two jaws: that capsule and a second one 5 cm above it add
+  // the second's pixels (a second jaw not drawn would not).
+  ToolDraw jaws{true, centre - Vec3(0.03, 0, 0), centre + Vec3(0.03, 0, 0), 0.02};
+  jaws.segments = 2;
+  jaws.a2 = jaws.a + Vec3(0, 0, 0.05), jaws.b2 = jaws.b + Vec3(0, 0, 0.05);
+  EXPECT_GT(object(renderer.render(cam, style, jaws)), object(with_capsule) + 300);
 }
 
 }  // namespace
