@@ -284,7 +284,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   }
 
   // Gershgorin bound and its rows (core/stability/gershgorin.h).
-  const GershgorinRows gershgorin = gershgorin_rows(model);
+  const GershgorinRows gershgorin = gershgorin_rows(model, options);
   const std::vector<double> rows = gershgorin_bounds(model, gershgorin, options);
   r.lambda_gershgorin = rows.empty() ? 0 : *std::max_element(rows.begin(), rows.end());
 

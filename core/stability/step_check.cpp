@@ -98,7 +98,7 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
   o << "stability (at rest):\n";
   o << "  dt_crit " << fmt(r.dt_crit) << " s (undamped 2/omega_max " << fmt(r.dt_crit_undamped)
     << " s, damping ratio of the top mode " << fmt(r.damping_ratio, "%.3g") << ")\n"
-    << "  bounds: all modes at once " << fmt(r.dt_crit_bound) << " s, guaranteed by Gershgorin "
+    << "  bounds: all modes at once " << fmt(r.dt_crit_bound) << " s, guaranteed "
     << fmt(r.dt_crit_gershgorin) << " s\n";
   o << "  omega_max " << fmt(r.omega_max) << " rad/s from " << r.iterations << " power iterations"
     << (r.converged ? "" : " (NOT converged)") << "; top mode: springs " << fmt(100 * r.share_springs, "%.0f")
