@@ -109,7 +109,7 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     o << "  tool contact " << fmt(r.tool_contact_stiffness) << " N/m counted on " << r.tool_points
       << " points near the tool path\n";
   o << "  limiting points (input numbering): " << point_list(r.mode_points, r.mode_points.size())
-    << "; largest Gershgorin rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
+    << "; largest bound rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
   if (!r.label_shares.empty()) {
     o << "  limited by label " << r.label_shares[0].label << "'s cells: top mode by label";
     for (const auto& l : r.label_shares) o << " " << l.label << " " << fmt(100 * l.share, "%.0f") << " %";
