@@ -286,12 +286,15 @@ GershgorinRows gershgorin_rows(const Model& model, const CriticalStepOptions& op
   check_layout(model);
   NodePatches cache = node_patches(model);
   const std::vector<double> tool = tool_stiffness(model, options);
-  // Start from d = 1 and multiply each d_i by its point's bound: on the
-  // scalar rows this is the power iteration on B (d <- B d); on the matrix
-  // rows it raises d where a row is above the rest, which lowers that row
-  // and raises its neighbours'. Every iterate is a proof; the one whose
-  // step is largest is kept (further iterates can localise d on the
-  // stiffest points and loosen the bound again).
+  // Start from d = 1 and multiply each d_i by its point's bound. Were the
+  // rows the scalar sums sum_e lambda_max(D_e,ii) (the Gershgorin form), this
+  // would be the power iteration towards the Perron vector of that
+  // non-negative matrix, whose rows all equal its spectral radius; on the
+  // matrix rows it raises d where a row is above the rest, which lowers that
+  // row and raises its neighbours'. Every iterate is a proof; the one whose
+  // step is largest is kept (on the liver the step still rose after 60
+  // updates, but the power iteration towards the scalar Perron vector itself
+  // localises d on the stiffest points and loosens the matrix rows again).
   std::vector<double> scale(model.npoint(), 0.0);
   for (int32_t i = 0; i < model.npoint(); ++i) scale[i] = model.inv_mass[i] > 0 ? 1.0 : 0.0;
   GershgorinRows best = rows_with_scale(model, scale, cache);

@@ -5,26 +5,27 @@
 // M^-1 K has the eigenvalues of the symmetric W = M^-1/2 K M^-1/2 over the
 // free points. K is a sum of positive semi-definite element matrices K_e
 // (a spring, a tet's volume term, a node's nodal volume term, a tet's shear
-// element, a node's smoothed shear patch), and every such K_e is bounded by
-// its own diagonal blocks: for any positive tau_c over the element's free
-// points c (Cauchy-Schwarz on each of its squared linear forms),
-//   x^T K_e x <= sum_c (T_e / tau_c) x_c^T K_e,cc x_c,  T_e = sum_c tau_c.
-// Summed over the elements, K <= blockdiag(A_i) with
-//   A_i = sum_{e holding i} (T_e / tau_ei) K_e,ii,
-// so lambda_max(W) <= max_i lambda_max(A_i) / m_i: the point's row (with the
-// tool's k_c I added to A_i). organsim takes tau_ec = mu_ec d_c / sqrt(m_c),
-// mu_ec = sqrt(lambda_max(K_e,cc)), and d the per-point scale: then
-// lambda_max(A_i) / m_i <= (B d)_i / d_i with the scalar matrix
-// B_ij = sum_e mu_ei mu_ej / sqrt(m_i m_j), whose Perron vector makes every
-// row rho(B) (power iterations on B give d; any positive d is a proof,
-// an approximate Perron vector only a looser one). With d = 1 the scalar
-// form is the block Gershgorin row of W (lambda_max(K_ii) + sum_j ||K_ij||
-// sqrt(m_i / m_j)) / m_i with ||K_ij|| bounded by its elements' terms, so
-// the rows are never above the block Gershgorin bound; keeping A_i a matrix
-// lets the directions of a point's springs and faces share the bound instead
-// of adding up. On the paper's 7656-point liver (poisson_ratio 0.45, the
-// tool on 905 points) the bound is 1.9 lambda_max, where the block
-// Gershgorin rows gave 3.1 (docs/stability.md).
+// element, a node's smoothed shear patch), and each K_e is at most a
+// block-diagonal majorant D_e (x^T K_e x <= x^T D_e x for every x):
+// - rank-one forms k (sum_c v_c . x_c)^2 (springs, volume terms), by
+//   Cauchy-Schwarz with any positive tau_c over the element's free points:
+//   D_e,cc = (T_e / tau_c) K_e,cc, T_e = sum_c tau_c;
+// - the shear forms (rank up to six), by |x_i||x_c| <= (r |x_i|^2 +
+//   |x_c|^2 / r) / 2 with r = tau_c / tau_i, the Gershgorin form:
+//   D_e,ii = K_e,ii + sum_{c != i} ||K_e,ic|| tau_c / tau_i I.
+// Summed over the elements, K <= blockdiag(A_i), A_i = sum_e D_e,ii, so
+// lambda_max(W) <= max_i lambda_max(A_i + k_c I) / m_i: the point's row (the
+// tool adds k_c I). organsim takes tau_ec = |v_ec| d_c / sqrt(m_c) (|v_ec|:
+// the length of c's part of the form) with one scale d per point. With
+// d = 1 each row is at most the block Gershgorin row of W,
+// (lambda_max(K_ii) + sum_j ||K_ij|| sqrt(m_i / m_j)) / m_i with ||K_ij||
+// bounded by its elements' terms; keeping A_i a matrix lets the directions
+// of a point's springs and faces share the bound instead of adding up. Any
+// positive d is a proof, so d is fitted (gershgorin_rows). On the paper's
+// 7656-point liver (poisson_ratio 0.45, the tool on 905 points) the bound is
+// 1.08 lambda_max after fitting d (1.61 at d = 1; block Gershgorin rows with
+// bounded ||K_ij||: 3.06; docs/stability.md). The file keeps the name of the
+// block Gershgorin bound that these rows refine, as do the JSON keys.
 #include <cstdint>
 #include <vector>
 
@@ -48,8 +49,9 @@ struct GershgorinRows {
 // and rows.damped, with the scale rows.scale.
 void compute_gershgorin_rows(const Model& model, const std::vector<int32_t>& points, GershgorinRows& rows);
 
-// Every row, with the scale from power iterations on B (the tool's k_c on
-// the points `options` lets it touch is part of B's diagonal).
+// Every row, with a fitted scale: from d = 1, each d_i is multiplied by its
+// row's bound (with the tool's k_c on the points `options` lets it touch)
+// 20 times, and the d whose rows guarantee the largest step is kept.
 GershgorinRows gershgorin_rows(const Model& model, const CriticalStepOptions& options = {});
 
 // Every row with a given scale (npoint, positive at the free points).
