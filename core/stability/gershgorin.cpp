@@ -90,10 +90,10 @@ double weighed(const std::vector<PatchEntry>& patch, const std::vector<double>& 
   return sum;
 }
 
-// The node patches of every point (and the volume patches' sums for one z),
-// built once for passes over all rows (a single row builds the few it needs).
+// The patches of the nodes a pass needs (and the volume patches' sums for
+// one z), each built once for all the rows that read it.
 struct NodePatches {
-  std::vector<std::vector<PatchEntry>> volume, shear;  // (npoint) or empty
+  std::vector<std::vector<PatchEntry>> volume, shear;  // (npoint) or empty; empty patches where not needed
   std::vector<double> volume_sum;                      // weighed() of each volume patch
 
   void weigh(const std::vector<double>& z) {
@@ -102,15 +102,30 @@ struct NodePatches {
   }
 };
 
-NodePatches node_patches(const Model& model) {
+// The nodes whose patch may hold point i: the points of i's tets.
+std::vector<int32_t> nodes_of(const Model& model, int32_t i) {
+  std::vector<int32_t> nodes;
+  for_each_tet_of(model, i, [&](int32_t t) {
+    for (int32_t a : model.tet_points[t])
+      if (std::find(nodes.begin(), nodes.end(), a) == nodes.end()) nodes.push_back(a);
+  });
+  return nodes;
+}
+
+// The patches that the rows of `points` read (every point's: nullptr).
+NodePatches node_patches(const Model& model, const std::vector<int32_t>* points) {
   NodePatches p;
-  if (model.has_nodal_volume()) {
-    p.volume.resize(model.npoint());
-    for (int32_t a = 0; a < model.npoint(); ++a) p.volume[a] = nodal_volume_patch(model, a);
-  }
-  if (model.has_smoothed_shear()) {
-    p.shear.resize(model.npoint());
-    for (int32_t a = 0; a < model.npoint(); ++a) p.shear[a] = shear_patch(model, a);
+  if (!model.has_nodal_volume() && !model.has_smoothed_shear()) return p;
+  std::vector<uint8_t> needed(model.npoint(), points ? 0 : 1);
+  if (points)
+    for (int32_t i : *points)
+      for (int32_t a : nodes_of(model, i)) needed[a] = 1;
+  if (model.has_nodal_volume()) p.volume.resize(model.npoint());
+  if (model.has_smoothed_shear()) p.shear.resize(model.npoint());
+  for (int32_t a = 0; a < model.npoint(); ++a) {
+    if (!needed[a]) continue;
+    if (model.has_nodal_volume()) p.volume[a] = nodal_volume_patch(model, a);
+    if (model.has_smoothed_shear()) p.shear[a] = shear_patch(model, a);
   }
   return p;
 }
@@ -126,10 +141,10 @@ enum class Part { Springs, Shear, Other };
 // (f = T_e / tau_ei = sum_c |v_c| z_c / (|v_i| z_i) over the element's
 // points c, |v_c| the length of c's part of the form); K_e,ii + sum_c
 // ||K_e,ic|| z_c / z_i I for the shear forms. z = d / sqrt(m), 0 at fixed
-// points (the element's forms never see them). `cache`, when given, holds
-// every node's patch, the volume patches weighed with this z.
+// points (the element's forms never see them). `cache` holds the patches
+// of i's nodes, the volume patches weighed with this z.
 template <class Visit>
-void visit_row_elements(const Model& model, int32_t i, const std::vector<double>& z, const NodePatches* cache,
+void visit_row_elements(const Model& model, int32_t i, const std::vector<double>& z, const NodePatches& cache,
                         Visit&& visit) {
   const GatherLayout& layout = model.layout;
   const int32_t c = layout.chunk_size;
@@ -155,13 +170,8 @@ void visit_row_elements(const Model& model, int32_t i, const std::vector<double>
     const Tet& tet = model.tet_points[t];
     return static_cast<int>(std::find(tet.begin(), tet.end(), i) - tet.begin());
   };
-  // The nodes whose patch may hold i: the points of i's tets.
-  std::vector<int32_t> nodes;
-  if (model.has_nodal_volume() || model.has_smoothed_shear())
-    for_each_tet_of(model, i, [&](int32_t t) {
-      for (int32_t a : model.tet_points[t])
-        if (std::find(nodes.begin(), nodes.end(), a) == nodes.end()) nodes.push_back(a);
-    });
+  const std::vector<int32_t> nodes =
+      model.has_nodal_volume() || model.has_smoothed_shear() ? nodes_of(model, i) : std::vector<int32_t>();
   auto node_term = [&](const std::vector<PatchEntry>& patch, double sum, double k) {
     const auto self = std::find_if(patch.begin(), patch.end(), [&](const PatchEntry& e) { return e.point == i; });
     if (self == patch.end() || !(k > 0) || !(self->norm > 0)) return;
@@ -175,14 +185,7 @@ void visit_row_elements(const Model& model, int32_t i, const std::vector<double>
     return Mat3(k * (force_law::shear_rest_stiffness(gi, gi) + off / zi * Mat3::Identity()));
   };
   if (model.has_nodal_volume()) {
-    for (int32_t a : nodes) {
-      if (cache) {
-        node_term(cache->volume[a], cache->volume_sum[a], model.point_volume_k[a]);
-      } else {
-        const std::vector<PatchEntry> patch = nodal_volume_patch(model, a);
-        node_term(patch, weighed(patch, z), model.point_volume_k[a]);
-      }
-    }
+    for (int32_t a : nodes) node_term(cache.volume[a], cache.volume_sum[a], model.point_volume_k[a]);
   } else if (model.has_volume()) {
     for_each_tet_of(model, i, [&](int32_t t) {
       const int corner = corner_of(t);
@@ -206,8 +209,7 @@ void visit_row_elements(const Model& model, int32_t i, const std::vector<double>
   }
   if (model.has_smoothed_shear()) {
     for (int32_t a : nodes) {
-      const std::vector<PatchEntry> built = cache ? std::vector<PatchEntry>() : shear_patch(model, a);
-      const std::vector<PatchEntry>& patch = cache ? cache->shear[a] : built;
+      const std::vector<PatchEntry>& patch = cache.shear[a];
       const auto self = std::find_if(patch.begin(), patch.end(), [&](const PatchEntry& e) { return e.point == i; });
       const double k = smoothed_shear_patch_k(model, a);
       if (self != patch.end() && k > 0)
@@ -227,7 +229,7 @@ std::vector<double> scaled_inverse_sqrt_mass(const Model& model, const std::vect
   return z;
 }
 
-void compute_row(const Model& model, int32_t i, const std::vector<double>& z, const NodePatches* cache,
+void compute_row(const Model& model, int32_t i, const std::vector<double>& z, const NodePatches& cache,
                  GershgorinRows& rows) {
   rows.all[i] = rows.damped[i] = 0;
   if (model.inv_mass[i] <= 0) return;
@@ -271,7 +273,7 @@ GershgorinRows rows_with_scale(const Model& model, std::vector<double> scale, No
   rows.scale = std::move(scale);
   const std::vector<double> z = scaled_inverse_sqrt_mass(model, rows.scale);
   cache.weigh(z);
-  for (int32_t i = 0; i < model.npoint(); ++i) compute_row(model, i, z, &cache, rows);
+  for (int32_t i = 0; i < model.npoint(); ++i) compute_row(model, i, z, cache, rows);
   return rows;
 }
 
@@ -279,12 +281,14 @@ GershgorinRows rows_with_scale(const Model& model, std::vector<double> scale, No
 
 void compute_gershgorin_rows(const Model& model, const std::vector<int32_t>& points, GershgorinRows& rows) {
   const std::vector<double> z = scaled_inverse_sqrt_mass(model, rows.scale);
-  for (int32_t i : points) compute_row(model, i, z, nullptr, rows);
+  NodePatches cache = node_patches(model, &points);
+  cache.weigh(z);
+  for (int32_t i : points) compute_row(model, i, z, cache, rows);
 }
 
 GershgorinRows gershgorin_rows(const Model& model, const CriticalStepOptions& options) {
   check_layout(model);
-  NodePatches cache = node_patches(model);
+  NodePatches cache = node_patches(model, nullptr);
   const std::vector<double> tool = tool_stiffness(model, options);
   // Start from d = 1 and multiply each d_i by its point's bound. Were the
   // rows the scalar sums sum_e lambda_max(D_e,ii) (the Gershgorin form), this
@@ -322,7 +326,7 @@ GershgorinRows gershgorin_rows_with_scale(const Model& model, std::vector<double
   if (scale.size() != static_cast<size_t>(model.npoint()))
     throw Error(ErrorKind::Usage, "gershgorin_rows_with_scale: " + std::to_string(scale.size()) +
                                       " scales, expected " + std::to_string(model.npoint()));
-  NodePatches cache = node_patches(model);
+  NodePatches cache = node_patches(model, nullptr);
   return rows_with_scale(model, std::move(scale), cache);
 }
 
