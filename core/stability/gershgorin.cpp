@@ -95,6 +95,7 @@ double weighed(const std::vector<PatchEntry>& patch, const std::vector<double>& 
 struct NodePatches {
   std::vector<std::vector<PatchEntry>> volume, shear;  // (npoint) or empty; empty patches where not needed
   std::vector<double> volume_sum;                      // weighed() of each volume patch
+  std::vector<std::vector<int32_t>> nodes;             // nodes_of each row's point (npoint), or empty
 
   void weigh(const std::vector<double>& z) {
     volume_sum.resize(volume.size());
@@ -112,14 +113,22 @@ std::vector<int32_t> nodes_of(const Model& model, int32_t i) {
   return nodes;
 }
 
-// The patches that the rows of `points` read (every point's: nullptr).
+// The patches that the rows of `points` read (every point's: nullptr), and
+// those points' nodes.
 NodePatches node_patches(const Model& model, const std::vector<int32_t>* points) {
   NodePatches p;
   if (!model.has_nodal_volume() && !model.has_smoothed_shear()) return p;
-  std::vector<uint8_t> needed(model.npoint(), points ? 0 : 1);
-  if (points)
-    for (int32_t i : *points)
-      for (int32_t a : nodes_of(model, i)) needed[a] = 1;
+  std::vector<uint8_t> needed(model.npoint(), 0);
+  p.nodes.resize(model.npoint());
+  auto row = [&](int32_t i) {
+    p.nodes[i] = nodes_of(model, i);
+    for (int32_t a : p.nodes[i]) needed[a] = 1;
+  };
+  if (points) {
+    for (int32_t i : *points) row(i);
+  } else {
+    for (int32_t i = 0; i < model.npoint(); ++i) row(i);
+  }
   if (model.has_nodal_volume()) p.volume.resize(model.npoint());
   if (model.has_smoothed_shear()) p.shear.resize(model.npoint());
   for (int32_t a = 0; a < model.npoint(); ++a) {
@@ -170,8 +179,8 @@ void visit_row_elements(const Model& model, int32_t i, const std::vector<double>
     const Tet& tet = model.tet_points[t];
     return static_cast<int>(std::find(tet.begin(), tet.end(), i) - tet.begin());
   };
-  const std::vector<int32_t> nodes =
-      model.has_nodal_volume() || model.has_smoothed_shear() ? nodes_of(model, i) : std::vector<int32_t>();
+  static const std::vector<int32_t> kNoNodes;  // without node terms
+  const std::vector<int32_t>& nodes = cache.nodes.empty() ? kNoNodes : cache.nodes[i];
   auto node_term = [&](const std::vector<PatchEntry>& patch, double sum, double k) {
     const auto self = std::find_if(patch.begin(), patch.end(), [&](const PatchEntry& e) { return e.point == i; });
     if (self == patch.end() || !(k > 0) || !(self->norm > 0)) return;
