@@ -61,19 +61,23 @@ struct PatchEntry {
 
 // The nodal volume term's node a: K_a = k_a G_a G_a^T with G_aj = dV_a/dx_j
 // = the sum of g_tj / 4 over the tets t of a holding j, one entry per point
-// of a's tets.
-std::vector<PatchEntry> nodal_volume_patch(const Model& model, int32_t a) {
+// of a's tets. `slot` (npoint, all -1) finds a point's entry; it is left
+// all -1 again.
+std::vector<PatchEntry> nodal_volume_patch(const Model& model, int32_t a, std::vector<int32_t>& slot) {
   std::vector<PatchEntry> patch;
   for_each_tet_of(model, a, [&](int32_t t) {
     const Tet& tet = model.tet_points[t];
     for (int c = 0; c < 4; ++c) {
       const Vec3 g = volume_gradient(model, tet, c) / 4;
-      auto it = std::find_if(patch.begin(), patch.end(), [&](const PatchEntry& e) { return e.point == tet[c]; });
-      if (it == patch.end()) patch.push_back({tet[c], g, 0});
-      else it->v += g;
+      if (slot[tet[c]] < 0) {
+        slot[tet[c]] = static_cast<int32_t>(patch.size());
+        patch.push_back({tet[c], g, 0});
+      } else {
+        patch[slot[tet[c]]].v += g;
+      }
     }
   });
-  for (PatchEntry& e : patch) e.norm = e.v.norm();
+  for (PatchEntry& e : patch) e.norm = e.v.norm(), slot[e.point] = -1;
   return patch;
 }
 
@@ -119,6 +123,7 @@ NodePatches node_patches(const Model& model, const std::vector<int32_t>* points)
   NodePatches p;
   if (!model.has_nodal_volume() && !model.has_smoothed_shear()) return p;
   std::vector<uint8_t> needed(model.npoint(), 0);
+  std::vector<int32_t> slot(model.npoint(), -1);
   p.nodes.resize(model.npoint());
   auto row = [&](int32_t i) {
     p.nodes[i] = nodes_of(model, i);
@@ -133,7 +138,7 @@ NodePatches node_patches(const Model& model, const std::vector<int32_t>* points)
   if (model.has_smoothed_shear()) p.shear.resize(model.npoint());
   for (int32_t a = 0; a < model.npoint(); ++a) {
     if (!needed[a]) continue;
-    if (model.has_nodal_volume()) p.volume[a] = nodal_volume_patch(model, a);
+    if (model.has_nodal_volume()) p.volume[a] = nodal_volume_patch(model, a, slot);
     if (model.has_smoothed_shear()) p.shear[a] = shear_patch(model, a);
   }
   return p;
