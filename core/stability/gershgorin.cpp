@@ -340,6 +340,10 @@ GershgorinRows gershgorin_rows_with_scale(const Model& model, std::vector<double
   if (scale.size() != static_cast<size_t>(model.npoint()))
     throw Error(ErrorKind::Usage, "gershgorin_rows_with_scale: " + std::to_string(scale.size()) +
                                       " scales, expected " + std::to_string(model.npoint()));
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (model.inv_mass[i] > 0 && !(scale[i] > 0 && std::isfinite(scale[i])))
+      throw Error(ErrorKind::Usage, "gershgorin_rows_with_scale: scale " + std::to_string(scale[i]) + " at point " +
+                                        std::to_string(i) + ", expected a positive finite number at every free point");
   NodePatches cache = node_patches(model, nullptr);
   return rows_with_scale(model, std::move(scale), cache);
 }

@@ -20,6 +20,7 @@
 #include "core/model/stiffness.h"
 #include "core/stability/critical_step.h"
 #include "core/stability/gershgorin.h"
+#include "core/util/error.h"
 #include "tests/core/stability_test_util.h"
 #include "tests/core/test_models.h"
 
@@ -163,6 +164,24 @@ TEST(StabilityBound, HoldsAgainstTheExactSpectrumAtAnyScaleAndBeatsBlockGershgor
     // And the chosen scale guarantees a step at least as large as d = 1's.
     const GershgorinRows ones = gershgorin_rows_with_scale(model, std::vector<double>(model.npoint(), 1.0));
     EXPECT_GE(guaranteed_critical_step(model, rows, options), guaranteed_critical_step(model, ones, options));
+  }
+}
+
+// A scale must be positive at every free point: a zero would divide by zero
+// in the rows' weights, so it is refused with the point it was found at.
+TEST(StabilityBound, ScaleWithoutAPositiveValueAtAFreePointIsRefused) {
+  const Model model = testing::stability_box(2, 0.03, testing::undamped_material(3000));
+  std::vector<double> scale(model.npoint(), 1.0);
+  const auto free_point = std::find_if(model.inv_mass.begin(), model.inv_mass.end(), [](double w) { return w > 0; });
+  ASSERT_NE(free_point, model.inv_mass.end());
+  scale[free_point - model.inv_mass.begin()] = 0;
+  try {
+    gershgorin_rows_with_scale(model, scale);
+    ADD_FAILURE() << "a zero scale at a free point was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Usage);
+    EXPECT_NE(std::string(e.what()).find("expected a positive finite number at every free point"), std::string::npos)
+        << e.what();
   }
 }
 
