@@ -284,7 +284,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
   }
 
   // Gershgorin bound and its rows (core/stability/gershgorin.h).
-  const GershgorinRows gershgorin = gershgorin_rows(model);
+  const GershgorinRows gershgorin = gershgorin_rows(model, options);
   const std::vector<double> rows = gershgorin_bounds(model, gershgorin, options);
   r.lambda_gershgorin = rows.empty() ? 0 : *std::max_element(rows.begin(), rows.end());
 
@@ -352,7 +352,7 @@ StabilityReport estimate_critical_step(const Model& model, const CriticalStepOpt
 
 
   // Limiting points: the top mode's largest kinetic-energy shares m_i |x_i|^2 = |y_i|^2,
-  // and the largest Gershgorin rows.
+  // and the largest rows of the guaranteed bound.
   std::vector<double> share(n);
   for (int32_t i = 0; i < n; ++i) share[i] = y[i].squaredNorm();
   if (r.lambda_max > 0) r.label_shares = mode_share_by_label(model, share);

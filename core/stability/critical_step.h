@@ -7,7 +7,7 @@
 // k_t ((g_i . g_j) I + g_j g_i^T), tool contact).
 // We estimate omega_max^2 by power iteration on the symmetric form
 // W = M^-1/2 K M^-1/2 over the free points and bound it from above by
-// Gershgorin. Damping then shrinks the step (see damped_critical_step).
+// a block-diagonal majorant (gershgorin.h). Damping then shrinks the step (see damped_critical_step).
 #include <array>
 #include <cstdint>
 #include <string>
@@ -43,7 +43,7 @@ struct LimitingPoint {
   int32_t point = -1;      // input numbering
   Vec3 position{0, 0, 0};  // rest position, m
   double mode_share = 0;   // share of the top mode's kinetic energy m_i |x_i|^2 (0..1)
-  double row_bound = 0;    // Gershgorin row bound of M^-1 K at this point, 1/s^2
+  double row_bound = 0;    // row of the guaranteed bound on M^-1 K at this point, 1/s^2
 };
 
 // How much of the top mode lies on one label's cells (labelled meshes).
@@ -63,7 +63,7 @@ struct SliverTet {
 struct StabilityReport {
   int32_t free_points = 0;
   double lambda_max = 0;          // estimated largest eigenvalue of M^-1 K, 1/s^2
-  double lambda_gershgorin = 0;   // Gershgorin upper bound on it, 1/s^2
+  double lambda_gershgorin = 0;   // guaranteed upper bound on it (core/stability/gershgorin.h), 1/s^2
   double omega_max = 0;           // sqrt(lambda_max), rad/s
   int32_t iterations = 0;         // power iterations done
   bool converged = false;
@@ -89,10 +89,10 @@ struct StabilityReport {
   // of the springs (the damped part) with its frequency under the full K.
   double dt_crit = 0;
   double dt_crit_bound = 0;        // every mode at once: omega^2 = lambda_max, rate c lambda_damped + alpha, s
-  double dt_crit_gershgorin = 0;   // the same from the Gershgorin bound: a guaranteed-stable step, s
+  double dt_crit_gershgorin = 0;   // the same from the guaranteed bound: a guaranteed-stable step, s
 
   std::vector<LimitingPoint> mode_points;        // largest components of the top mode
-  std::vector<LimitingPoint> gershgorin_points;  // largest Gershgorin rows
+  std::vector<LimitingPoint> gershgorin_points;  // largest rows of the guaranteed bound
   std::vector<SliverTet> slivers;                // worst tets at those points
   // Labelled meshes: the top mode's kinetic energy per label, largest first
   // (the first label's cells limit dt_crit); a point on an interface splits

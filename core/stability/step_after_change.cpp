@@ -15,6 +15,11 @@ void ChangeStepCheck::update(const Model& previous, const Model& next) {
                            std::to_string(n));
   rows_.all.resize(n, 0.0);
   rows_.damped.resize(n, 0.0);
+  // A copy takes its origin's scale. The points that were there keep theirs,
+  // so every row not recomputed still has its elements' scales: all rows are
+  // bounds with one positive scale, which is all the proof needs.
+  rows_.scale.resize(n, 0.0);
+  for (int32_t p = old_n; p < n; ++p) rows_.scale[p] = rows_.scale[next.origin[p]] > 0 ? rows_.scale[next.origin[p]] : 1.0;
   touched_.assign(n, 0);
   std::vector<int32_t> changed;
   for (int32_t p = old_n; p < n; ++p)
@@ -26,12 +31,13 @@ void ChangeStepCheck::update(const Model& previous, const Model& next) {
       if (!touched_[q]) touched_[q] = 1, changed.push_back(q);
   // Their spring neighbours: a neighbour's spring to a split point may now be
   // two springs (one per side) whose stiffnesses sum to the old one. With the
-  // nodal volume term also the next ring: a row sums over the nodal volumes
-  // of its neighbours, whose own tets reach the split points.
+  // nodal volume term or smoothed shear patches also the next ring: a row
+  // sums over the patches of its neighbours, whose own tets reach the split
+  // points.
   const GatherLayout& layout = next.layout;
   const int32_t c = layout.chunk_size;
   size_t ring_begin = 0;
-  for (int ring = 0; ring < (next.has_nodal_volume() ? 2 : 1); ++ring) {
+  for (int ring = 0; ring < (next.has_nodal_volume() || next.has_smoothed_shear() ? 2 : 1); ++ring) {
     const size_t ring_end = changed.size();
     for (size_t k = ring_begin; k < ring_end; ++k) {
       const int32_t p = changed[k];
@@ -43,7 +49,7 @@ void ChangeStepCheck::update(const Model& previous, const Model& next) {
     }
     ring_begin = ring_end;
   }
-  for (int32_t p : changed) compute_gershgorin_row(next, p, rows_);
+  compute_gershgorin_rows(next, changed, rows_);
 }
 
 }  // namespace organsim

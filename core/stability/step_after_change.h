@@ -23,9 +23,11 @@ class ChangeStepCheck {
 
   // Follows `next`, made from `previous` by appending copies (ids kept) and
   // sutures: recomputes the rows of the copies, their origins, the new
-  // sutures' ends and every spring neighbour of those. Every other row is computed from the same springs
-  // (same stiffness, same order), tets and mass as before, so the rows equal
-  // gershgorin_rows(next) exactly.
+  // sutures' ends and every spring neighbour of those (two rings with node
+  // patches). A copy takes its origin's scale; every other row is computed
+  // from the same springs (same stiffness, same order), tets, masses and
+  // scales as before, so the rows equal
+  // gershgorin_rows_with_scale(next, rows().scale) exactly.
   void update(const Model& previous, const Model& next);
 
   const GershgorinRows& rows() const { return rows_; }

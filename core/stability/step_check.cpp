@@ -98,7 +98,7 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
   o << "stability (at rest):\n";
   o << "  dt_crit " << fmt(r.dt_crit) << " s (undamped 2/omega_max " << fmt(r.dt_crit_undamped)
     << " s, damping ratio of the top mode " << fmt(r.damping_ratio, "%.3g") << ")\n"
-    << "  bounds: all modes at once " << fmt(r.dt_crit_bound) << " s, guaranteed by Gershgorin "
+    << "  bounds: all modes at once " << fmt(r.dt_crit_bound) << " s, guaranteed "
     << fmt(r.dt_crit_gershgorin) << " s\n";
   o << "  omega_max " << fmt(r.omega_max) << " rad/s from " << r.iterations << " power iterations"
     << (r.converged ? "" : " (NOT converged)") << "; top mode: springs " << fmt(100 * r.share_springs, "%.0f")
@@ -109,7 +109,7 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     o << "  tool contact " << fmt(r.tool_contact_stiffness) << " N/m counted on " << r.tool_points
       << " points near the tool path\n";
   o << "  limiting points (input numbering): " << point_list(r.mode_points, r.mode_points.size())
-    << "; largest Gershgorin rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
+    << "; largest bound rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
   if (!r.label_shares.empty()) {
     o << "  limited by label " << r.label_shares[0].label << "'s cells: top mode by label";
     for (const auto& l : r.label_shares) o << " " << l.label << " " << fmt(100 * l.share, "%.0f") << " %";

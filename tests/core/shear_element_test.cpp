@@ -380,28 +380,6 @@ TEST(ShearElement, RebuildAfterACutKeepsTheElement) {
   }
 }
 
-// The rest stiffness K of the whole model by central differences of the
-// reference force (dense; ~100 points), restricted to the free points.
-Eigen::MatrixXd dense_rest_stiffness(const Model& model, std::vector<int32_t>& free_dof) {
-  free_dof.clear();
-  for (int32_t i = 0; i < model.npoint(); ++i)
-    if (!model.fixed[i])
-      for (int k = 0; k < 3; ++k) free_dof.push_back(3 * i + k);
-  const int n = static_cast<int>(free_dof.size());
-  Eigen::MatrixXd K(n, n);
-  std::vector<Vec3> zero(model.npoint(), Vec3::Zero()), plus, minus;
-  const double h = 1e-7;
-  for (int c = 0; c < n; ++c) {
-    std::vector<Vec3> x = model.rest_position;
-    x[free_dof[c] / 3][free_dof[c] % 3] += h;
-    reference_internal_forces(model, x, zero, plus);
-    x[free_dof[c] / 3][free_dof[c] % 3] -= 2 * h;
-    reference_internal_forces(model, x, zero, minus);
-    for (int r = 0; r < n; ++r) K(r, c) = -(plus[free_dof[r] / 3][free_dof[r] % 3] - minus[free_dof[r] / 3][free_dof[r] % 3]) / (2 * h);
-  }
-  return 0.5 * (K + K.transpose());
-}
-
 // The static solve's stiffness (the validation suite's) is the derivative
 // of the reference force, per-tet and smoothed: its solution u for a random
 // load f satisfies K u = f with K from central differences of the reference
@@ -415,7 +393,7 @@ TEST(ShearElement, StaticSolveIsTheLinearisedReferenceForce) {
     const Model model = build_model(testing::jittered_box(3, 0.05, 0.25, 9), m, testing::fixed_bottom_options());
     ASSERT_EQ(model.has_smoothed_shear(), form == ShearFormulation::Smoothed);
     std::vector<int32_t> free_dof;
-    const Eigen::MatrixXd K = dense_rest_stiffness(model, free_dof);
+    const Eigen::MatrixXd K = testing::dense_rest_stiffness(model, free_dof);
     StaticProblem problem;
     problem.load.assign(model.npoint(), Vec3::Zero());
     Eigen::VectorXd f(free_dof.size()), u(free_dof.size());
@@ -444,7 +422,7 @@ TEST(ShearElement, CriticalStepAndGershgorinBoundHoldAgainstTheExactSpectrum) {
     const Model model = testing::stability_box(3, 0.03, m, 0.2, 5);
     ASSERT_TRUE(model.has_shear_element());
     std::vector<int32_t> free_dof;
-    const Eigen::MatrixXd K = dense_rest_stiffness(model, free_dof);
+    const Eigen::MatrixXd K = testing::dense_rest_stiffness(model, free_dof);
     Eigen::VectorXd inv_sqrt_m(free_dof.size());
     for (size_t r = 0; r < free_dof.size(); ++r) inv_sqrt_m[r] = 1 / std::sqrt(model.mass[free_dof[r] / 3]);
     const Eigen::MatrixXd W = inv_sqrt_m.asDiagonal() * K * inv_sqrt_m.asDiagonal();  // M^-1/2 K M^-1/2

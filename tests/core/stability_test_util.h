@@ -1,11 +1,13 @@
 #pragma once
 // Helpers for the stability tests: small models and an empirical stability
 // probe (does a tiny random perturbation grow under the CPU backend?).
+#include <Eigen/Dense>
 #include <cmath>
 #include <random>
 
 #include "core/model/model.h"
 #include "core/sim/cpu_backend.h"
+#include "core/sim/reference_forces.h"
 #include "tests/core/test_models.h"
 
 namespace organsim::testing {
@@ -21,6 +23,28 @@ inline Model stability_box(int n, double size, const Material& material, double 
   bottom.normal = Vec3(0, 0, -1);  // fixed where z <= 0
   options.fixed.push_back(bottom);
   return build_model(mesh, material, options);
+}
+
+// The rest stiffness K of the whole model by central differences of the
+// reference force (dense; ~100 points), restricted to the free points.
+inline Eigen::MatrixXd dense_rest_stiffness(const Model& model, std::vector<int32_t>& free_dof) {
+  free_dof.clear();
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (!model.fixed[i])
+      for (int k = 0; k < 3; ++k) free_dof.push_back(3 * i + k);
+  const int n = static_cast<int>(free_dof.size());
+  Eigen::MatrixXd K(n, n);
+  std::vector<Vec3> zero(model.npoint(), Vec3::Zero()), plus, minus;
+  const double h = 1e-7;
+  for (int c = 0; c < n; ++c) {
+    std::vector<Vec3> x = model.rest_position;
+    x[free_dof[c] / 3][free_dof[c] % 3] += h;
+    reference_internal_forces(model, x, zero, plus);
+    x[free_dof[c] / 3][free_dof[c] % 3] -= 2 * h;
+    reference_internal_forces(model, x, zero, minus);
+    for (int r = 0; r < n; ++r) K(r, c) = -(plus[free_dof[r] / 3][free_dof[r] % 3] - minus[free_dof[r] / 3][free_dof[r] % 3]) / (2 * h);
+  }
+  return 0.5 * (K + K.transpose());
 }
 
 inline Material undamped_material(double young = 3000, double volume_modulus = 0) {
