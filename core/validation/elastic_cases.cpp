@@ -200,8 +200,8 @@ void add_kink_springs(const RigidTool& tool, const Tri& tri, const Vec3 x[3], co
 // closest point and normal (a SurfaceSpring; for a capsule also
 // add_kink_springs), solves, and moves towards that solution by the largest
 // of 1, 1/2, 1/4, ... that lowers the energy, until a step changes the push
-// (along -z) by less than 1e-6 of itself (1e-4 after 30 iterations), or,
-// for a capsule, until no step lowers the energy.
+// (along -z) by less than 1e-6 of itself (1e-4 after 30 iterations); a
+// capsule until the supports' reaction settles or no step lowers the energy.
 SurfaceContact surface_contact(const Model& m, const StaticSolver& solver, const StaticProblem& supports,
                                const RigidTool& tool, double k_contact) {
   const bool capsule = tool.a != tool.b;
@@ -251,6 +251,15 @@ SurfaceContact surface_contact(const Model& m, const StaticSolver& solver, const
     }
     return st;
   };
+  auto supports_reaction_z = [&](const std::vector<Vec3>& u) {
+    const std::vector<Vec3> elastic = solver.elastic_force(u);
+    double sum = 0;
+    for (const PrescribedDof& d : supports.prescribed)
+      if (d.axis == 2) sum += elastic[d.point].z();
+    return sum;
+  };
+  double last_reaction = 0;
+  int quiet = 0;
   std::vector<Vec3> u(m.npoint(), Vec3::Zero());
   State now = evaluate(u);
   if (now.touching == 0) return {};  // the tool does not reach the surface
@@ -286,6 +295,16 @@ SurfaceContact surface_contact(const Model& m, const StaticSolver& solver, const
     const double change = std::abs(tried.push() - now.push());
     u.swap(next);
     now = tried;
+    if (capsule) {
+      // Its penalties jump at the kinks, so a capsule's state is judged by
+      // the supports' reaction along z (smooth in u): settled when three
+      // steps in a row moved it by < 1e-4 of itself.
+      const double reaction = supports_reaction_z(u);
+      quiet = std::abs(reaction - last_reaction) <= 1e-4 * std::abs(reaction) ? quiet + 1 : 0;
+      last_reaction = reaction;
+      if (quiet == 3) break;
+      continue;
+    }
     // Settled: a step of at least a quarter, still touching, that moved the
     // push by < 1e-6 of it, or by < 1e-4 after 30 iterations (where a
     // closest point slides along its triangle, which the linearisation
