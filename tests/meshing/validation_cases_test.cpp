@@ -159,7 +159,7 @@ TEST(ValidationCases, LineLoadOfACapsuleGrowsWithDepthPushesDownAndConvergesFrom
       EXPECT_LT(std::hypot(f.x(), f.y()), 0.10 * -f.z()) << "d " << depths[i];
       EXPECT_GT(r->contacts[i], 0);
     }
-    // A line contact's force grows about linearly with depth (2.03-2.07x
+    // A line contact's force grows about linearly with depth (2.02-2.05x
     // per doubling measured; a point contact like Hertz would give 2.8x):
     // 1.8-2.4x per doubling.
     for (size_t i = 1; i < depths.size(); ++i) {
