@@ -95,7 +95,8 @@ void validate_command(const ValidateArgs& args) {
   j["probe_radius"] = options.probe_radius;
   j["contact"] = args.contact;
   if (options.line_load_reference)
-    j["line_load"] = {{"block", {0.08, 0.04, 0.03}},
+    j["line_load"] = {{"block", {options.line_load_block.x(), options.line_load_block.y(), options.line_load_block.z()}},
+                      {"depths", options.line_load_depths},
                       {"capsule_radius", options.line_load_radius},
                       {"reference_cell_size", *options.line_load_reference},
                       {"theory", "the same case's force on the reference mesh"}};

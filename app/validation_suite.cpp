@@ -31,11 +31,7 @@ Material suite_material(const SuiteOptions& options, const std::optional<double>
   return m;
 }
 
-// The line-load case: a block 8 cm long, 4 cm wide (the capsule's way) and
-// 3 cm high, pressed 1, 2 and 4 mm; the target is within 15 % of the
-// reference mesh's force.
-const Vec3 kLineLoadBlock(0.08, 0.04, 0.03);
-const std::vector<double> kLineLoadDepths{0.001, 0.002, 0.004};
+// The line-load case's target: within 15 % of the reference mesh's force.
 constexpr double kLineLoadTolerance = 0.15;
 
 }  // namespace
@@ -52,16 +48,16 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
   // The line-load case's reference: the same case on the refined mesh, per material.
   std::vector<LineLoadResult> line_load_reference;
   if (options.line_load_reference) {
-    const TetMesh reference = mesh_box(kLineLoadBlock, *options.line_load_reference);
+    const TetMesh reference = mesh_box(options.line_load_block, *options.line_load_reference);
     for (const auto& nu : options.poisson_ratios) {
       if (progress) progress(done, total, material_name(nu) + ", line-load reference");
       line_load_reference.push_back(capsule_line_load(reference, suite_material(options, nu), options.line_load_radius,
-                                                      kLineLoadDepths));
+                                                      options.line_load_depths));
     }
   }
   for (double h : options.cell_sizes) {
     const TetMesh block_mesh = mesh_box(block, h), beam_mesh = mesh_box(beam, h), slab_mesh = mesh_box(slab, h);
-    const TetMesh line_mesh = options.line_load_reference ? mesh_box(kLineLoadBlock, h) : TetMesh{};
+    const TetMesh line_mesh = options.line_load_reference ? mesh_box(options.line_load_block, h) : TetMesh{};
     for (size_t material = 0; material < options.poisson_ratios.size(); ++material) {
       const auto& nu = options.poisson_ratios[material];
       const Material m = suite_material(options, nu);
@@ -93,11 +89,11 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
           sphere_indentation(slab_mesh, m, options.probe_radius, {0.2 * options.probe_radius}, options.contact);
       add("hertz probe d/R=0.2", probe.points, probe.force[0], probe.hertz[0], true);
       if (options.line_load_reference) {
-        const LineLoadResult line = capsule_line_load(line_mesh, m, options.line_load_radius, kLineLoadDepths);
+        const LineLoadResult line = capsule_line_load(line_mesh, m, options.line_load_radius, options.line_load_depths);
         const LineLoadResult& reference = line_load_reference[material];
-        for (size_t i = 0; i < kLineLoadDepths.size(); ++i) {
+        for (size_t i = 0; i < options.line_load_depths.size(); ++i) {
           char test[48];
-          std::snprintf(test, sizeof test, "line load d=%gmm", kLineLoadDepths[i] * 1000);
+          std::snprintf(test, sizeof test, "line load d=%gmm", options.line_load_depths[i] * 1000);
           add(test, line.points, -line.force[i].z(), -reference.force[i].z(), true, kLineLoadTolerance);
         }
       }

@@ -12,6 +12,7 @@
 
 #include "core/model/material.h"
 #include "core/sim/tool.h"
+#include "core/util/vec.h"
 
 namespace organsim::app {
 
@@ -32,6 +33,9 @@ struct SuiteOptions {
   // case out, since a converged reference (2.5 mm) takes minutes per material.
   std::optional<double> line_load_reference;
   double line_load_radius = 0.005;  // m: the capsule (a 10 mm instrument shaft)
+  // The block (m; the capsule lies along y, across its 4 cm) and the depths (m).
+  Vec3 line_load_block{0.08, 0.04, 0.03};
+  std::vector<double> line_load_depths{0.001, 0.002, 0.004};
 };
 
 // One measured quantity against its theory.
