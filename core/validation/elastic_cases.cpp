@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <tuple>
 
 #include "core/model/model.h"
 #include "core/model/stiffness.h"
@@ -132,44 +134,109 @@ BeamResult cantilever(const TetMesh& beam, const Material& material, BeamEnd end
 
 namespace {
 
-// The surface contact's static response at one depth: the displacement that
+// A rigid tool as the tool applies it: a capsule, the segment a-b with a
+// radius (a == b: a sphere).
+struct RigidTool {
+  Vec3 a, b;
+  double radius = 0;
+};
+
+// The surface contact's static response: the penalties' total force on the
+// tissue (N), the triangles pushing and the settled displacements (m; empty
+// when the tool does not reach the surface).
+struct SurfaceContact {
+  Vec3 force = Vec3::Zero();
+  int32_t touching = 0;
+  std::vector<Vec3> displacement;
+};
+
+// A capsule lying parallel to a triangle touches it along a chord under its
+// axis, and the force law's closest point jumps from one end of that chord
+// to the other as the triangle tilts (segment_point_closest_to_triangle): the
+// penalty energy is the larger of the two ends', with a kink where they are
+// level, and the minimum lies on such kinks. A Gauss-Newton step linearised
+// at one end only tilts the triangle onto the other and the line search
+// refuses it. So the step's model also holds every other segment-to-edge
+// closest pair within 5 % of the triangle's depth, the triangle's penalty
+// stiffness shared equally between them (the mean of the kink's sides).
+// Only the step's model changes: the energy and the forces are the force
+// law's. `spring` is the force law's linearisation at `depth`, `x` the
+// triangle's corners at u.
+void add_kink_springs(const RigidTool& tool, const Tri& tri, const Vec3 x[3], const std::vector<Vec3>& u,
+                      const SurfaceSpring& spring, double depth, std::vector<SurfaceSpring>& springs) {
+  const size_t first = springs.size();
+  springs.push_back(spring);
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    double s = 0, t = 0;
+    force_law::segments_closest(tool.a, tool.b, x[i], x[j], s, t);
+    const Vec3 offset = x[i] + t * (x[j] - x[i]) - (tool.a + s * (tool.b - tool.a));
+    const double dist = offset.norm(), edge_depth = tool.radius - dist;
+    if (!(dist > 0) || !(edge_depth >= 0.95 * depth)) continue;
+    SurfaceSpring c = spring;
+    c.weights = {0, 0, 0};
+    c.weights[i] = 1 - t;
+    c.weights[j] = t;
+    const auto same_point = [&](const SurfaceSpring& o) {
+      for (int k = 0; k < 3; ++k)
+        if (std::abs(o.weights[k] - c.weights[k]) > 1e-9) return false;
+      return true;
+    };
+    if (std::any_of(springs.begin() + static_cast<std::ptrdiff_t>(first), springs.end(), same_point)) continue;
+    c.direction = offset / dist;
+    const Vec3 u_q = c.weights[0] * u[tri[0]] + c.weights[1] * u[tri[1]] + c.weights[2] * u[tri[2]];
+    c.target = edge_depth + c.direction.dot(u_q);
+    springs.push_back(c);
+  }
+  const double n = static_cast<double>(springs.size() - first);
+  for (size_t k = first; k < springs.size(); ++k) springs[k].k /= n;
+}
+
+// The surface contact's static response at one pose: the displacement that
 // minimises the elastic energy plus every triangle's penalty
-// (force_law::sphere_triangle_penalty's k_t/2 (R - |q - c|)^2 inside the
-// sphere), by Gauss-Newton with a backtracking line search: each iteration
-// linearises the penalty of every triangle inside the sphere at its current
-// closest point and normal (a SurfaceSpring), solves, and moves towards that
-// solution by the largest of 1, 1/2, 1/4, ... that lowers the energy, until
-// a step changes the push by less than 1e-6 of itself (1e-4 after 30
-// iterations). Returns the push along -z (N) and the triangles pushing.
-std::pair<double, int32_t> surface_indentation(const Model& m, const StaticSolver& solver,
-                                               const StaticProblem& supports, const Vec3& centre, double radius,
-                                               double k_contact) {
+// (force_law::capsule_triangle_penalty's k_t/2 (R - dist)^2 inside the tool),
+// by Gauss-Newton with a backtracking line search: each iteration
+// linearises the penalty of every triangle inside the tool at its current
+// closest point and normal (a SurfaceSpring; for a capsule also
+// add_kink_springs), solves, and moves towards that solution by the largest
+// of 1, 1/2, 1/4, ... that lowers the energy, until a step changes the push
+// (along -z) by less than 1e-6 of itself (1e-4 after 30 iterations); a
+// capsule until the supports' reaction settles or no step lowers the energy.
+SurfaceContact surface_contact(const Model& m, const StaticSolver& solver, const StaticProblem& supports,
+                               const RigidTool& tool, double k_contact) {
+  const bool capsule = tool.a != tool.b;
+  auto corners = [&](const std::vector<Vec3>& u, int32_t t, Vec3 x[3]) {
+    for (int i = 0; i < 3; ++i) x[i] = m.rest_position[m.surface[t][i]] + u[m.surface[t][i]];
+  };
   // Triangle t at displacements u: its penalty as a SurfaceSpring (closest
-  // point weights, normal, k_t, the depth as target at rest) and its depth.
+  // point weights, the direction it pushes the tissue, k_t, and a target that
+  // makes target - direction . u_q its depth) and its depth (0: outside).
   auto contact = [&](const std::vector<Vec3>& u, int32_t t, SurfaceSpring& s) {
     const Tri& tri = m.surface[t];
     Vec3 x[3];
+    corners(u, t, x);
     double share[3];
-    for (int i = 0; i < 3; ++i) {
-      x[i] = m.rest_position[tri[i]] + u[tri[i]];
-      share[i] = m.tool_scale(tri[i]) / m.surface_count(tri[i]);
-    }
+    for (int i = 0; i < 3; ++i) share[i] = m.tool_scale(tri[i]) / m.surface_count(tri[i]);
+    const double k_t = k_contact * force_law::triangle_penalty_scale(share);
+    Vec3 f;
     double w[3];
-    force_law::triangle_closest_weights(centre, x[0], x[1], x[2], w);
-    const Vec3 q = w[0] * x[0] + w[1] * x[1] + w[2] * x[2];
-    const double dist = (q - centre).norm();
+    if (!(k_t > 0) ||
+        !force_law::capsule_triangle_penalty(tool.a, tool.b, tool.radius, x[0], x[1], x[2], k_contact, share, f, w))
+      return 0.0;
+    const double depth = f.norm() / k_t;
     s.points = {tri[0], tri[1], tri[2]};
     s.weights = {w[0], w[1], w[2]};
-    s.direction = dist > 0 ? Vec3((q - centre) / dist) : Vec3(0, 0, -1);
-    s.k = k_contact * force_law::triangle_penalty_scale(share);
-    Vec3 rest_q = Vec3::Zero();
-    for (int i = 0; i < 3; ++i) rest_q += w[i] * m.rest_position[tri[i]];
-    s.target = radius - s.direction.dot(rest_q - centre);
-    return radius - dist;
+    s.direction = f / f.norm();
+    s.k = k_t;
+    const Vec3 u_q = w[0] * u[tri[0]] + w[1] * u[tri[1]] + w[2] * u[tri[2]];
+    s.target = depth + s.direction.dot(u_q);
+    return depth;
   };
   struct State {
-    double energy = 0, push = 0;
+    double energy = 0;
+    Vec3 force = Vec3::Zero();
     int32_t touching = 0;
+    double push() const { return -force.z(); }
   };
   auto evaluate = [&](const std::vector<Vec3>& u) {
     State st;
@@ -179,20 +246,38 @@ std::pair<double, int32_t> surface_indentation(const Model& m, const StaticSolve
       const double depth = contact(u, t, s);
       if (!(depth > 0)) continue;
       st.energy += s.k * depth * depth / 2;
-      st.push -= s.k * depth * s.direction.z();
+      st.force += s.k * depth * s.direction;
       ++st.touching;
     }
     return st;
   };
+  auto supports_reaction_z = [&](const std::vector<Vec3>& u) {
+    const std::vector<Vec3> elastic = solver.elastic_force(u);
+    double sum = 0;
+    for (const PrescribedDof& d : supports.prescribed)
+      if (d.axis == 2) sum += elastic[d.point].z();
+    return sum;
+  };
+  double last_reaction = 0;
+  int quiet = 0;
   std::vector<Vec3> u(m.npoint(), Vec3::Zero());
   State now = evaluate(u);
-  if (now.touching == 0) return {0.0, 0};  // the sphere does not reach the surface
+  if (now.touching == 0) return {};  // the tool does not reach the surface
   for (int iteration = 0;; ++iteration) {
-    if (iteration == 100) throw Error(ErrorKind::Numerical, "sphere_indentation: surface contact did not settle");
+    if (iteration == 100) throw Error(ErrorKind::Numerical, "validation: surface contact did not settle");
     StaticProblem problem = supports;
     SurfaceSpring s;
-    for (int32_t t = 0; t < m.nsurface(); ++t)
-      if (contact(u, t, s) > 0) problem.surface_springs.push_back(s);
+    for (int32_t t = 0; t < m.nsurface(); ++t) {
+      const double depth = contact(u, t, s);
+      if (!(depth > 0)) continue;
+      if (!capsule) {
+        problem.surface_springs.push_back(s);
+        continue;
+      }
+      Vec3 x[3];
+      corners(u, t, x);
+      add_kink_springs(tool, m.surface[t], x, u, s, depth, problem.surface_springs);
+    }
     const StaticSolution sol = solver.solve(problem);
     std::vector<Vec3> next(u.size());
     State tried;
@@ -202,20 +287,35 @@ std::pair<double, int32_t> surface_indentation(const Model& m, const StaticSolve
       tried = evaluate(next);
       if (tried.energy <= now.energy || step < 1e-3) break;
     }
-    const double change = std::abs(tried.push - now.push);
+    // A capsule's minimum lies on kinks (add_kink_springs) that the model
+    // can approach but not resolve: when no step lowers the energy the
+    // elastic state has settled, though the force law's penalties, taken
+    // on one side of each kink, need not sum to the supports' reaction.
+    if (capsule && !(tried.energy < now.energy)) break;
+    const double change = std::abs(tried.push() - now.push());
     u.swap(next);
     now = tried;
+    if (capsule) {
+      // Its penalties jump at the kinks, so a capsule's state is judged by
+      // the supports' reaction along z (smooth in u): settled when three
+      // steps in a row moved it by < 1e-4 of itself.
+      const double reaction = supports_reaction_z(u);
+      quiet = std::abs(reaction - last_reaction) <= 1e-4 * std::abs(reaction) ? quiet + 1 : 0;
+      last_reaction = reaction;
+      if (quiet == 3) break;
+      continue;
+    }
     // Settled: a step of at least a quarter, still touching, that moved the
     // push by < 1e-6 of it, or by < 1e-4 after 30 iterations (where a
     // closest point slides along its triangle, which the linearisation
     // leaves out, the push converges only linearly, and where the touching
     // set alternates the full step is refused every time; 1e-4 is far below
     // the percent-level errors measured). A tiny step changes little without
-    // settling anything, and one that left the sphere is not a solution.
+    // settling anything, and one that left the tool is not a solution.
     const double tolerance = iteration < 30 ? 1e-6 : 1e-4;
-    if (step >= 0.25 && now.touching > 0 && change <= tolerance * std::abs(now.push)) break;
+    if (step >= 0.25 && now.touching > 0 && change <= tolerance * std::abs(now.push())) break;
   }
-  return {now.push, now.touching};
+  return {now.force, now.touching, std::move(u)};
 }
 
 // The point contact's static response at one depth: a stiff penalty spring
@@ -264,33 +364,85 @@ std::pair<double, int32_t> point_indentation(const Model& m, const StaticSolver&
 
 }  // namespace
 
+namespace {
+
+// A block with its bottom face clamped, its stiffness factored once for every
+// pose of a tool pressed into its top, and the tool's penalty: 1000x the
+// stiffest point, so its compliance is 1e-3 of the solid's.
+struct ClampedBlock {
+  ClampedBlock(const TetMesh& mesh, const Material& material)
+      : model(free_model(mesh, material)), box(bounding_box(model)), bottom(face(model, box, 2, -1)) {
+    clamp(supports, bottom, Vec3::Zero());
+    const std::vector<double> diagonal = stiffness_diagonal(model);
+    k_contact = 1e3 * *std::max_element(diagonal.begin(), diagonal.end());
+    solver = std::make_unique<StaticSolver>(model, supports.prescribed);
+  }
+  const Model model;
+  const Box box;
+  const std::vector<int32_t> bottom;
+  StaticProblem supports;
+  double k_contact = 0;
+  std::unique_ptr<const StaticSolver> solver;  // refers to model
+};
+
+}  // namespace
+
 IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
                                      const std::vector<double>& depths, ToolContact contact) {
-  const Model m = free_model(block, material);
-  const Box box = bounding_box(m);
-  const auto bottom = face(m, box, 2, -1);
-  const std::vector<double> diagonal = stiffness_diagonal(m);
-  // Penalty 1000x the stiffest point: its compliance is 1e-3 of the solid's.
-  const double k_contact = 1e3 * *std::max_element(diagonal.begin(), diagonal.end());
+  const ClampedBlock b(block, material);
   const EffectiveElasticity e = effective_elasticity(material);
   const double e_star = e.young_modulus / (1 - e.poisson_ratio * e.poisson_ratio);
-  // The bottom clamped at every depth: one factorisation serves them all.
-  StaticProblem supports;
-  clamp(supports, bottom, Vec3::Zero());
-  const StaticSolver solver(m, supports.prescribed);
-
   IndentationResult r;
-  r.points = m.npoint();
+  r.points = b.model.npoint();
   for (double depth : depths) {
-    const Vec3 centre(0.5 * (box.min.x() + box.max.x()), 0.5 * (box.min.y() + box.max.y()),
-                      box.max.z() + radius - depth);
-    const auto [force, touching] = contact == ToolContact::Surface
-                                       ? surface_indentation(m, solver, supports, centre, radius, k_contact)
-                                       : point_indentation(m, solver, supports, centre, radius, k_contact);
+    const Vec3 centre(0.5 * (b.box.min.x() + b.box.max.x()), 0.5 * (b.box.min.y() + b.box.max.y()),
+                      b.box.max.z() + radius - depth);
+    double force = 0;
+    int32_t touching = 0;
+    if (contact == ToolContact::Surface) {
+      const SurfaceContact c = surface_contact(b.model, *b.solver, b.supports, {centre, centre, radius}, b.k_contact);
+      force = -c.force.z();
+      touching = c.touching;
+    } else {
+      std::tie(force, touching) = point_indentation(b.model, *b.solver, b.supports, centre, radius, b.k_contact);
+    }
     r.depth.push_back(depth);
     r.force.push_back(force);
     r.hertz.push_back(4.0 / 3.0 * e_star * std::sqrt(radius) * std::pow(depth, 1.5));
     r.contacts.push_back(touching);
+  }
+  return r;
+}
+
+LineLoadResult capsule_line_load(const TetMesh& block, const Material& material, double radius,
+                                 const std::vector<double>& depths) {
+  for (double depth : depths)
+    if (!(depth > 0 && depth < radius))
+      throw Error(ErrorKind::Usage, "capsule_line_load: expected depths in (0, radius), got " + std::to_string(depth) +
+                                        " m for radius " + std::to_string(radius) + " m");
+  const ClampedBlock b(block, material);
+  // The axis along y over the middle of the top face, reaching 2R beyond
+  // each side so the rounded ends lie wholly outside the block.
+  const double x = 0.5 * (b.box.min.x() + b.box.max.x());
+  LineLoadResult r;
+  r.points = b.model.npoint();
+  r.capsule_length = b.box.size().y() + 4 * radius;
+  for (double depth : depths) {
+    const double z = b.box.max.z() + radius - depth;
+    const RigidTool capsule{Vec3(x, b.box.min.y() - 2 * radius, z), Vec3(x, b.box.max.y() + 2 * radius, z), radius};
+    const SurfaceContact c = surface_contact(b.model, *b.solver, b.supports, capsule, b.k_contact);
+    // The force through the clamped base, K u there: at a kink the force
+    // law's penalties are one side's (surface_contact), the base carries
+    // what holds the settled state.
+    Vec3 force = Vec3::Zero();
+    if (!c.displacement.empty()) {
+      const std::vector<Vec3> elastic = b.solver->elastic_force(c.displacement);
+      for (int32_t p : b.bottom) force -= elastic[p];
+    }
+    r.depth.push_back(depth);
+    r.force.push_back(force);
+    r.contact_force.push_back(c.force);
+    r.contacts.push_back(c.touching);
   }
   return r;
 }

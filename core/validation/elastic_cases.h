@@ -62,4 +62,27 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
                                      const std::vector<double>& depths,
                                      ToolContact contact = ToolContact::Surface);
 
+// A line load: a rigid frictionless capsule of `radius` lying along y across
+// the middle of the block's top face (bottom face clamped), its axis 2R
+// longer than the block on each side so the rounded ends lie beyond it,
+// pressed `depth` into the top (0 < depth < radius), for each depth. Contact
+// on the boundary triangles (force_law::capsule_triangle_penalty, the
+// tool's surface contact), solved as sphere_indentation's; the force is the
+// one the clamped base carries (the settled state's K u there), since at
+// the kinks where a triangle's closest point jumps between the ends of the
+// chord under the axis the penalties are one side's. No closed-form
+// theory: a cylinder on an elastic half-space has no finite-depth force
+// law (the 2D surface displacement under a line load grows like the log of
+// the body's size), so the case is compared with itself on a refined mesh.
+struct LineLoadResult {
+  std::vector<double> depth;      // m
+  std::vector<Vec3> force;        // the tool's force on the tissue as the base carries it, N (a push is along -z)
+  std::vector<Vec3> contact_force;  // the force law's penalties summed at the settled state, N
+  std::vector<int32_t> contacts;  // triangles touching at each depth
+  int32_t points = 0;
+  double capsule_length = 0;      // the axis segment, m
+};
+LineLoadResult capsule_line_load(const TetMesh& block, const Material& material, double radius,
+                                 const std::vector<double>& depths);
+
 }  // namespace organsim

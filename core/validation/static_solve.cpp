@@ -250,6 +250,15 @@ double StaticSolver::elastic_energy(const std::vector<Vec3>& u) const {
   return x.dot(factor_->K * x) / 2;
 }
 
+std::vector<Vec3> StaticSolver::elastic_force(const std::vector<Vec3>& u) const {
+  Eigen::VectorXd x(3 * static_cast<Eigen::Index>(u.size()));
+  for (size_t p = 0; p < u.size(); ++p) x.segment<3>(3 * static_cast<Eigen::Index>(p)) = u[p];
+  const Eigen::VectorXd f = factor_->K * x;
+  std::vector<Vec3> out(u.size());
+  for (size_t p = 0; p < u.size(); ++p) out[p] = f.segment<3>(3 * static_cast<Eigen::Index>(p));
+  return out;
+}
+
 StaticSolution solve_static(const Model& model, const StaticProblem& problem) {
   return StaticSolver(model, problem.prescribed).solve(problem);
 }

@@ -79,6 +79,10 @@ class StaticSolver {
   // 1/2 u^T K u, J: the rest stiffness's energy at displacements u (npoint).
   double elastic_energy(const std::vector<Vec3>& u) const;
 
+  // K u, N (npoint): the rest stiffness's force at displacements u; at the
+  // held coordinates of an equilibrium, the supports' reaction.
+  std::vector<Vec3> elastic_force(const std::vector<Vec3>& u) const;
+
  private:
   struct Factor;
   const Model& model_;

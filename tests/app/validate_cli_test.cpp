@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -61,6 +62,49 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
   const std::string png = test::slurp(dir / "out" / "validation.png");
   ASSERT_GT(png.size(), 8u);
   EXPECT_EQ(png.substr(1, 3), "PNG");
+}
+
+// The line-load case against its reference mesh: at the reference's own
+// cell size the ratio is 1 (the same mesh, CGAL's meshing is deterministic),
+// every row carries the 15 % target and its verdict in JSON and CSV.
+TEST(ValidateCli, LineLoadRowsCompareWithTheReferenceMeshAndCarryTheTarget) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_line_load";
+  fs::remove_all(dir);
+  const auto r = test::run_organsim(
+      "validate --cell-size 0.02,0.012 --poisson-ratio 0.4 --line-load-reference 0.012 -o " + (dir / "out").string(),
+      dir / "log");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(test::slurp(dir / "out" / "validation.json"));
+  EXPECT_EQ(j["line_load"]["reference_cell_size"].get<double>(), 0.012);
+  int rows = 0, at_reference = 0;
+  for (const auto& row : j["rows"]) {
+    if (row["test"].get<std::string>().rfind("line load d=", 0) != 0) {
+      EXPECT_FALSE(row.contains("tolerance")) << row["test"];
+      continue;
+    }
+    ++rows;
+    const double error = row["error"];
+    EXPECT_GT(row["theory"].get<double>(), 0) << row["test"];
+    EXPECT_EQ(row["tolerance"].get<double>(), 0.15);
+    EXPECT_EQ(row["pass"].get<bool>(), std::abs(error - 1) <= 0.15) << row["test"] << " error " << error;
+    if (row["cell_size"].get<double>() == 0.012) {
+      EXPECT_NEAR(error, 1.0, 1e-12) << row["test"];
+      ++at_reference;
+    }
+  }
+  EXPECT_EQ(rows, 2 * 3);  // 2 cell sizes x depths 1, 2, 4 mm
+  EXPECT_EQ(at_reference, 3);
+  const std::string csv = test::slurp(dir / "out" / "validation.csv");
+  EXPECT_NE(csv.find("tolerance,pass\n"), std::string::npos);
+  EXPECT_NE(csv.find("line load d=2mm,nu 0.40,0.012,"), std::string::npos);
+  EXPECT_NE(csv.find(",ratio,0.15,pass\n"), std::string::npos);  // at least the reference's own rows
+}
+
+TEST(ValidateCli, NegativeLineLoadReferenceIsAUsageError) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_bad_line_load";
+  const auto r = test::run_organsim("validate --line-load-reference -0.002 -o " + (dir / "out").string(), dir / "log");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--line-load-reference"), std::string::npos) << r.err;
 }
 
 TEST(ValidateCli, BadPoissonRatioIsAUsageError) {

@@ -109,6 +109,16 @@ TEST(StaticSolve, StiffSpringsAddedToTheFactorActAsPrescribedCoordinates) {
     const double spring_force = k * (push - got.displacement[top].z());
     EXPECT_NEAR(spring_force, want.reaction[top].z(), 1e-3 * std::abs(want.reaction[top].z()));
   }
+  // K u at the solved state (elastic_force): the supports' reaction at the
+  // held coordinates and zero elsewhere (equilibrium, no load), to the
+  // factorisation's round-off (1e-9 of the reaction).
+  const std::vector<Vec3> elastic = solver.elastic_force(want.displacement);
+  const double scale = std::abs(want.reaction[top].z());
+  for (int32_t p = 0; p < model.npoint(); ++p)
+    for (int a = 0; a < 3; ++a) {
+      const bool held = model.fixed[p] || (p == top && a == 2);
+      EXPECT_NEAR(elastic[p][a], held ? want.reaction[p][a] : 0.0, 1e-9 * scale) << "point " << p << " axis " << a;
+    }
   // A problem holding other coordinates than were factored is refused.
   EXPECT_THROW(solver.solve(prescribed), Error);
 }
