@@ -8,9 +8,10 @@
 # the real-time factor from the force log's meta, with the CPU and the load.
 # With ORGANSIM_LIVE_BENCH_CUT=S the client's tool points down into the liver
 # and it sends the STRING command "CUT 40 30" after S seconds; the cut's figures are
-# printed: the new Model built off the tick's path (model_ms, on a worker
-# thread) and what stayed on it (the backend's rebuild and the dt check, ms),
-# and how many ticks after the request it went in.
+# printed: what was built off the tick's path on a worker thread (the new
+# Model, model_ms, and the backend's tables, backend_prepare_ms), what stayed
+# on it (the backend's adoption of those tables and the dt check, ms), and
+# how many ticks after the request it went in.
 # A benchmark, not a test: its figures depend on the machine and its load
 # (docs/live.md lists what it measured).
 # Usage: [ORGANSIM_LIVE_BENCH_CUT=S] scripts/live_bench.sh [SECONDS (default 60)] [extra organsim serve options...]
@@ -66,8 +67,8 @@ for cut in live.get("cuts", []):
         continue
     print(f"cut:      {cut['name']} asked at tick {cut['tick']}, in at tick {cut.get('applied_tick', '-')}: "
           f"{e['faces_separated']} faces, {e['points_added']} points added; off the tick's path {e['model_ms']:.1f} ms "
-          f"(the new Model, on the worker), on it {e['backend_rebuild_ms']:.1f} ms backend rebuild "
-          f"+ {e['dt_check_ms']:.1f} ms dt check ({e['dt_check']})")
+          f"(the new Model) + {e.get('backend_prepare_ms', 0):.1f} ms (the backend's tables) on the worker, "
+          f"on it {e['backend_rebuild_ms']:.2f} ms backend adopt + {e['dt_check_ms']:.2f} ms dt check ({e['dt_check']})")
 if live.get("commands_refused"):
     print(f"refused:  {live['commands_refused']}")
 PY

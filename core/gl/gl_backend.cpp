@@ -203,16 +203,41 @@ void GlBackend::delete_model_buffers() {
   }
 }
 
-void GlBackend::rebuild(const Model& next) {
+namespace {
+
+// What GlBackend::prepare hands to adopt: the host-side arrays of every
+// buffer and the step's passes.
+struct GlPrepared final : PreparedModel {
+  GlPrepared(const Model& next, const BackendTool& tool)
+      : PreparedModel(next), packed(gl::pack_model(next)), plan(make_step_plan(next, tool)) {}
+  gl::PackedModel packed;
+  StepPlan plan;
+};
+
+}  // namespace
+
+std::unique_ptr<PreparedModel> GlBackend::prepare(const Model& next) const {
+  return std::make_unique<GlPrepared>(next, tool_);
+}
+
+void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
+  auto* p = dynamic_cast<GlPrepared*>(prepared.get());
+  if (!p) throw Error(ErrorKind::Backend, "GL backend: adopt() of a version it did not prepare");
+  const Model& next = p->model();
+  const gl::PackedModel& packed = p->packed;
   const int32_t old_n = npoint_, n = next.npoint();
   if (n < old_n || static_cast<int32_t>(next.origin.size()) != n) {
     throw Error(ErrorKind::Backend, "GL backend: rebuild from a Model with " + std::to_string(n) + " points after " +
                                         std::to_string(old_n) + " (points are append-only)");
   }
+  // The shader variants were compiled for the first version's plan; a
+  // topology change adds sutures at most, which step.comp reads from the
+  // spring entries, so the same programs run the next version.
+  if (p->plan.element != plan_.element || p->plan.gravity != plan_.gravity || p->plan.tool != plan_.tool)
+    throw Error(ErrorKind::Backend, "GL backend: a rebuild changed the step's passes beyond sutures");
   make_current();
   // The state comes back once per topology change (an event, not per step):
   // x_t and d_t of the points that stay, copies of their origin's for the new.
-  const gl::PackedModel packed = gl::pack_model(next);
   std::vector<float> x(packed.rest.size()), d(packed.rest.size());
   const GLsizeiptr old_bytes = static_cast<GLsizeiptr>(static_cast<size_t>(old_n) * 4 * sizeof(float));
   glGetNamedBufferSubData(x_[cur_], 0, old_bytes, x.data());
@@ -231,13 +256,7 @@ void GlBackend::rebuild(const Model& next) {
     }
   }
   delete_model_buffers();
-  // The shader variants were compiled for the first version's plan; a
-  // topology change adds sutures at most, which step.comp reads from the
-  // spring entries, so the same programs run the next version.
-  const StepPlan next_plan = make_step_plan(next, tool_);
-  if (next_plan.element != plan_.element || next_plan.gravity != plan_.gravity || next_plan.tool != plan_.tool)
-    throw Error(ErrorKind::Backend, "GL backend: a rebuild changed the step's passes beyond sutures");
-  plan_ = next_plan;
+  plan_ = p->plan;
   model_ = &next;
   upload_model(packed, x, d, std::move(anchors));
   context_->check_errors("GL backend rebuild");

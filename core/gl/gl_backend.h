@@ -48,7 +48,10 @@ class GlBackend final : public Backend {
   Reaction tick(const TickRequest& request) override;
   void attach(const Attachment& attachment) override;
   void release() override;
-  void rebuild(const Model& next) override;
+  // prepare: gl::pack_model (host-side arrays, no GL call); adopt: the
+  // state read back, the buffers re-created and uploaded.
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override;
+  void adopt(std::unique_ptr<PreparedModel> prepared) override;
   void positions(std::vector<Vec3>& out) const override;
   double time() const override { return time_; }
 
@@ -83,7 +86,7 @@ class GlBackend final : public Backend {
   // Writes the sutures' rest lengths at time_ into their spring entries.
   void refresh_suture_rest();
 
-  const Model* model_;  // the current version (rebuild() moves it on)
+  const Model* model_;  // the current version (adopt() moves it on)
   BackendTool tool_;
   GlBackendOptions options_;
   std::unique_ptr<gl::EglContext> context_;

@@ -5,7 +5,6 @@
 #include <cmath>
 
 #include "core/live/latency_stats.h"
-#include "core/mesh/boundary.h"
 #include "core/model/model.h"
 #include "core/sim/contact_stiffness.h"
 #include "core/util/format.h"
@@ -205,7 +204,10 @@ void LiveSession::find_surface(const Model& model) {
   surface_triangles_.clear();
   if (o_.surface_rate <= 0) return;
   std::vector<int32_t> index(static_cast<size_t>(model.npoint()), -1);
-  for (const Tri& f : extract_boundary_faces(model.tet_points)) {
+  // Model::surface is the boundary every version extracted when it was made
+  // (off the tick's path for a client's cut), so a change costs the tick
+  // only this pass over its triangles.
+  for (const Tri& f : model.surface) {
     Tri g;
     for (int k = 0; k < 3; ++k) {
       int32_t& i = index[static_cast<size_t>(f[static_cast<size_t>(k)])];

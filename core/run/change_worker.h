@@ -1,8 +1,9 @@
 #pragma once
 // A topology change off the tick's path (docs/topology.md, "Off the tick's
-// path"): the next Model version and its guaranteed-stable step are made on
-// a worker thread from the positions at the start of the tick that asked for
-// it, while the run loop steps the previous version; the loop swaps it in
+// path"): the next Model version, its guaranteed-stable step and the
+// backend's tables for it (Backend::prepare) are made on a worker thread
+// from the positions at the start of the tick that asked for it, while the
+// run loop steps the previous version; the loop swaps it in (Backend::adopt)
 // later, at a tick the change names (applied_at, a replay) or at the first
 // tick after the worker is done (a live client's cut). While it is busy the
 // loop touches nothing of the TopologyEvents but their read-only active().
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/sim/backend.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/run_events.h"
 
@@ -22,15 +24,18 @@ class ChangeWorker {
   struct Built {
     std::unique_ptr<Model> next;  // null when the change separated nothing
     double guaranteed = 0;        // the next version's guaranteed-stable step, s
+    std::unique_ptr<PreparedModel> prepared;  // `next` packed by the backend's prepare()
+    double prepare_seconds = 0;               // how long prepare() took on the worker
   };
 
   ~ChangeWorker() { abandon(); }
 
   // Starts the change over the tick [t0, t1] of `events` on `current` at
   // positions x (as TopologyEvents::before_tick); `when` as returned by
-  // TopologyEvents::off_path. `current`, `events` and `tool` must outlive it.
+  // TopologyEvents::off_path. `current`, `events`, `tool` and `backend`
+  // must outlive it; the worker calls only backend.prepare().
   void start(TopologyEvents& events, const Model& current, std::vector<Vec3> x, double t0, double t1,
-             const ToolSpec* tool, const OffPathPlan& when);
+             const ToolSpec* tool, const Backend& backend, const OffPathPlan& when);
   bool busy() const { return future_.valid(); }
   // Whether the tick starting at t0 (time step dt, for rounding) swaps it in.
   bool due(double t0, double dt) const;

@@ -128,13 +128,18 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   bool off_path_driver_cut = false;  // the change the worker builds holds the tool driver's cut
   const ToolSpec* tool_spec = scenario.tool ? &scenario.tool->spec : nullptr;
   // Makes `next`, the version `topology` made from *current, the Model the
-  // backend steps from the tick starting at t0. `guaranteed`: its
-  // guaranteed-stable step when the worker computed it; `applied_t`: t0 when
-  // that is later than the tick that made it.
-  const auto adopt = [&](std::unique_ptr<Model> next, double t0, std::optional<double> guaranteed,
+  // backend steps from the tick starting at t0. `built`: what the worker made
+  // off the tick's path (the guaranteed-stable step and the backend's
+  // prepared tables, which leave only their adoption on the tick); `applied_t`:
+  // t0 when that is later than the tick that made it.
+  const auto adopt = [&](std::unique_ptr<Model> next, double t0, ChangeWorker::Built* built,
                          std::optional<double> applied_t) {
     const auto rebuild_start = Clock::now();
-    backend.rebuild(*next);
+    if (built) {
+      backend.adopt(std::move(built->prepared));
+    } else {
+      backend.rebuild(*next);
+    }
     const double rebuild_seconds = seconds_since(rebuild_start);
     // From here the backend steps `next`; the previous version lives until
     // the end of this call (the log compares the two).
@@ -148,17 +153,20 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
     // needed to decide.
     const auto check_start = Clock::now();
     const CriticalStepOptions step_options = critical_step_options(*current, tool_spec);
-    if (!guaranteed) guaranteed = topology->guaranteed_step(previous, *current, step_options);
+    const double guaranteed = built ? built->guaranteed : topology->guaranteed_step(previous, *current, step_options);
     std::optional<StabilityReport> report;
-    if (!(time.dt <= *guaranteed)) report = estimate_critical_step(*current, step_options);
-    topology->changed(previous, *current, rebuild_seconds, *guaranteed, report ? &*report : nullptr,
-                      seconds_since(check_start), applied_t);
+    if (!(time.dt <= guaranteed)) report = estimate_critical_step(*current, step_options);
+    ChangeTimes times;
+    times.rebuild_seconds = rebuild_seconds;
+    times.check_seconds = seconds_since(check_start);
+    if (built) times.prepare_seconds = built->prepare_seconds;
+    topology->changed(previous, *current, times, guaranteed, report ? &*report : nullptr, applied_t);
     if (report) check_step_after_change(*report, scenario, t0, options.allow_unstable);
   };
   // Swaps in the change built off the tick's path at the tick starting at t0.
   const auto finish_off_path = [&](double t0) {
     ChangeWorker::Built built = off_path.take();
-    if (built.next) adopt(std::move(built.next), t0, built.guaranteed, t0);
+    if (built.next) adopt(std::move(built.next), t0, &built, t0);
     if (off_path_driver_cut) options.tool_driver->cut_applied(t0);
     off_path_driver_cut = false;
   };
@@ -208,12 +216,12 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
         backend.positions(event_positions);
         const OffPathPlan plan = topology->off_path(t0, t1, time.dt);
         if (plan.off) {
-          off_path.start(*topology, *current, event_positions, t0, t1, tool_spec, plan);
+          off_path.start(*topology, *current, event_positions, t0, t1, tool_spec, backend, plan);
           off_path_driver_cut = driver_cut;
         } else {
           auto next = std::make_unique<Model>();
           if (topology->before_tick(t0, t1, *current, event_positions, *next))
-            adopt(std::move(next), t0, std::nullopt, std::nullopt);
+            adopt(std::move(next), t0, nullptr, std::nullopt);
           if (driver_cut) options.tool_driver->cut_applied(t0);  // with the tick's other events, at once
         }
       }

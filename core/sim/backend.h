@@ -53,6 +53,18 @@ struct Plan {
   int32_t syncs_per_step = 0;        // CPU-GPU synchronisations per step
 };
 
+// A Model version packed by Backend::prepare, for adopt() on the backend
+// that made it. `next` must outlive it and the backend.
+class PreparedModel {
+ public:
+  explicit PreparedModel(const Model& next) : next_(&next) {}
+  virtual ~PreparedModel() = default;
+  const Model& model() const { return *next_; }
+
+ private:
+  const Model* next_;
+};
+
 class Backend {
  public:
   virtual ~Backend() = default;
@@ -92,8 +104,19 @@ class Backend {
   // next rebuild. x_t and x_{t-1} of existing points carry over exactly;
   // appended points start with the x_t and x_{t-1} of the point they copy
   // (Model::origin), so a cut adds no velocity jump. Attachments stay on the
-  // same ids. Between ticks only.
-  virtual void rebuild(const Model& next) = 0;
+  // same ids. Between ticks only. The same as adopt(prepare(next)).
+  void rebuild(const Model& next) { adopt(prepare(next)); }
+  // The part of a rebuild that needs nothing of the run: `next` packed into
+  // this backend's tables (precision, slot order, kernel streams, host-side
+  // buffer contents). Changes nothing and reads no state, so a run may call
+  // it on another thread while this backend ticks (the topology change's
+  // worker, core/run/change_worker.h).
+  virtual std::unique_ptr<PreparedModel> prepare(const Model& next) const = 0;
+  // The rest of the rebuild, between ticks: the state carried over by ids
+  // as rebuild() says, the prepared tables swapped in (GL: uploaded). Ticks
+  // after adopt(prepare(next)) are bit for bit those after rebuild(next),
+  // however many ticks ran between the two calls.
+  virtual void adopt(std::unique_ptr<PreparedModel> prepared) = 0;
   // Simulated time at the end of the last tick, s.
   virtual double time() const = 0;
 };

@@ -72,16 +72,54 @@ struct Soa3 {
   }
 };
 
+// Everything a CpuBackend derives from one Model version, in its precision
+// and slot order, with the scratch sized by it: packed off the tick's path
+// by prepare() and swapped in by adopt() with one move.
+template <class Real>
+struct CpuTables {
+  const Model* model = nullptr;  // the version they were packed from
+  StepPlan plan;                 // the passes of its step
+  std::unique_ptr<Avx512Kernel<Real>> fast;  // set when the AVX-512 kernel runs this version
+  std::vector<ChunkReaction> fast_partial;   // its tool reaction per chunk
+  Soa3<Real> rest;                   // X, rest positions (npoint)
+  Soa3<Real> pos;                    // x = X + u of the current step (npoint)
+  Soa3<Real> u_next, d_next;         // u_{t+1}, d_{t+1} (npoint)
+  std::vector<int32_t> spring_other;  // per slot, self for padding (nentry)
+  std::vector<Real> spring_rest, spring_k, spring_d;  // per slot (nentry); k < 0 marks a suture
+  std::vector<std::pair<int32_t, int32_t>> suture_slots;  // (slot, spring) of every suture slot
+  std::vector<int32_t> tet_a, tet_b, tet_c;  // per slot, self for padding (nentry); empty without volume
+  std::vector<Real> tet_rest, tet_k;          // per slot (nentry); zero with the nodal term; k_t with the shear element
+  std::array<std::vector<Real>, 9> shear_g;    // shear element: g_a, g_b, g_c (x, y, z each) per slot (nentry); else empty
+  std::vector<Real> node_k, node_rest, node_q;  // nodal term: k_a, V_a^r, pressure (npoint); else empty
+  std::vector<Real> node_inv_k;                     // smoothed shear element: 1/K_a (npoint); else empty
+  std::array<std::vector<Real>, 9> node_stress;     // its P(Fbar_a), row-major (npoint each); else empty
+  Real smoothed_share = 0;                          // its s (Model::shear_smoothed_share)
+  std::vector<int32_t> spring_width, tet_width;  // slots per lane group (nchunk x groups)
+  int32_t groups_per_chunk = 1;
+  std::vector<Real> mass, inv_mass;
+  std::vector<Real> tool_scale;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint; npad for the AVX-512 kernel, 0 for padding)
+  std::vector<ChunkReaction> partial;   // tool reaction per chunk (nchunk)
+  SurfaceContact<Real> surface;         // the surface-contact pass (a pushing tool on the surface)
+};
+
+// What CpuBackend::prepare hands to adopt.
+template <class Real>
+struct CpuPrepared final : PreparedModel {
+  explicit CpuPrepared(const Model& next) : PreparedModel(next) {}
+  CpuTables<Real> tables;
+};
+
 template <class Real>
 class CpuBackend final : public Backend {
   // Lanes evaluated together: one 512-bit register of Real.
   static constexpr int32_t kLanes = 64 / static_cast<int32_t>(sizeof(Real));
   // The AVX-512 kernel of this precision.
   using FastKernel = Avx512Kernel<Real>;
+  using Tables = CpuTables<Real>;
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options, StepTiming timing)
-      : model_(&model), tool_(tool), kernel_choice_(options.kernel),
+      : tool_(tool), kernel_choice_(options.kernel),
         threads_(options.threads > 0 ? options.threads : 1), timing_(std::move(timing)) {
     // State is the displacement u = x - X from rest and the last step's
     // increment d = u_t - u_{t-1}. In float, x itself would round away the
@@ -93,7 +131,8 @@ class CpuBackend final : public Backend {
     u_.assign(n, 0);
     d_.assign(n, 0);
     attached_.assign(n, -1);
-    pack();
+    t_ = pack(model);
+    install();
     std::string how;
     if (options.threads <= 0 && omp_get_max_threads() > 1) {
       how = choose_threads_by_timing();
@@ -102,13 +141,21 @@ class CpuBackend final : public Backend {
     device_ = cpu_model_name() + ", " + threads_text(threads_) + how;
   }
 
-  void rebuild(const Model& next) override {
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
+    auto prepared = std::make_unique<CpuPrepared<Real>>(next);
+    prepared->tables = pack(next);
+    return prepared;
+  }
+
+  void adopt(std::unique_ptr<PreparedModel> prepared) override {
+    auto* p = dynamic_cast<CpuPrepared<Real>*>(prepared.get());
+    if (!p) throw Error(ErrorKind::Backend, "cpu backend: adopt() of a version it did not prepare");
+    const Model& next = p->model();
     const size_t old_n = u_.x.size(), n = static_cast<size_t>(next.npoint());
     if (n < old_n || next.origin.size() != n)
       throw Error(ErrorKind::Backend, "cpu backend: rebuild from a Model with " + std::to_string(n) +
                                           " points after " + std::to_string(old_n) + " (points are append-only)");
-    model_ = &next;
-    if (fast_) pull_fast_state();
+    if (t_.fast) pull_fast_state();
     // An appended point copies its origin's displacement and increment: its
     // rest position is the origin's, so it starts at the same x_t and x_{t-1}.
     for (Soa3<Real>* s : {&u_, &d_}) {
@@ -116,7 +163,11 @@ class CpuBackend final : public Backend {
       for (size_t i = old_n; i < n; ++i) s->copy(next.origin[i], i);
     }
     attached_.resize(n, -1);
-    pack();
+    // The previous version's tables leave with `prepared`; friction's
+    // anchors stay (ids are kept), so a grip holds through a cut.
+    std::swap(t_, p->tables);
+    t_.surface.take_anchors(p->tables.surface);
+    install();
   }
 
   std::string name() const override { return "cpu"; }
@@ -129,31 +180,31 @@ class CpuBackend final : public Backend {
                 (choice_->probes() > 1 ? "s" : "") + ", " + std::to_string(choice_->switches()) + " switch" +
                 (choice_->switches() == 1 ? "" : "es") + ", now " + threads_text(choice_->chosen());
     }
-    return device_ + retimed + ", " + (fast_ ? "avx512" : "generic") + " kernel";
+    return device_ + retimed + ", " + (t_.fast ? "avx512" : "generic") + " kernel";
   }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
 
-  const StepPlan& step_plan() const override { return plan_; }
+  const StepPlan& step_plan() const override { return t_.plan; }
 
   Plan plan() const override {
     Plan plan;
-    for (Pass pass : plan_.passes) plan.passes.push_back({pass_name(pass), pass_detail(pass)});
-    if (plan_.sutures > 0)
-      plan.per_tick.push_back({"suture-rest", std::to_string(plan_.sutures) + " sutures' rest lengths from their schedule"});
-    const auto& m = *model_;
+    for (Pass pass : t_.plan.passes) plan.passes.push_back({pass_name(pass), pass_detail(pass)});
+    if (t_.plan.sutures > 0)
+      plan.per_tick.push_back({"suture-rest", std::to_string(t_.plan.sutures) + " sutures' rest lengths from their schedule"});
+    const auto& m = *t_.model;
     const size_t real = sizeof(Real), n = static_cast<size_t>(m.npoint());
-    if (fast_) {
+    if (t_.fast) {
       plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
-                              fast_->bytes()});
+                              t_.fast->bytes()});
     } else {
       plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
       plan.buffers.push_back({"mass, 1/mass", 2 * n * real});
       plan.buffers.push_back({"spring slots (other, rest, k, d)",
                               m.layout.springs.item.size() * (sizeof(int32_t) + 3 * real)});
       const size_t tet_slots = m.layout.tets.item.size();
-      switch (plan_.element) {
+      switch (t_.plan.element) {
         case ElementTerm::NodalVolume:
           plan.buffers.push_back({"tet slots (3 others)", tet_slots * 3 * sizeof(int32_t)});
           plan.buffers.push_back({"nodal k, rest volume, pressure", 3 * n * real});
@@ -171,8 +222,8 @@ class CpuBackend final : public Backend {
         case ElementTerm::None: break;
       }
     }
-    if (plan_.tool != ToolTerm::None)
-      plan.buffers.push_back({"tool partial sums per chunk", partial_.size() * sizeof(ChunkReaction)});
+    if (t_.plan.tool != ToolTerm::None)
+      plan.buffers.push_back({"tool partial sums per chunk", t_.partial.size() * sizeof(ChunkReaction)});
     plan.dispatches_per_step = 1;
     plan.syncs_per_step = 0;
     return plan;
@@ -180,7 +231,7 @@ class CpuBackend final : public Backend {
 
   // What this backend's kernel does for one pass of the step plan.
   std::string pass_detail(Pass pass) const {
-    const auto& m = *model_;
+    const auto& m = *t_.model;
     const std::string lanes = std::to_string(kLanes) + " " + precision() + " lanes";
     const std::string tets_per_vertex = std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                         std::to_string(m.layout.tets.item.size()) + " slots)";
@@ -188,22 +239,22 @@ class CpuBackend final : public Backend {
                                     " per batch, ";
     switch (pass) {
       case Pass::NodalPressure:
-        return fast_ ? tet_batches + "6 V_t into their vertices' nodal volumes (2 fixed slices), a barrier, "
-                                     "the pressures per point, a barrier (avx512 kernel)"
-                     : "nodal volumes and pressures, " + tets_per_vertex + ", then a barrier";
+        return t_.fast ? tet_batches + "6 V_t into their vertices' nodal volumes (2 fixed slices), a barrier, "
+                                       "the pressures per point, a barrier (avx512 kernel)"
+                       : "nodal volumes and pressures, " + tets_per_vertex + ", then a barrier";
       case Pass::ShearSmoothing:
         return "every point's stress on its node-averaged deformation gradient, " +
-               (fast_ ? "gathered over its spring slots, then a barrier (avx512 kernel)"
-                      : tets_per_vertex + ", then a barrier");
+               (t_.fast ? "gathered over its spring slots, then a barrier (avx512 kernel)"
+                        : tets_per_vertex + ", then a barrier");
       case Pass::Springs:
         return std::to_string(m.nspring()) + " springs gathered from both ends (" +
                std::to_string(m.layout.springs.item.size()) + " slots)" + sutures_detail(m);
       case Pass::Volume:
-        return fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex;
+        return t_.fast ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex;
       case Pass::ShearElement:
-        return std::string(plan_.element == ElementTerm::SmoothedShear ? "smoothed " : "") +
+        return std::string(t_.plan.element == ElementTerm::SmoothedShear ? "smoothed " : "") +
                "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") +
-               "), " + (fast_ ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
+               "), " + (t_.fast ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
       case Pass::SurfaceContact:
         return std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
@@ -212,12 +263,12 @@ class CpuBackend final : public Backend {
                "triangle's penalty at its closest point, spread to its corners (box tests on the step's threads, "
                "penalties on one thread in triangle order)";
       case Pass::ToolContact:
-        return plan_.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"
-               : plan_.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
-                                                 : "grasp attachment springs";
+        return t_.plan.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"
+               : t_.plan.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
+                                                   : "grasp attachment springs";
       case Pass::Integrate:
         return "position Verlet with drag, fused with the force passes (" + lanes +
-               (fast_ ? ", avx512 kernel)" : ", generic kernel)");
+               (t_.fast ? ", avx512 kernel)" : ", generic kernel)");
     }
     return "";
   }
@@ -239,19 +290,19 @@ class CpuBackend final : public Backend {
 
   void positions(std::vector<Vec3>& out) const override {
     out.resize(u_.x.size());
-    if (fast_) {
-      const Real *ux = fast_->displacement(0), *uy = fast_->displacement(1), *uz = fast_->displacement(2);
-      for (size_t i = 0; i < out.size(); ++i) out[i] = model_->rest_position[i] + Vec3(ux[i], uy[i], uz[i]);
+    if (t_.fast) {
+      const Real *ux = t_.fast->displacement(0), *uy = t_.fast->displacement(1), *uz = t_.fast->displacement(2);
+      for (size_t i = 0; i < out.size(); ++i) out[i] = t_.model->rest_position[i] + Vec3(ux[i], uy[i], uz[i]);
       return;
     }
-    for (size_t i = 0; i < out.size(); ++i) out[i] = model_->rest_position[i] + displacement(u_, i);
+    for (size_t i = 0; i < out.size(); ++i) out[i] = t_.model->rest_position[i] + displacement(u_, i);
   }
 
   void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override {
     if (x.size() != u_.x.size() || x_prev.size() != u_.x.size())
       throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(u_.x.size()) + " positions");
     for (size_t i = 0; i < x.size(); ++i) {
-      const Vec3 u = x[i] - model_->rest_position[i], d = x[i] - x_prev[i];
+      const Vec3 u = x[i] - t_.model->rest_position[i], d = x[i] - x_prev[i];
       u_.x[i] = static_cast<Real>(u.x());
       u_.y[i] = static_cast<Real>(u.y());
       u_.z[i] = static_cast<Real>(u.z());
@@ -259,7 +310,7 @@ class CpuBackend final : public Backend {
       d_.y[i] = static_cast<Real>(d.y());
       d_.z[i] = static_cast<Real>(d.z());
     }
-    if (fast_) push_fast_state();
+    if (t_.fast) push_fast_state();
   }
 
   Reaction tick(const TickRequest& request) override {
@@ -267,15 +318,15 @@ class CpuBackend final : public Backend {
     ctx.dt = static_cast<Real>(request.dt);
     ctx.inv_dt = static_cast<Real>(1.0 / request.dt);
     ctx.dt2 = static_cast<Real>(request.dt * request.dt);
-    ctx.drag = static_cast<Real>(1.0 - model_->viscous_damping * request.dt);
-    ctx.shear_damping = static_cast<Real>(model_->shear_damping_time / request.dt);
-    for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(model_->gravity[k]);
+    ctx.drag = static_cast<Real>(1.0 - t_.model->viscous_damping * request.dt);
+    ctx.shear_damping = static_cast<Real>(t_.model->shear_damping_time / request.dt);
+    for (int k = 0; k < 3; ++k) ctx.gravity[k] = static_cast<Real>(t_.model->gravity[k]);
     ctx.tool_radius = static_cast<Real>(tool_.radius);
     ctx.tool_k = static_cast<Real>(tool_.contact_stiffness);
-    ctx.tool = request.tool_active ? plan_.tool : ToolTerm::None;
+    ctx.tool = request.tool_active ? t_.plan.tool : ToolTerm::None;
     ctx.attached = attached_.data();
     ctx.attach_offset = attach_offset_.data();
-    ctx.tool_scale = tool_scale_.data();
+    ctx.tool_scale = t_.tool_scale.data();
     refresh_suture_rest();
     Reaction reaction;
     auto substep = [&](int32_t s) {
@@ -288,8 +339,8 @@ class CpuBackend final : public Backend {
       }
       ctx.tool_reach = static_cast<Real>(placed.reach());
       if (ctx.tool == ToolTerm::Surface) surface_contact(ctx, placed);
-      reaction = fast_ ? fast_step(ctx) : step(ctx);
-      if (ctx.tool == ToolTerm::Surface) reaction.grip = static_cast<double>(surface_.grip());
+      reaction = t_.fast ? fast_step(ctx) : step(ctx);
+      if (ctx.tool == ToolTerm::Surface) reaction.grip = static_cast<double>(t_.surface.grip());
       time_ += request.dt;
     };
     if (!choice_) {
@@ -313,30 +364,31 @@ class CpuBackend final : public Backend {
   // Calls f(entry, p) for every slot of `table`, padding included, with the
   // point p whose lane holds it (chunk by chunk, no search per entry).
   template <class F>
-  void for_each_slot(const GatherTable& table, F f) const {
-    const int32_t c = model_->layout.chunk_size;
+  static void for_each_slot(const GatherTable& table, int32_t c, F f) {
     for (int32_t chunk = 0; chunk + 1 < static_cast<int32_t>(table.chunk_offset.size()); ++chunk)
       for (int32_t e = table.chunk_offset[chunk]; e < table.chunk_offset[chunk + 1]; ++e)
         f(e, chunk * c + (e - table.chunk_offset[chunk]) % c);
   }
 
-  // Everything derived from the Model, in the backend's precision and slot
-  // order; the constructor and rebuild() share it, so a topology change needs
-  // no code of its own here.
-  void pack() {
-    const Model& model = *model_;
-    plan_ = make_step_plan(model, tool_);
+  // Everything derived from `model`, in the backend's precision and slot
+  // order; the constructor and prepare() share it, so a topology change needs
+  // no code of its own here. Reads nothing of the run (state, time, thread
+  // count): prepare() runs it on another thread while the backend ticks.
+  Tables pack(const Model& model) const {
+    Tables t;
+    t.model = &model;
+    t.plan = make_step_plan(model, tool_);
     const int32_t n = model.npoint();
     const auto& layout = model.layout;
-    rest_.assign(n, 0);
+    t.rest.assign(n, 0);
     for (int32_t i = 0; i < n; ++i) {
-      rest_.x[i] = static_cast<Real>(model.rest_position[i].x());
-      rest_.y[i] = static_cast<Real>(model.rest_position[i].y());
-      rest_.z[i] = static_cast<Real>(model.rest_position[i].z());
+      t.rest.x[i] = static_cast<Real>(model.rest_position[i].x());
+      t.rest.y[i] = static_cast<Real>(model.rest_position[i].y());
+      t.rest.z[i] = static_cast<Real>(model.rest_position[i].z());
     }
-    pos_ = rest_;
-    u_next_.assign(n, 0);
-    d_next_.assign(n, 0);
+    t.pos = t.rest;
+    t.u_next.assign(n, 0);
+    t.d_next.assign(n, 0);
 
     // Per-slot copies of the parameters in the backend's precision, one
     // contiguous stream per slot. Padding slots point at their own point
@@ -345,164 +397,169 @@ class CpuBackend final : public Backend {
     // from the rounded rest positions exactly as the loops compute them, so
     // the rest state is force-free in either precision.
     const auto& springs = layout.springs;
-    spring_other_.resize(springs.item.size());
-    spring_rest_.assign(springs.item.size(), 0);
-    spring_k_.assign(springs.item.size(), 0);
-    spring_d_.assign(springs.item.size(), 0);
-    suture_slots_.clear();
-    for_each_slot(springs, [&](int32_t e, int32_t p) {
+    t.spring_other.resize(springs.item.size());
+    t.spring_rest.assign(springs.item.size(), 0);
+    t.spring_k.assign(springs.item.size(), 0);
+    t.spring_d.assign(springs.item.size(), 0);
+    t.suture_slots.clear();
+    for_each_slot(springs, layout.chunk_size, [&](int32_t e, int32_t p) {
       const int32_t s = springs.item[e];
-      spring_other_[e] = s < 0 ? p : layout.spring_other[e];
+      t.spring_other[e] = s < 0 ? p : layout.spring_other[e];
       if (s < 0) return;
-      spring_rest_[e] = rest_distance(p, spring_other_[e]);
-      spring_k_[e] = static_cast<Real>(model.spring_k[s]);
-      spring_d_[e] = static_cast<Real>(model.spring_d[s]);
+      t.spring_rest[e] = rest_distance(t.rest, p, t.spring_other[e]);
+      t.spring_k[e] = static_cast<Real>(model.spring_k[s]);
+      t.spring_d[e] = static_cast<Real>(model.spring_d[s]);
       if (s >= model.first_suture()) {
         // A suture: tension only, marked by a negative stiffness in its slot
         // (no extra stream for the loop to read); its rest length follows
         // the schedule (refresh_suture_rest).
-        spring_k_[e] = -spring_k_[e];
-        suture_slots_.push_back({e, s});
+        t.spring_k[e] = -t.spring_k[e];
+        t.suture_slots.push_back({e, s});
       }
     });
-    refresh_suture_rest();
     if (model.has_volume() || model.has_shear_element()) {
       const auto& tets = layout.tets;
-      for (auto* v : {&tet_a_, &tet_b_, &tet_c_}) v->resize(tets.item.size());
+      for (auto* v : {&t.tet_a, &t.tet_b, &t.tet_c}) v->resize(tets.item.size());
       // The nodal term reads only the vertices of each slot.
       const size_t per_tet = model.has_nodal_volume() ? 0 : tets.item.size();
-      tet_rest_.assign(per_tet, 0);
-      tet_k_.assign(model.has_shear_element() ? tets.item.size() : per_tet, 0);
+      t.tet_rest.assign(per_tet, 0);
+      t.tet_k.assign(model.has_shear_element() ? tets.item.size() : per_tet, 0);
       // The shear element: rest gradients g_a, g_b, g_c of each slot's
       // others (padding: zero, no force).
-      for (auto& g : shear_g_) g.assign(model.has_shear_element() ? tets.item.size() : 0, 0);
-      for_each_slot(tets, [&](int32_t e, int32_t p) {
-        const int32_t t = tets.item[e];
+      for (auto& g : t.shear_g) g.assign(model.has_shear_element() ? tets.item.size() : 0, 0);
+      for_each_slot(tets, layout.chunk_size, [&](int32_t e, int32_t p) {
+        const int32_t tet = tets.item[e];
         const auto& o = layout.tet_others[e];
-        tet_a_[e] = t < 0 ? p : o[0];
-        tet_b_[e] = t < 0 ? p : o[1];
-        tet_c_[e] = t < 0 ? p : o[2];
-        if (t < 0 || model.has_nodal_volume()) return;
+        t.tet_a[e] = tet < 0 ? p : o[0];
+        t.tet_b[e] = tet < 0 ? p : o[1];
+        t.tet_c[e] = tet < 0 ? p : o[2];
+        if (tet < 0 || model.has_nodal_volume()) return;
         if (model.has_shear_element()) {
           for (int k = 0; k < 3; ++k)
             for (int axis = 0; axis < 3; ++axis)
-              shear_g_[3 * k + axis][e] = static_cast<Real>(shape_gradient_of(model, t, o[k])[axis]);
-          tet_k_[e] = static_cast<Real>(model.tet_shear_k[t]);
+              t.shear_g[3 * k + axis][e] = static_cast<Real>(shape_gradient_of(model, tet, o[k])[axis]);
+          t.tet_k[e] = static_cast<Real>(model.tet_shear_k[tet]);
           return;
         }
-        tet_rest_[e] = rest_volume(p, o[0], o[1], o[2]);
-        tet_k_[e] = static_cast<Real>(model.tet_k[t]);
+        t.tet_rest[e] = rest_volume(t.rest, p, o[0], o[1], o[2]);
+        t.tet_k[e] = static_cast<Real>(model.tet_k[tet]);
       });
     }
-    mass_.resize(n);
-    inv_mass_.resize(n);
-    tool_scale_.resize(n);
-    for (int32_t i = 0; i < n; ++i) tool_scale_[i] = static_cast<Real>(model.tool_scale(i));
+    t.mass.resize(n);
+    t.inv_mass.resize(n);
+    t.tool_scale.resize(n);
+    for (int32_t i = 0; i < n; ++i) t.tool_scale[i] = static_cast<Real>(model.tool_scale(i));
     for (int32_t i = 0; i < n; ++i) {
-      mass_[i] = static_cast<Real>(model.mass[i]);
-      inv_mass_[i] = static_cast<Real>(model.inv_mass[i]);
+      t.mass[i] = static_cast<Real>(model.mass[i]);
+      t.inv_mass[i] = static_cast<Real>(model.inv_mass[i]);
     }
     // Slots per group of lanes: the widest point of the group.
     const int32_t groups_per_chunk = (layout.chunk_size + kLanes - 1) / kLanes;
-    spring_width_.assign(static_cast<size_t>(layout.nchunk) * groups_per_chunk, 0);
-    tet_width_.assign(spring_width_.size(), 0);
+    t.spring_width.assign(static_cast<size_t>(layout.nchunk) * groups_per_chunk, 0);
+    t.tet_width.assign(t.spring_width.size(), 0);
     for (int32_t p = 0; p < n; ++p) {
       const int32_t c = p / layout.chunk_size, g = (p % layout.chunk_size) / kLanes;
-      auto& sw = spring_width_[c * groups_per_chunk + g];
-      auto& tw = tet_width_[c * groups_per_chunk + g];
+      auto& sw = t.spring_width[c * groups_per_chunk + g];
+      auto& tw = t.tet_width[c * groups_per_chunk + g];
       sw = std::max(sw, springs.count[p]);
       tw = std::max(tw, layout.tets.count[p]);
     }
-    groups_per_chunk_ = groups_per_chunk;
-    partial_.resize(layout.nchunk);
+    t.groups_per_chunk = groups_per_chunk;
+    t.partial.resize(layout.nchunk);
     if (model.has_nodal_volume()) {
-      // Rest nodal volumes by the very pass the step runs (pos_ is at rest
+      // Rest nodal volumes by the very pass the step runs (t.pos is at rest
       // here), so the rest state is exactly pressure-free in either precision.
-      node_k_.resize(n);
-      for (int32_t i = 0; i < n; ++i) node_k_[i] = static_cast<Real>(model.point_volume_k[i]);
-      node_rest_.assign(n, 0);
-      node_q_.assign(n, 0);
-      for (int32_t c = 0; c < layout.nchunk; ++c) nodal_volume_chunk(c, node_rest_.data());
+      t.node_k.resize(n);
+      for (int32_t i = 0; i < n; ++i) t.node_k[i] = static_cast<Real>(model.point_volume_k[i]);
+      t.node_rest.assign(n, 0);
+      t.node_q.assign(n, 0);
+      for (int32_t c = 0; c < layout.nchunk; ++c) nodal_volume_chunk(t, c, t.node_rest.data());
     } else {
-      node_k_.clear(), node_rest_.clear(), node_q_.clear();
+      t.node_k.clear(), t.node_rest.clear(), t.node_q.clear();
     }
     // The smoothed shear element: 1/K_p per point (0 in no tet: its stress
     // stays P(I) = 0) and the stresses, rewritten every step.
-    node_inv_k_.clear();
-    for (auto& a : node_stress_) a.assign(model.has_smoothed_shear() ? n : 0, 0);
+    t.node_inv_k.clear();
+    for (auto& a : t.node_stress) a.assign(model.has_smoothed_shear() ? n : 0, 0);
     if (model.has_smoothed_shear()) {
-      node_inv_k_.resize(n);
+      t.node_inv_k.resize(n);
       for (int32_t i = 0; i < n; ++i)
-        node_inv_k_[i] = model.point_shear_k[i] > 0 ? static_cast<Real>(1 / model.point_shear_k[i]) : Real(0);
+        t.node_inv_k[i] = model.point_shear_k[i] > 0 ? static_cast<Real>(1 / model.point_shear_k[i]) : Real(0);
     }
-    smoothed_share_ = static_cast<Real>(model.shear_smoothed_share);
-    pack_fast();
-    if (plan_.tool == ToolTerm::Surface) surface_.pack(model, tool_scale_, tool_scale_.size());
+    t.smoothed_share = static_cast<Real>(model.shear_smoothed_share);
+    pack_fast(t);
+    if (t.plan.tool == ToolTerm::Surface) t.surface.pack(model, t.tool_scale, t.tool_scale.size());
+    return t;
   }
 
   // The surface-contact pass at this substep's positions (X + u): the
   // kernels' tool pass then adds its per-point forces.
   void surface_contact(KernelStepInputs<Real>& ctx, const ToolPlacement& placed) {
-    const std::array<const Real*, 3> rest = {rest_.x.data(), rest_.y.data(), rest_.z.data()};
+    const std::array<const Real*, 3> rest = {t_.rest.x.data(), t_.rest.y.data(), t_.rest.z.data()};
     const std::array<const Real*, 3> u =
-        fast_ ? std::array<const Real*, 3>{fast_->displacement(0), fast_->displacement(1), fast_->displacement(2)}
-              : std::array<const Real*, 3>{u_.x.data(), u_.y.data(), u_.z.data()};
-    surface_.evaluate(rest, u, placed, ctx.tool_k, tool_.friction, threads_);
-    ctx.contact_slot = surface_.slot();
-    ctx.contact_force = surface_.force();
+        t_.fast ? std::array<const Real*, 3>{t_.fast->displacement(0), t_.fast->displacement(1), t_.fast->displacement(2)}
+                : std::array<const Real*, 3>{u_.x.data(), u_.y.data(), u_.z.data()};
+    t_.surface.evaluate(rest, u, placed, ctx.tool_k, tool_.friction, threads_);
+    ctx.contact_slot = t_.surface.slot();
+    ctx.contact_force = t_.surface.force();
   }
 
   // Sutures tighten on their schedule: rest lengths at the start of the tick,
   // constant over its substeps. The few suture slots only; nothing allocates.
   void refresh_suture_rest() {
-    for (const auto& [e, s] : suture_slots_) {
-      spring_rest_[e] = static_cast<Real>(model_->spring_rest_at(s, time_));
-      if (fast_) fast_->set_spring_rest(e, spring_rest_[e]);
+    for (const auto& [e, s] : t_.suture_slots) {
+      t_.spring_rest[e] = static_cast<Real>(t_.model->spring_rest_at(s, time_));
+      if (t_.fast) t_.fast->set_spring_rest(e, t_.spring_rest[e]);
     }
   }
 
   // The AVX-512 kernel packs its own streams from the same Model; while it
-  // runs, it holds the state (u_, d_ are filled from it only for a rebuild).
-  void pack_fast() {
-    const std::string refusal = avx512_refusal(plan_, *model_);
+  // runs, it holds the state (u_, d_ are filled from it only for a rebuild;
+  // install() puts the state in).
+  void pack_fast(Tables& t) const {
+    const std::string refusal = avx512_refusal(t.plan, *t.model);
     if (kernel_choice_ == CpuKernel::Avx512 && !refusal.empty())
       throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
-    if (kernel_choice_ == CpuKernel::Generic || !refusal.empty()) {
-      fast_.reset();
-      return;
-    }
-    if (!fast_) fast_ = std::make_unique<FastKernel>();
-    fast_->pack(*model_, plan_);
-    refresh_suture_rest();
-    fast_partial_.resize(fast_->nchunk());
-    // The kernel reads attachment indices a register of points at a time, padding included.
-    const size_t npad = static_cast<size_t>(fast_->nchunk()) * model_->layout.chunk_size;
-    attached_.resize(std::max(attached_.size(), npad), -1);
+    if (kernel_choice_ == CpuKernel::Generic || !refusal.empty()) return;
+    t.fast = std::make_unique<FastKernel>();
+    t.fast->pack(*t.model, t.plan);
+    t.fast_partial.resize(t.fast->nchunk());
     // Padding lanes (at the origin, no mass) may fall inside a push tool: scale 0.
-    tool_scale_.resize(std::max(tool_scale_.size(), npad), 0);
-    push_fast_state();
+    t.tool_scale.resize(std::max(t.tool_scale.size(), npad_of(t)), 0);
+  }
+  // Points the AVX-512 kernel reads a register at a time, padding included (0 without it).
+  static size_t npad_of(const Tables& t) {
+    return t.fast ? static_cast<size_t>(t.fast->nchunk()) * t.model->layout.chunk_size : 0;
+  }
+  // Makes t_ (just packed) the tables the backend steps: the state u_, d_
+  // (npoint of t_.model) into its kernel, the sutures' rest lengths at time_.
+  void install() {
+    // The kernel reads attachment indices a register of points at a time, padding included.
+    attached_.resize(std::max(attached_.size(), npad_of(t_)), -1);
+    refresh_suture_rest();
+    if (t_.fast) push_fast_state();
   }
   void push_fast_state() {
     for (size_t i = 0; i < u_.x.size(); ++i) {
       const Real u[3] = {u_.x[i], u_.y[i], u_.z[i]}, d[3] = {d_.x[i], d_.y[i], d_.z[i]};
-      fast_->set_point(static_cast<int32_t>(i), u, d);
+      t_.fast->set_point(static_cast<int32_t>(i), u, d);
     }
   }
   void pull_fast_state() {
     Real u[3], d[3];
     for (size_t i = 0; i < u_.x.size(); ++i) {
-      fast_->get_point(static_cast<int32_t>(i), u, d);
+      t_.fast->get_point(static_cast<int32_t>(i), u, d);
       u_.x[i] = u[0], u_.y[i] = u[1], u_.z[i] = u[2];
       d_.x[i] = d[0], d_.y[i] = d[1], d_.z[i] = d[2];
     }
   }
 
   Reaction fast_step(const KernelStepInputs<Real>& in) {
-    fast_->step(in, threads_, fast_partial_);
+    t_.fast->step(in, threads_, t_.fast_partial);
     Reaction reaction;
     if (in.tool != ToolTerm::None) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
-      for (const ChunkReaction& p : fast_partial_) {
+      for (const ChunkReaction& p : t_.fast_partial) {
         reaction.force += p.force;
         reaction.torque += p.torque;
         reaction.contacts += p.contacts;
@@ -521,11 +578,11 @@ class CpuBackend final : public Backend {
     const int all = omp_get_max_threads();
     KernelStepInputs<Real> ctx{};
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
-    ctx.shear_damping = static_cast<Real>(model_->shear_damping_time * 1e6);
+    ctx.shear_damping = static_cast<Real>(t_.model->shear_damping_time * 1e6);
     auto time_steps = [&](int threads, int32_t steps) {
       threads_ = threads;
       return 1e3 * timed(steps, [&] {
-               for (int32_t s = 0; s < steps; ++s) fast_ ? fast_step(ctx) : step(ctx);
+               for (int32_t s = 0; s < steps; ++s) t_.fast ? fast_step(ctx) : step(ctx);
              }) / steps;
     };
     // Warm-up: the first parallel step also starts the thread pool.
@@ -538,7 +595,7 @@ class CpuBackend final : public Backend {
     threads_ = best[1] < best[0] ? all : 1;
     u_.assign(u_.x.size(), 0);
     d_.assign(d_.x.size(), 0);
-    if (fast_) push_fast_state();
+    if (t_.fast) push_fast_state();
     char buf[96];
     std::snprintf(buf, sizeof buf, " (timed: %.4f ms per step on 1, %.4f on %d)", best[0], best[1], all);
     return buf;
@@ -559,22 +616,22 @@ class CpuBackend final : public Backend {
   static Vec3 displacement(const Soa3<Real>& u, size_t i) {
     return Vec3(static_cast<double>(u.x[i]), static_cast<double>(u.y[i]), static_cast<double>(u.z[i]));
   }
-  Real rest_distance(int32_t p, int32_t q) const {
-    const Real dx = rest_.x[q] - rest_.x[p], dy = rest_.y[q] - rest_.y[p], dz = rest_.z[q] - rest_.z[p];
+  static Real rest_distance(const Soa3<Real>& rest, int32_t p, int32_t q) {
+    const Real dx = rest.x[q] - rest.x[p], dy = rest.y[q] - rest.y[p], dz = rest.z[q] - rest.z[p];
     return std::sqrt(dx * dx + dy * dy + dz * dz);
   }
-  Real rest_volume(int32_t p, int32_t a, int32_t b, int32_t c) const {
+  static Real rest_volume(const Soa3<Real>& rest, int32_t p, int32_t a, int32_t b, int32_t c) {
     auto d = [&](int32_t q, const std::vector<Real>& v) { return v[q] - v[p]; };
-    const Real ax = d(a, rest_.x), ay = d(a, rest_.y), az = d(a, rest_.z);
-    const Real bx = d(b, rest_.x), by = d(b, rest_.y), bz = d(b, rest_.z);
-    const Real cx = d(c, rest_.x), cy = d(c, rest_.y), cz = d(c, rest_.z);
+    const Real ax = d(a, rest.x), ay = d(a, rest.y), az = d(a, rest.z);
+    const Real bx = d(b, rest.x), by = d(b, rest.y), bz = d(b, rest.z);
+    const Real cx = d(c, rest.x), cy = d(c, rest.y), cz = d(c, rest.z);
     return (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)) / Real(6);
   }
 
   // Each combination of the plan's passes is its own compiled loop, so a
   // lean scene never touches the code or data of a pass it lacks.
   Reaction step(const KernelStepInputs<Real>& ctx) {
-    switch (plan_.element) {
+    switch (t_.plan.element) {
       case ElementTerm::NodalVolume: return dispatch_gravity<ElementTerm::NodalVolume>(ctx);
       case ElementTerm::TetVolume: return dispatch_gravity<ElementTerm::TetVolume>(ctx);
       case ElementTerm::SmoothedShear: return dispatch_gravity<ElementTerm::SmoothedShear>(ctx);
@@ -586,7 +643,7 @@ class CpuBackend final : public Backend {
 
   template <ElementTerm Volume>
   Reaction dispatch_gravity(const KernelStepInputs<Real>& ctx) {
-    return plan_.gravity ? dispatch_tool<Volume, true>(ctx) : dispatch_tool<Volume, false>(ctx);
+    return t_.plan.gravity ? dispatch_tool<Volume, true>(ctx) : dispatch_tool<Volume, false>(ctx);
   }
 
   template <ElementTerm Volume, bool Gravity>
@@ -602,16 +659,16 @@ class CpuBackend final : public Backend {
 
   template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
   Reaction run(const KernelStepInputs<Real>& ctx) {
-    const int32_t nchunk = model_->layout.nchunk, npoint = model_->npoint();
+    const int32_t nchunk = t_.model->layout.nchunk, npoint = t_.model->npoint();
 #pragma omp parallel num_threads(threads_)
     {
       // Positions x = X + u once per step: the gathers below then fetch 3
       // coordinates per neighbour instead of 6. Integration stays on u and d.
 #pragma omp for simd schedule(static)
       for (int32_t p = 0; p < npoint; ++p) {
-        pos_.x[p] = rest_.x[p] + u_.x[p];
-        pos_.y[p] = rest_.y[p] + u_.y[p];
-        pos_.z[p] = rest_.z[p] + u_.z[p];
+        t_.pos.x[p] = t_.rest.x[p] + u_.x[p];
+        t_.pos.y[p] = t_.rest.y[p] + u_.y[p];
+        t_.pos.z[p] = t_.rest.z[p] + u_.z[p];
       }
       if constexpr (Volume == ElementTerm::NodalVolume) {
         // The nodal term's extra pass: every point's pressure before any force.
@@ -626,12 +683,12 @@ class CpuBackend final : public Backend {
 #pragma omp for schedule(static)
       for (int32_t c = 0; c < nchunk; ++c) chunk<Volume, Gravity, Tool>(ctx, c);
     }
-    u_.swap(u_next_);  // u_t <- u_{t+1}
-    d_.swap(d_next_);  // d_t <- d_{t+1}
+    u_.swap(t_.u_next);  // u_t <- u_{t+1}
+    d_.swap(t_.d_next);  // d_t <- d_{t+1}
     Reaction reaction;
     if constexpr (Tool != ToolTerm::None) {
       // Fixed-order sum of per-chunk partials: identical for any thread count.
-      for (const ChunkReaction& p : partial_) {
+      for (const ChunkReaction& p : t_.partial) {
         reaction.force += p.force;
         reaction.torque += p.torque;
         reaction.contacts += p.contacts;
@@ -640,25 +697,25 @@ class CpuBackend final : public Backend {
     return reaction;
   }
 
-  // Nodal volumes V_p = sum over the tets of p of V_t / 4 at pos_, for the
+  // Nodal volumes V_p = sum over the tets of p of V_t / 4 at t_.pos, for the
   // points of chunk c, into out. Not inlined: pack() and the step must run
   // the same instructions so the rest state gives exactly V_p^r.
-  __attribute__((noinline)) void nodal_volume_chunk(int32_t c, Real* __restrict out) const {
-    const auto& L = model_->layout;
+  __attribute__((noinline)) static void nodal_volume_chunk(const Tables& t, int32_t c, Real* __restrict out) {
+    const auto& L = t.model->layout;
     const int32_t C = L.chunk_size;
-    const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
-    const Real* __restrict X = pos_.x.data();
-    const Real* __restrict Y = pos_.y.data();
-    const Real* __restrict Z = pos_.z.data();
-    const int32_t* __restrict ta = tet_a_.data();
-    const int32_t* __restrict tb = tet_b_.data();
-    const int32_t* __restrict tc = tet_c_.data();
+    const int32_t first = c * C, last = std::min(t.model->npoint(), first + C);
+    const Real* __restrict X = t.pos.x.data();
+    const Real* __restrict Y = t.pos.y.data();
+    const Real* __restrict Z = t.pos.z.data();
+    const int32_t* __restrict ta = t.tet_a.data();
+    const int32_t* __restrict tb = t.tet_b.data();
+    const int32_t* __restrict tc = t.tet_c.data();
     for (int32_t g0 = first; g0 < last; g0 += kLanes) {
       const int32_t lanes = std::min(kLanes, last - g0);
       const int32_t lane0 = g0 - first;
-      const int32_t group = c * groups_per_chunk_ + lane0 / kLanes;
+      const int32_t group = c * t.groups_per_chunk + lane0 / kLanes;
       alignas(64) Real v[kLanes] = {};
-      for (int32_t j = 0; j < tet_width_[group]; ++j) {
+      for (int32_t j = 0; j < t.tet_width[group]; ++j) {
         const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
 #pragma omp simd
         for (int32_t l = 0; l < lanes; ++l) {
@@ -673,40 +730,40 @@ class CpuBackend final : public Backend {
     }
   }
 
-  // Nodal pressures q_p = k_p (V_p - V_p^r) of chunk c into node_q_.
+  // Nodal pressures q_p = k_p (V_p - V_p^r) of chunk c into t_.node_q.
   void nodal_pressure_chunk(int32_t c) {
-    nodal_volume_chunk(c, node_q_.data());
-    const int32_t first = c * model_->layout.chunk_size;
-    const int32_t last = std::min(model_->npoint(), first + model_->layout.chunk_size);
+    nodal_volume_chunk(t_, c, t_.node_q.data());
+    const int32_t first = c * t_.model->layout.chunk_size;
+    const int32_t last = std::min(t_.model->npoint(), first + t_.model->layout.chunk_size);
 #pragma omp simd
-    for (int32_t p = first; p < last; ++p) node_q_[p] = force_law::volume_pressure(node_k_[p], node_q_[p], node_rest_[p]);
+    for (int32_t p = first; p < last; ++p) t_.node_q[p] = force_law::volume_pressure(t_.node_k[p], t_.node_q[p], t_.node_rest[p]);
   }
 
   // The smoothed shear element's stress P(Fbar_p) = Fbar + phi'(J) cof Fbar
-  // of the points of chunk c into node_stress_ (row-major), with
+  // of the points of chunk c into t_.node_stress (row-major), with
   // Fbar_p - I = sum over p's tet slots of k_t H_t / K_p and H_t = sum over
   // the others q of (u_q - u_p) g_q^T, from displacements as in the force
   // pass: at rest H = 0 exactly, Fbar = I and P = 0 in either precision.
   void shear_stress_chunk(int32_t c) {
-    const auto& L = model_->layout;
+    const auto& L = t_.model->layout;
     const int32_t C = L.chunk_size;
-    const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
+    const int32_t first = c * C, last = std::min(t_.model->npoint(), first + C);
     const Real* __restrict ux = u_.x.data();
     const Real* __restrict uy = u_.y.data();
     const Real* __restrict uz = u_.z.data();
-    const int32_t* __restrict ta = tet_a_.data();
-    const int32_t* __restrict tb = tet_b_.data();
-    const int32_t* __restrict tc = tet_c_.data();
-    const Real* __restrict kt = tet_k_.data();
-    const std::array<const Real*, 9> g = {shear_g_[0].data(), shear_g_[1].data(), shear_g_[2].data(),
-                                          shear_g_[3].data(), shear_g_[4].data(), shear_g_[5].data(),
-                                          shear_g_[6].data(), shear_g_[7].data(), shear_g_[8].data()};
+    const int32_t* __restrict ta = t_.tet_a.data();
+    const int32_t* __restrict tb = t_.tet_b.data();
+    const int32_t* __restrict tc = t_.tet_c.data();
+    const Real* __restrict kt = t_.tet_k.data();
+    const std::array<const Real*, 9> g = {t_.shear_g[0].data(), t_.shear_g[1].data(), t_.shear_g[2].data(),
+                                          t_.shear_g[3].data(), t_.shear_g[4].data(), t_.shear_g[5].data(),
+                                          t_.shear_g[6].data(), t_.shear_g[7].data(), t_.shear_g[8].data()};
     for (int32_t g0 = first; g0 < last; g0 += kLanes) {
       const int32_t lanes = std::min(kLanes, last - g0);
       const int32_t lane0 = g0 - first;
-      const int32_t group = c * groups_per_chunk_ + lane0 / kLanes;
+      const int32_t group = c * t_.groups_per_chunk + lane0 / kLanes;
       alignas(64) Real h[9][kLanes] = {};
-      for (int32_t j = 0; j < tet_width_[group]; ++j) {
+      for (int32_t j = 0; j < t_.tet_width[group]; ++j) {
         const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
 #pragma omp simd
         for (int32_t l = 0; l < lanes; ++l) {
@@ -722,7 +779,7 @@ class CpuBackend final : public Backend {
 #pragma omp simd
       for (int32_t l = 0; l < lanes; ++l) {
         const int32_t p = g0 + l;
-        const Real w = node_inv_k_[p];
+        const Real w = t_.node_inv_k[p];
         const Real f00 = 1 + w * h[0][l], f01 = w * h[1][l], f02 = w * h[2][l];
         const Real f10 = w * h[3][l], f11 = 1 + w * h[4][l], f12 = w * h[5][l];
         const Real f20 = w * h[6][l], f21 = w * h[7][l], f22 = 1 + w * h[8][l];
@@ -730,28 +787,28 @@ class CpuBackend final : public Backend {
         const Real k10 = f02 * f21 - f01 * f22, k11 = f00 * f22 - f02 * f20, k12 = f01 * f20 - f00 * f21;
         const Real k20 = f01 * f12 - f02 * f11, k21 = f02 * f10 - f00 * f12, k22 = f00 * f11 - f01 * f10;
         const Real slope = force_law::shear_barrier_slope(f00 * k00 + f01 * k01 + f02 * k02);
-        node_stress_[0][p] = f00 + slope * k00;
-        node_stress_[1][p] = f01 + slope * k01;
-        node_stress_[2][p] = f02 + slope * k02;
-        node_stress_[3][p] = f10 + slope * k10;
-        node_stress_[4][p] = f11 + slope * k11;
-        node_stress_[5][p] = f12 + slope * k12;
-        node_stress_[6][p] = f20 + slope * k20;
-        node_stress_[7][p] = f21 + slope * k21;
-        node_stress_[8][p] = f22 + slope * k22;
+        t_.node_stress[0][p] = f00 + slope * k00;
+        t_.node_stress[1][p] = f01 + slope * k01;
+        t_.node_stress[2][p] = f02 + slope * k02;
+        t_.node_stress[3][p] = f10 + slope * k10;
+        t_.node_stress[4][p] = f11 + slope * k11;
+        t_.node_stress[5][p] = f12 + slope * k12;
+        t_.node_stress[6][p] = f20 + slope * k20;
+        t_.node_stress[7][p] = f21 + slope * k21;
+        t_.node_stress[8][p] = f22 + slope * k22;
       }
     }
   }
 
   template <ElementTerm Volume, bool Gravity, ToolTerm Tool>
   void chunk(const KernelStepInputs<Real>& ctx, int32_t c) {
-    const auto& L = model_->layout;
+    const auto& L = t_.model->layout;
     const int32_t C = L.chunk_size;
-    const int32_t first = c * C, last = std::min(model_->npoint(), first + C);
+    const int32_t first = c * C, last = std::min(t_.model->npoint(), first + C);
     ChunkReaction partial;
-    const Real* __restrict X = pos_.x.data();
-    const Real* __restrict Y = pos_.y.data();
-    const Real* __restrict Z = pos_.z.data();
+    const Real* __restrict X = t_.pos.x.data();
+    const Real* __restrict Y = t_.pos.y.data();
+    const Real* __restrict Z = t_.pos.z.data();
     const Real* __restrict ux = u_.x.data();
     const Real* __restrict uy = u_.y.data();
     const Real* __restrict uz = u_.z.data();
@@ -761,24 +818,24 @@ class CpuBackend final : public Backend {
     for (int32_t g0 = first; g0 < last; g0 += kLanes) {
       const int32_t lanes = std::min(kLanes, last - g0);
       const int32_t lane0 = g0 - first;
-      const int32_t group = c * groups_per_chunk_ + lane0 / kLanes;
+      const int32_t group = c * t_.groups_per_chunk + lane0 / kLanes;
       alignas(64) Real fx[kLanes], fy[kLanes], fz[kLanes];
 #pragma omp simd
       for (int32_t l = 0; l < lanes; ++l) {
         const int32_t p = g0 + l;
-        fx[l] = Gravity ? mass_[p] * ctx.gravity[0] : Real(0);
-        fy[l] = Gravity ? mass_[p] * ctx.gravity[1] : Real(0);
-        fz[l] = Gravity ? mass_[p] * ctx.gravity[2] : Real(0);
+        fx[l] = Gravity ? t_.mass[p] * ctx.gravity[0] : Real(0);
+        fy[l] = Gravity ? t_.mass[p] * ctx.gravity[1] : Real(0);
+        fz[l] = Gravity ? t_.mass[p] * ctx.gravity[2] : Real(0);
       }
 
       // Springs + dampers: f = [k (L - r) + d (dv . l/L)] l/L, l = x_q - x_p.
       // A suture (k < 0 in its slot, stiffness |k|) pulls only: no force while
       // slack (L <= r), and a closing damper never turns the pull into a push.
-      const int32_t* __restrict other = spring_other_.data();
-      const Real* __restrict rest = spring_rest_.data();
-      const Real* __restrict k = spring_k_.data();
-      const Real* __restrict d = spring_d_.data();
-      for (int32_t j = 0; j < spring_width_[group]; ++j) {
+      const int32_t* __restrict other = t_.spring_other.data();
+      const Real* __restrict rest = t_.spring_rest.data();
+      const Real* __restrict k = t_.spring_k.data();
+      const Real* __restrict d = t_.spring_d.data();
+      for (int32_t j = 0; j < t_.spring_width[group]; ++j) {
         const int32_t e0 = L.springs.chunk_offset[c] + j * C + lane0;
 #pragma omp simd
         for (int32_t l = 0; l < lanes; ++l) {
@@ -806,27 +863,27 @@ class CpuBackend final : public Backend {
         // Its damper: f_p += (tau k / (dt J_d)) (G (cof^T c) + cof (G^T c)),
         // c = cof s, G = sum over the others q of (d_q - d_p) g_q^T = dt Fdot,
         // J_d = max(J, J_min): -(2 tau k / J_d) sym(Fdot cof^T) cof g_p.
-        const int32_t* __restrict ta = tet_a_.data();
-        const int32_t* __restrict tb = tet_b_.data();
-        const int32_t* __restrict tc = tet_c_.data();
-        const Real* __restrict kt = tet_k_.data();
-        const Real* __restrict gax = shear_g_[0].data();
-        const Real* __restrict gay = shear_g_[1].data();
-        const Real* __restrict gaz = shear_g_[2].data();
-        const Real* __restrict gbx = shear_g_[3].data();
-        const Real* __restrict gby = shear_g_[4].data();
-        const Real* __restrict gbz = shear_g_[5].data();
-        const Real* __restrict gcx = shear_g_[6].data();
-        const Real* __restrict gcy = shear_g_[7].data();
-        const Real* __restrict gcz = shear_g_[8].data();
+        const int32_t* __restrict ta = t_.tet_a.data();
+        const int32_t* __restrict tb = t_.tet_b.data();
+        const int32_t* __restrict tc = t_.tet_c.data();
+        const Real* __restrict kt = t_.tet_k.data();
+        const Real* __restrict gax = t_.shear_g[0].data();
+        const Real* __restrict gay = t_.shear_g[1].data();
+        const Real* __restrict gaz = t_.shear_g[2].data();
+        const Real* __restrict gbx = t_.shear_g[3].data();
+        const Real* __restrict gby = t_.shear_g[4].data();
+        const Real* __restrict gbz = t_.shear_g[5].data();
+        const Real* __restrict gcx = t_.shear_g[6].data();
+        const Real* __restrict gcy = t_.shear_g[7].data();
+        const Real* __restrict gcz = t_.shear_g[8].data();
         // Smoothed: the per-tet stress weighs 1 - s, the mean of the four
         // corners' smoothed stresses s (their sum times s / 4).
         constexpr bool smoothed = Volume == ElementTerm::SmoothedShear;
-        const Real per_tet = smoothed ? 1 - smoothed_share_ : Real(1), corners = smoothed ? smoothed_share_ / 4 : Real(0);
-        const std::array<const Real*, 9> P = {node_stress_[0].data(), node_stress_[1].data(), node_stress_[2].data(),
-                                              node_stress_[3].data(), node_stress_[4].data(), node_stress_[5].data(),
-                                              node_stress_[6].data(), node_stress_[7].data(), node_stress_[8].data()};
-        for (int32_t j = 0; j < tet_width_[group]; ++j) {
+        const Real per_tet = smoothed ? 1 - t_.smoothed_share : Real(1), corners = smoothed ? t_.smoothed_share / 4 : Real(0);
+        const std::array<const Real*, 9> P = {t_.node_stress[0].data(), t_.node_stress[1].data(), t_.node_stress[2].data(),
+                                              t_.node_stress[3].data(), t_.node_stress[4].data(), t_.node_stress[5].data(),
+                                              t_.node_stress[6].data(), t_.node_stress[7].data(), t_.node_stress[8].data()};
+        for (int32_t j = 0; j < t_.tet_width[group]; ++j) {
           const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
 #pragma omp simd
           for (int32_t l = 0; l < lanes; ++l) {
@@ -891,13 +948,13 @@ class CpuBackend final : public Backend {
       } else if constexpr (Volume != ElementTerm::None) {
         // f_p = -p dV/dx_p, dV/dx_p = (c - a) x (b - a) / 6, with the tet's
         // pressure p = k_v (V - V_r), or the mean of its 4 nodal pressures.
-        const Real* __restrict q = node_q_.data();
-        const int32_t* __restrict ta = tet_a_.data();
-        const int32_t* __restrict tb = tet_b_.data();
-        const int32_t* __restrict tc = tet_c_.data();
-        const Real* __restrict vr = tet_rest_.data();
-        const Real* __restrict kv = tet_k_.data();
-        for (int32_t j = 0; j < tet_width_[group]; ++j) {
+        const Real* __restrict q = t_.node_q.data();
+        const int32_t* __restrict ta = t_.tet_a.data();
+        const int32_t* __restrict tb = t_.tet_b.data();
+        const int32_t* __restrict tc = t_.tet_c.data();
+        const Real* __restrict vr = t_.tet_rest.data();
+        const Real* __restrict kv = t_.tet_k.data();
+        for (int32_t j = 0; j < t_.tet_width[group]; ++j) {
           const int32_t e0 = L.tets.chunk_offset[c] + j * C + lane0;
 #pragma omp simd
           for (int32_t l = 0; l < lanes; ++l) {
@@ -935,17 +992,17 @@ class CpuBackend final : public Backend {
 
       // Position Verlet with drag: d' = (1 - alpha dt) d + dt^2 F/m,
       // u' = u + d'. Fixed points (1/m = 0) stay put.
-      Real* __restrict nx = u_next_.x.data();
-      Real* __restrict ny = u_next_.y.data();
-      Real* __restrict nz = u_next_.z.data();
-      Real* __restrict ndx = d_next_.x.data();
-      Real* __restrict ndy = d_next_.y.data();
-      Real* __restrict ndz = d_next_.z.data();
+      Real* __restrict nx = t_.u_next.x.data();
+      Real* __restrict ny = t_.u_next.y.data();
+      Real* __restrict nz = t_.u_next.z.data();
+      Real* __restrict ndx = t_.d_next.x.data();
+      Real* __restrict ndy = t_.d_next.y.data();
+      Real* __restrict ndz = t_.d_next.z.data();
 #pragma omp simd
       for (int32_t l = 0; l < lanes; ++l) {
         const int32_t p = g0 + l;
-        const Real w = inv_mass_[p] * ctx.dt2;
-        const bool free = inv_mass_[p] > Real(0);
+        const Real w = t_.inv_mass[p] * ctx.dt2;
+        const bool free = t_.inv_mass[p] > Real(0);
         ndx[p] = free ? ctx.drag * dx[p] + w * fx[l] : Real(0);
         ndy[p] = free ? ctx.drag * dy[p] + w * fy[l] : Real(0);
         ndz[p] = free ? ctx.drag * dz[p] + w * fz[l] : Real(0);
@@ -954,43 +1011,24 @@ class CpuBackend final : public Backend {
         nz[p] = uz[p] + ndz[p];
       }
     }
-    if constexpr (Tool != ToolTerm::None) partial_[c] = partial;
+    if constexpr (Tool != ToolTerm::None) t_.partial[c] = partial;
   }
 
-  const Model* model_;  // the current version (rebuild() moves it on)
-  StepPlan plan_;       // the passes of its step (pack() computes it for each version)
   BackendTool tool_;
   CpuKernel kernel_choice_;
   int threads_;
   StepTiming timing_;                     // stands in for the clock in tests (thread choice)
   std::optional<ThreadChoice> choice_;    // set when the thread count is chosen by timing
-  std::unique_ptr<FastKernel> fast_;         // set when the AVX-512 kernel runs this backend
-  std::vector<ChunkReaction> fast_partial_;  // its tool reaction per chunk
   std::string device_;
   double time_ = 0;
-  Soa3<Real> rest_;                   // X, rest positions (npoint)
-  Soa3<Real> pos_;                    // x = X + u of the current step (npoint)
-  Soa3<Real> u_, u_next_;             // displacements from rest at t, t+1 (npoint)
-  Soa3<Real> d_, d_next_;             // step increments u_t - u_{t-1}, u_{t+1} - u_t (npoint)
-  std::vector<int32_t> spring_other_;  // per slot, self for padding (nentry)
-  std::vector<Real> spring_rest_, spring_k_, spring_d_;  // per slot (nentry); k < 0 marks a suture
-  std::vector<std::pair<int32_t, int32_t>> suture_slots_;  // (slot, spring) of every suture slot
-  std::vector<int32_t> tet_a_, tet_b_, tet_c_;  // per slot, self for padding (nentry); empty without volume
-  std::vector<Real> tet_rest_, tet_k_;          // per slot (nentry); zero with the nodal term; k_t with the shear element
-  std::array<std::vector<Real>, 9> shear_g_;    // shear element: g_a, g_b, g_c (x, y, z each) per slot (nentry); else empty
-  std::vector<Real> node_k_, node_rest_, node_q_;  // nodal term: k_a, V_a^r, pressure (npoint); else empty
-  std::vector<Real> node_inv_k_;                     // smoothed shear element: 1/K_a (npoint); else empty
-  std::array<std::vector<Real>, 9> node_stress_;     // its P(Fbar_a), row-major (npoint each); else empty
-  Real smoothed_share_ = 0;                          // its s (Model::shear_smoothed_share)
-  std::vector<int32_t> spring_width_, tet_width_;  // slots per lane group (nchunk x groups)
-  int32_t groups_per_chunk_ = 1;
-  std::vector<Real> mass_, inv_mass_;
-  std::vector<Real> tool_scale_;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint; npad for the AVX-512 kernel, 0 for padding)
-  std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint)
+  // The state: with the AVX-512 kernel it lives in t_.fast, and these hold
+  // it only across a rebuild.
+  Soa3<Real> u_;  // displacements from rest at t (npoint)
+  Soa3<Real> d_;  // step increments u_t - u_{t-1} (npoint)
+  std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint; npad for the AVX-512 kernel)
   std::vector<int32_t> attached_points_;
   std::vector<Real> attach_offset_;  // pull: x_i - c at grasp time, 3 per attachment
-  std::vector<ChunkReaction> partial_;   // tool reaction per chunk (nchunk)
-  SurfaceContact<Real> surface_;         // the surface-contact pass (a pushing tool on the surface)
+  Tables t_;                         // the current version's
 };
 
 }  // namespace

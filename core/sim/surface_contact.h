@@ -58,9 +58,21 @@ class SurfaceContact {
     force_.clear();
     touched_.clear();
     point_scale_.assign(scale.begin(), scale.begin() + model.npoint());
-    // Anchors are per point id, which a rebuild keeps: a grip holds through a cut.
-    anchor_.resize(model.npoint(), V3::Zero());
-    has_anchor_.resize(model.npoint(), 0);
+    anchor_.assign(model.npoint(), V3::Zero());
+    has_anchor_.assign(model.npoint(), 0);
+    anchored_.clear();
+  }
+
+  // Friction's anchors from the pass of the previous Model version: they are
+  // per point id, which a rebuild keeps, so a grip holds through a cut
+  // (appended points have none).
+  void take_anchors(SurfaceContact& previous) {
+    const size_t n = anchor_.size();
+    anchor_ = std::move(previous.anchor_);
+    has_anchor_ = std::move(previous.has_anchor_);
+    anchored_ = std::move(previous.anchored_);
+    anchor_.resize(n, V3::Zero());
+    has_anchor_.resize(n, 0);
   }
 
   // Forces for the tool placed as `placed` (its one segment, or a

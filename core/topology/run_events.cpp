@@ -185,16 +185,16 @@ double TopologyEvents::guaranteed_step(const Model& previous, const Model& next,
   return step_check_.guaranteed_step(next, options);
 }
 
-void TopologyEvents::changed(const Model& previous, const Model& next, double rebuild_seconds,
-                             double dt_crit_guaranteed, const StabilityReport* full, double check_seconds,
-                             std::optional<double> applied_t) {
+void TopologyEvents::changed(const Model& previous, const Model& next, const ChangeTimes& times,
+                             double dt_crit_guaranteed, const StabilityReport* full, std::optional<double> applied_t) {
   if (tear_) tear_->model_changed(previous, next);
   if (applied_t) pending_["applied_t"] = *applied_t;
-  pending_["backend_rebuild_ms"] = 1e3 * rebuild_seconds;
+  if (times.prepare_seconds) pending_["backend_prepare_ms"] = 1e3 * *times.prepare_seconds;
+  pending_["backend_rebuild_ms"] = 1e3 * times.rebuild_seconds;
   pending_["dt_crit_guaranteed"] = dt_crit_guaranteed;
   pending_["dt_check"] = full ? "power iteration" : "gershgorin";
   if (full) pending_["dt_crit"] = full->dt_crit;
-  pending_["dt_check_ms"] = 1e3 * check_seconds;
+  pending_["dt_check_ms"] = 1e3 * times.check_seconds;
   log_.push_back(std::move(pending_));
   pending_ = nlohmann::json();
 }

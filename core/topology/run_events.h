@@ -37,6 +37,13 @@ struct OffPathPlan {
   std::optional<double> at;
 };
 
+// How long the parts of a change that follow the new Model took, s (meta.events).
+struct ChangeTimes {
+  double rebuild_seconds = 0;  // the backend's part on the tick's path: adopt(), or the whole rebuild()
+  std::optional<double> prepare_seconds;  // its part off the tick's path (prepare() on the worker), if any
+  double check_seconds = 0;               // the dt check
+};
+
 class TopologyEvents {
  public:
   TopologyEvents(const EventsDef& events, const Model& initial);
@@ -63,14 +70,14 @@ class TopologyEvents {
   // touched are recomputed).
   double guaranteed_step(const Model& previous, const Model& next, const CriticalStepOptions& options);
 
-  // Records the change just made (time, kinds, counts incl. sutures, the backend's rebuild
-  // time, the guaranteed step and, when the run needed it, the new dt_crit
-  // from the full estimate, and how long the check took) and carries the
-  // tear counters over.
+  // Records the change just made (time, kinds, counts incl. sutures, how
+  // long the backend's rebuild and the check took, the guaranteed step and,
+  // when the run needed it, the new dt_crit from the full estimate) and
+  // carries the tear counters over.
   // `applied_t`: the start of the tick that swapped it in, when that was
   // later than the tick that made it (off the tick's path).
-  void changed(const Model& previous, const Model& next, double rebuild_seconds, double dt_crit_guaranteed,
-               const StabilityReport* full, double check_seconds, std::optional<double> applied_t = std::nullopt);
+  void changed(const Model& previous, const Model& next, const ChangeTimes& times, double dt_crit_guaranteed,
+               const StabilityReport* full, std::optional<double> applied_t = std::nullopt);
 
   // meta.events of the force log: one entry per change.
   const nlohmann::json& log() const { return log_; }

@@ -166,8 +166,8 @@ BlockRun run_block(const Scenario& s, const Model& model, const std::string& nam
 }
 
 // The cut through the block over tick 20 with applied_at = 25 ms: made from
-// tick 20's positions on a worker thread while ticks 20-24 step the uncut
-// block, swapped in before tick 25. Replays of it must not depend on when
+// tick 20's positions on a worker thread (the Model and the backend's
+// tables) while ticks 20-24 step the uncut block, swapped in before tick 25. Replays of it must not depend on when
 // the worker finishes.
 TEST(TopologyRun, ACutOffTheTicksPathStepsTheOldModelUntilItsAppliedTick) {
   const Scenario at_once = hanging_block();
@@ -188,6 +188,10 @@ TEST(TopologyRun, ACutOffTheTicksPathStepsTheOldModelUntilItsAppliedTick) {
   EXPECT_EQ(events[0]["applied_t"], 25 * tick);
   EXPECT_EQ(events[0]["points_added"], 25);
   EXPECT_FALSE(a.result.meta.extra["events"][0].contains("applied_t"));
+  // The backend's tables were prepared on the worker too (Backend::prepare),
+  // so only their adoption was on the tick's path; the cut at once did both there.
+  EXPECT_TRUE(events[0].contains("backend_prepare_ms")) << events[0];
+  EXPECT_FALSE(a.result.meta.extra["events"][0].contains("backend_prepare_ms"));
   ASSERT_EQ(b.ticks.x.size(), 60u);
   // Ticks 0-24 (ending at 1..25 ms) step the uncut block exactly; the cut at
   // once has changed tick 20 already; from tick 25 on the block falls apart.

@@ -333,6 +333,8 @@ TEST(LiveSession, AClientCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
   ASSERT_TRUE(cut.applied_at);
   EXPECT_GE(*cut.applied_at, 11 * s.time.tick());
   EXPECT_EQ(events[0]["applied_t"], *cut.applied_at);
+  // The backend's tables were prepared on the worker as well; the tick only adopted them.
+  EXPECT_TRUE(events[0].contains("backend_prepare_ms")) << events[0];
   EXPECT_EQ(served.live["cuts"][0]["applied_tick"], std::llround(*cut.applied_at / s.time.tick()));
   EXPECT_GT(served.result.meta.extra["final_points"].get<int>(), model.npoint());
 

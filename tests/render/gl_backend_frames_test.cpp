@@ -31,7 +31,8 @@ class HiddenBackend : public Backend {
   Reaction tick(const TickRequest& r) override { return inner_.tick(r); }
   void attach(const Attachment& a) override { inner_.attach(a); }
   void release() override { inner_.release(); }
-  void rebuild(const Model& next) override { inner_.rebuild(next); }
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override { return inner_.prepare(next); }
+  void adopt(std::unique_ptr<PreparedModel> prepared) override { inner_.adopt(std::move(prepared)); }
   void positions(std::vector<Vec3>& out) const override { inner_.positions(out); }
   void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override { inner_.set_state(x, x_prev); }
   double time() const override { return inner_.time(); }

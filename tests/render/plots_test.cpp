@@ -126,7 +126,10 @@ class LateBackend : public Backend {
   Reaction tick(const TickRequest&) override { return {}; }
   void attach(const Attachment&) override {}
   void release() override {}
-  void rebuild(const Model&) override {}
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
+    return std::make_unique<PreparedModel>(next);
+  }
+  void adopt(std::unique_ptr<PreparedModel>) override {}
   void positions(std::vector<Vec3>&) const override {}
   void set_state(const std::vector<Vec3>&, const std::vector<Vec3>&) override {}
   double time() const override { return 0; }
