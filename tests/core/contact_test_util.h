@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/sim/backend.h"
 #include "core/sim/reference_forces.h"
 #include "tests/core/test_models.h"
 
@@ -28,6 +29,28 @@ struct Contact {
   Reaction reaction;
   std::vector<Vec3> force;  // per point
 };
+
+// The force one step of dt from rest applied to each free point, read from
+// its displacement (f = m u / dt^2: no velocity, no internal force at
+// rest), against `want` per point: their sum, the largest difference and
+// the largest wanted force.
+struct Applied {
+  Vec3 received = Vec3::Zero();
+  double worst = 0, peak = 0;
+};
+inline Applied applied_in_one_step(const Model& m, const Backend& backend, double dt, const std::vector<Vec3>& want) {
+  std::vector<Vec3> x;
+  backend.positions(x);
+  Applied out;
+  for (int32_t i = 0; i < m.npoint(); ++i) {
+    if (m.fixed[i]) continue;
+    const Vec3 f = m.mass[i] * (x[i] - m.rest_position[i]) / (dt * dt);
+    out.received += f;
+    out.worst = std::max(out.worst, (f - want[i]).norm());
+    out.peak = std::max(out.peak, want[i].norm());
+  }
+  return out;
+}
 
 inline double largest_change(const Contact& a, const Contact& b) {
   double worst = 0;

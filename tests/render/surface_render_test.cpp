@@ -121,12 +121,17 @@ TEST(SurfaceRenderer, WireframeAndToolAddPixels) {
   const cv::Mat with_capsule =
       renderer.render(cam, style, ToolDraw{true, centre - Vec3(0.03, 0, 0), centre + Vec3(0.03, 0, 0), 0.02});
   EXPECT_GT(object(with_capsule), object(with_tool) + 300);
-  // A grasper's two jaws: that capsule and a second one 5 cm above it add
-  // the second's pixels (a second jaw not drawn would not).
+  // A grasper's two jaws: that capsule and a second one 9 cm beside it (in
+  // view, clear of the first and of the box) add the second's own pixels (a
+  // second jaw not drawn would not).
+  const Vec3 shift(0.09, 0, 0);
+  const ToolDraw second{true, centre - Vec3(0.03, 0, 0) + shift, centre + Vec3(0.03, 0, 0) + shift, 0.02};
+  const int alone = object(renderer.render(cam, style, second)) - object(plain);
+  ASSERT_GT(alone, 300) << "the second jaw must be in view";
   ToolDraw jaws{true, centre - Vec3(0.03, 0, 0), centre + Vec3(0.03, 0, 0), 0.02};
   jaws.segments = 2;
-  jaws.a2 = jaws.a + Vec3(0, 0, 0.05), jaws.b2 = jaws.b + Vec3(0, 0, 0.05);
-  EXPECT_GT(object(renderer.render(cam, style, jaws)), object(with_capsule) + 300);
+  jaws.a2 = second.a, jaws.b2 = second.b;
+  EXPECT_GT(object(renderer.render(cam, style, jaws)), object(with_capsule) + alone / 3);
 }
 
 }  // namespace
