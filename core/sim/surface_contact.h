@@ -94,8 +94,8 @@ class SurfaceContact {
     const Real r2 = radius * radius;
     // A grasper's jaws close along -+ its jaw axis: the first (at +gap/2)
     // toward -axis. What a penalty presses along that is grip.
-    const V3 axis = (placed.rotation * kJawAxis).cast<Real>();
-    const V3 closing[2] = {-axis, axis};
+    const V3 jaw_axis = (placed.rotation * kJawAxis).cast<Real>();
+    const V3 closing[2] = {-jaw_axis, jaw_axis};
     grip_ = 0;
     const int32_t npoint = static_cast<int32_t>(points_.size()), ntri = triangles();
     const int32_t* ta = corner_[0].data();
