@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/gl/gl_model_pack.h"
+#include "core/sim/friction_plan.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
 
@@ -336,7 +337,8 @@ Plan GlBackend::plan() const {
       case Pass::SurfaceContact:
         detail = std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
                  " surface triangles, each surface point recomputing its own triangles (broad phase: the " +
-                 shape_name(tool_.shape) + " against each triangle's box), w_p f summed in triangle order" + in_step;
+                 shape_name(tool_.shape) + " against each triangle's box), w_p f summed in triangle order" +
+                 friction_plan(tool_) + in_step;
         break;
       case Pass::ToolContact:
         detail = (plan_.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"

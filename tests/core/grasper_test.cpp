@@ -274,6 +274,23 @@ TEST(Grasper, KernelsPrecisionsAndThreadsFollowTheDoubleReference) {
   EXPECT_TRUE(same) << "two threads must give one thread's log bit for bit";
 }
 
+// `--plan` names the grasper in the surface-contact pass and says friction
+// follows it (and says nothing of friction without it).
+TEST(Grasper, PlanNamesTheJawsAndTheFriction) {
+  const Model m = testing::contact_box(2);
+  auto detail = [&](const BackendTool& tool) {
+    for (const PassInfo& p : make_cpu_backend(m, tool, {Precision::Double, 1})->plan().passes)
+      if (p.name == pass_name(Pass::SurfaceContact)) return p.detail;
+    return std::string();
+  };
+  const std::string with = detail(grasper(0.6, 0.4));
+  EXPECT_EQ(with.rfind("grasper against", 0), 0u) << with;
+  EXPECT_NE(with.find("Coulomb friction"), std::string::npos) << with;
+  BackendTool frictionless = grasper(0.6, 0.4);
+  frictionless.friction = {};
+  EXPECT_EQ(detail(frictionless).find("friction"), std::string::npos) << detail(frictionless);
+}
+
 // A rebuild mid-grip (a Model version with the same points, as a cut
 // elsewhere would give) keeps every point's anchor: the force log goes on
 // bit for bit as without it, where anchors dropped at the rebuild would let

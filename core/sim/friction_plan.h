@@ -1,0 +1,17 @@
+#pragma once
+// What `--plan` adds to a backend's surface-contact pass for friction (the
+// same words on every backend).
+#include <string>
+
+#include "core/sim/tool.h"
+
+namespace organsim {
+
+// "" without friction.
+inline std::string friction_plan(const BackendTool& tool) {
+  if (!tool.friction.on()) return "";
+  return ", then Coulomb friction per touched point (stick anchor in the tool frame, mu_s " +
+         std::to_string(tool.friction.mu_s) + ", mu_k " + std::to_string(tool.friction.mu_k) + ")";
+}
+
+}  // namespace organsim
