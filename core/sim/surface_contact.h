@@ -61,6 +61,7 @@ class SurfaceContact {
     anchor_.assign(model.npoint(), V3::Zero());
     has_anchor_.assign(model.npoint(), 0);
     anchored_.clear();
+    anchored_.reserve(points_.size());  // so that the step never grows it
   }
 
   // Friction's anchors from the pass of the previous Model version: they are
@@ -73,6 +74,7 @@ class SurfaceContact {
     anchored_ = std::move(previous.anchored_);
     anchor_.resize(n, V3::Zero());
     has_anchor_.resize(n, 0);
+    anchored_.reserve(points_.size());
   }
 
   // Forces for the tool placed as `placed` (its one segment, or a

@@ -193,13 +193,7 @@ TEST(CapsuleContact, CpuKernelsApplyTheReferenceForcesAndReportMinusTheirSum) {
         const BackendTool tool = capsule(0.006, contact);
         auto backend = make_cpu_backend(m, tool, {precision, 1, kernel});
         SCOPED_TRACE(backend->device() + (contact == ToolContact::Surface ? ", surface" : ", points"));
-        TickRequest r;
-        r.dt = dt;
-        r.substeps = 1;
-        r.tool_active = true;
-        r.tool_from = r.tool_to = origin;
-        r.turn_from = r.turn_to = turn;
-        const Reaction got = backend->tick(r);
+        const Reaction got = backend->tick(testing::one_step_at(dt, origin, turn));
         const Contact want = at_rest(m, tool, origin, turn);
         const testing::Applied applied = testing::applied_in_one_step(m, *backend, dt, want.force);
         ASSERT_GT(applied.peak, 0.05);

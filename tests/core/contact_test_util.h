@@ -30,6 +30,17 @@ struct Contact {
   std::vector<Vec3> force;  // per point
 };
 
+// One step of dt with the tool held still at `origin`, turned by `turn`.
+inline TickRequest one_step_at(double dt, const Vec3& origin, const Quat& turn = Quat::Identity()) {
+  TickRequest r;
+  r.dt = dt;
+  r.substeps = 1;
+  r.tool_active = true;
+  r.tool_from = r.tool_to = origin;
+  r.turn_from = r.turn_to = turn;
+  return r;
+}
+
 // The force one step of dt from rest applied to each free point, read from
 // its displacement (f = m u / dt^2: no velocity, no internal force at
 // rest), against `want` per point: their sum, the largest difference and

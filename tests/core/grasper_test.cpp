@@ -192,11 +192,7 @@ TEST(Grasper, JawsPressAsTheReferenceAndTheReactionIsMinusWhatTheTissueReceives)
       const BackendTool tool = grasper(0.5, 0.5);
       auto backend = make_cpu_backend(m, tool, {precision, 1, kernel});
       SCOPED_TRACE(backend->device());
-      TickRequest r;
-      r.dt = dt;
-      r.substeps = 1;
-      r.tool_active = true;
-      r.tool_from = r.tool_to = kGripAt;
+      TickRequest r = testing::one_step_at(dt, kGripAt);
       r.gap_from = r.gap_to = kClosedGap;
       const Reaction got = backend->tick(r);
       std::vector<Vec3> want(m.npoint(), Vec3::Zero());

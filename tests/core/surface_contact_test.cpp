@@ -97,12 +97,7 @@ TEST(SurfaceContact, BackendAppliesTheReferenceForcesAndReportsMinusTheirSum) {
   const double dt = 1e-4;
   for (CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Auto}) {
     auto backend = make_cpu_backend(m, tool, {Precision::Double, 1, kernel});
-    TickRequest r;
-    r.dt = dt;
-    r.substeps = 1;
-    r.tool_active = true;
-    r.tool_from = r.tool_to = center;
-    const Reaction got = backend->tick(r);
+    const Reaction got = backend->tick(testing::one_step_at(dt, center));
     const Contact want = at_rest(m, center, tool.radius);
     const testing::Applied applied = testing::applied_in_one_step(m, *backend, dt, want.force);
     const Vec3& received = applied.received;
