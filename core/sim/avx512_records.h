@@ -11,7 +11,9 @@
 //           arrays of 32-byte quads: the tet pass reads positions only,
 //           half the bytes (the two measured the same within noise for
 //           springs at liver size).
-// w is the nodal volume term's scaled pressure, 0 without it. Force arrays
+// w is the nodal volume term's scaled pressure, 0 without it. The
+// displacement records of the shear element have the same layouts; their
+// increment's 4th value carries the smoothed stress's P_22. Force arrays
 // are (x, y, z, 0) per point in both widths.
 #include <immintrin.h>
 
@@ -24,15 +26,16 @@ namespace organsim::avx512 {
 
 // ---- float x 16 ----------------------------------------------------------------
 
-// Neighbour positions and increments of 16 points from their 32-byte
-// records: eight 512-bit registers of two records each, transposed in
+// All eight floats of 16 points' 32-byte records (a[j] holds value j of
+// every lane): eight 512-bit registers of two records each, transposed in
 // registers. Register i holds records (q_i, q_{i+4}) for i < 4 and
 // (q_{i+4}, q_{i+8}) above, so the shuffles below leave lanes in q order.
+// Outputs a caller does not use cost nothing (the compiler drops them).
 template <int Scale>
-[[gnu::always_inline]] inline void gather6(const float* rec, const int32_t* q, __m512& x, __m512& y, __m512& z, __m512& dx, __m512& dy, __m512& dz) {
-  auto pair = [&](int a, int b) {
-    return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_load_ps(rec + Scale * static_cast<ptrdiff_t>(q[a]))),
-                               _mm256_load_ps(rec + Scale * static_cast<ptrdiff_t>(q[b])), 1);
+[[gnu::always_inline]] inline void gather8(const float* rec, const int32_t* q, __m512 (&a)[8]) {
+  auto pair = [&](int i, int j) {
+    return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_load_ps(rec + Scale * static_cast<ptrdiff_t>(q[i]))),
+                               _mm256_load_ps(rec + Scale * static_cast<ptrdiff_t>(q[j])), 1);
   };
   const __m512 r0 = pair(0, 4), r1 = pair(1, 5), r2 = pair(2, 6), r3 = pair(3, 7);
   const __m512 r4 = pair(8, 12), r5 = pair(9, 13), r6 = pair(10, 14), r7 = pair(11, 15);
@@ -40,19 +43,15 @@ template <int Scale>
   const __m512 t2 = _mm512_unpacklo_ps(r2, r3), t3 = _mm512_unpackhi_ps(r2, r3);
   const __m512 t4 = _mm512_unpacklo_ps(r4, r5), t5 = _mm512_unpackhi_ps(r4, r5);
   const __m512 t6 = _mm512_unpacklo_ps(r6, r7), t7 = _mm512_unpackhi_ps(r6, r7);
-  // Per 128-bit quarter: x of 4 points, then dx of the same 4, and so on.
-  const __m512 sx0 = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m512 sy0 = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-  const __m512 sz0 = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m512 sx1 = _mm512_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0));
-  const __m512 sy1 = _mm512_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
-  const __m512 sz1 = _mm512_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0));
-  x = _mm512_shuffle_f32x4(sx0, sx1, _MM_SHUFFLE(2, 0, 2, 0));
-  y = _mm512_shuffle_f32x4(sy0, sy1, _MM_SHUFFLE(2, 0, 2, 0));
-  z = _mm512_shuffle_f32x4(sz0, sz1, _MM_SHUFFLE(2, 0, 2, 0));
-  dx = _mm512_shuffle_f32x4(sx0, sx1, _MM_SHUFFLE(3, 1, 3, 1));
-  dy = _mm512_shuffle_f32x4(sy0, sy1, _MM_SHUFFLE(3, 1, 3, 1));
-  dz = _mm512_shuffle_f32x4(sz0, sz1, _MM_SHUFFLE(3, 1, 3, 1));
+  // Per 128-bit quarter: value j of 4 points, then value j + 4 of the same 4.
+  const __m512 s0[4] = {_mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2)),
+                        _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2))};
+  const __m512 s1[4] = {_mm512_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2)),
+                        _mm512_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2))};
+  for (int j = 0; j < 4; ++j) {
+    a[j] = _mm512_shuffle_f32x4(s0[j], s1[j], _MM_SHUFFLE(2, 0, 2, 0));
+    a[j + 4] = _mm512_shuffle_f32x4(s0[j], s1[j], _MM_SHUFFLE(3, 1, 3, 1));
+  }
 }
 
 // Neighbour positions and the records' 4th float (tets): 16-byte loads, four
@@ -176,6 +175,32 @@ template <int Scale>
   gather4<Scale>(base, q, x, y, z, unused);
 }
 
+// All eight doubles of 8 points' 64-byte records (a[j] holds value j of
+// every lane): one load per point and an 8 x 8 transpose in three rounds.
+template <int Scale>
+[[gnu::always_inline]] inline void gather8(const double* base, const int32_t* q, __m512d (&a)[8]) {
+  __m512d r[8];
+  for (int i = 0; i < 8; ++i) r[i] = _mm512_load_pd(base + Scale * static_cast<ptrdiff_t>(q[i]));
+  // t[2i] = (r_2i[0] r_2i+1[0] | r_2i[2] r_2i+1[2] | ...), t[2i+1] the odd values.
+  __m512d t[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = _mm512_unpacklo_pd(r[2 * i], r[2 * i + 1]);
+    t[2 * i + 1] = _mm512_unpackhi_pd(r[2 * i], r[2 * i + 1]);
+  }
+  // u[4h + j]: values (j, j + 4) of points 4h..4h+3, in 128-bit pairs of points.
+  __m512d u[8];
+  for (int h = 0; h < 2; ++h)
+    for (int e = 0; e < 2; ++e) {
+      const __m512d lo = t[4 * h + e], hi = t[4 * h + 2 + e];
+      u[4 * h + e] = _mm512_shuffle_f64x2(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));      // values e, e + 4
+      u[4 * h + 2 + e] = _mm512_shuffle_f64x2(lo, hi, _MM_SHUFFLE(3, 1, 3, 1));  // values e + 2, e + 6
+    }
+  for (int j = 0; j < 4; ++j) {
+    a[j] = _mm512_shuffle_f64x2(u[j], u[4 + j], _MM_SHUFFLE(2, 0, 2, 0));
+    a[j + 4] = _mm512_shuffle_f64x2(u[j], u[4 + j], _MM_SHUFFLE(3, 1, 3, 1));
+  }
+}
+
 // The inverse of gather3 for 8 consecutive points: out[i] holds the quads
 // (x, y, z, 0) of points 2i and 2i + 1.
 [[gnu::always_inline]] inline void to_quads(const __m512d& x, const __m512d& y, const __m512d& z, __m512d (&out)[4]) {
@@ -255,16 +280,34 @@ struct Records<double> {
 
 // Position and increment of the neighbours q (pre-scaled offsets; the
 // records at rec + Scale q, increments at inc + Scale q when split).
+// dw is the increment's 4th value (float: the record's last; double: w of
+// the increment quad), which the smoothed shear pass uses for P_22.
 template <int Scale>
 [[gnu::always_inline]] inline void gather_xd(const float* rec, const float*, const int32_t* q, V<float> (&x)[3],
-                                             V<float> (&d)[3]) {
-  gather6<Scale>(rec, q, x[0].r, x[1].r, x[2].r, d[0].r, d[1].r, d[2].r);
+                                             V<float> (&d)[3], V<float>& dw) {
+  __m512 a[8];
+  gather8<Scale>(rec, q, a);
+  for (int k = 0; k < 3; ++k) x[k].r = a[k], d[k].r = a[4 + k];
+  dw.r = a[7];
 }
 template <int Scale>
 [[gnu::always_inline]] inline void gather_xd(const double* rec, const double* inc, const int32_t* q,
-                                             V<double> (&x)[3], V<double> (&d)[3]) {
+                                             V<double> (&x)[3], V<double> (&d)[3], V<double>& dw) {
   gather3<Scale>(rec, q, x[0].r, x[1].r, x[2].r);
-  gather3<Scale>(inc, q, d[0].r, d[1].r, d[2].r);
+  gather4<Scale>(inc, q, d[0].r, d[1].r, d[2].r, dw.r);
+}
+template <int Scale, class Real>
+[[gnu::always_inline]] inline void gather_xd(const Real* rec, const Real* inc, const int32_t* q, V<Real> (&x)[3],
+                                             V<Real> (&d)[3]) {
+  V<Real> unused;
+  gather_xd<Scale>(rec, inc, q, x, d, unused);
+}
+// Eight values per point from 8-value records (float 32 bytes, double 64).
+template <int Scale, class Real>
+[[gnu::always_inline]] inline void gather_8(const Real* base, const int32_t* q, V<Real> (&a)[8]) {
+  decltype(a[0].r) r[8];
+  gather8<Scale>(base, q, r);
+  for (int j = 0; j < 8; ++j) a[j].r = r[j];
 }
 // Position only, and position with w.
 template <int Scale, class Real>

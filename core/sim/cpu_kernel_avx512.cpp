@@ -28,10 +28,12 @@ namespace {
 // slices in order, so results do not depend on the thread count.
 constexpr int kSlices = 2;
 
-// The smoothed shear element's per-point stress record: its three rows,
-// each (P_r0, P_r1, P_r2, 0), so that the tet pass reads a row of 16 (or 8)
-// corners with the same loads and transposes as a position.
-constexpr int kStressRecord = 12;
+// The smoothed shear element's per-point stress record: P_00, P_01, P_02,
+// P_10, ..., P_21 (32 bytes in float, 64 in double), read by the tet pass
+// with one load per corner and a transpose (avx512_records.h, gather8).
+// P_22 rides in the displacement records' spare slot, the increment's 4th
+// value (Data::stress_tail), which the tet pass gathers with u and d.
+constexpr int kStressRecord = 8;
 
 }  // namespace
 
@@ -105,6 +107,10 @@ struct Avx512KernelData {
   AlignedVector<Real> tet_force[kSlices];
 
   Real* positions(int b) { return rec[b].data(); }
+  // Where point p's P_22 goes: the increment's 4th value beside its
+  // displacement (float: slot 7 of the urec record; double: w of the
+  // increment quad), every kRecord values.
+  Real* stress_tail(int b) { return kSplit ? inc[b].data() + 3 : urec[b].data() + 7; }
   Real* increments(int b) { return kSplit ? inc[b].data() : rec[b].data() + 4; }
 };
 
@@ -215,22 +221,25 @@ template <class Real>
 }
 
 // force_law::shear_barrier_slope on every lane: -1/J from J_min up, the
-// quadratic extension's (J - 2 J_min) / J_min^2 below.
+// quadratic extension's (J - 2 J_min) / J_min^2 below; inv_j = 1 / max(J,
+// J_min), the one division, which the damper shares.
 template <class Real>
-[[gnu::always_inline]] inline V<Real> barrier_slope(V<Real> J) {
+[[gnu::always_inline]] inline V<Real> barrier_slope(V<Real> J, V<Real> inv_j) {
   const Real jm = static_cast<Real>(force_law::kShearElementMinJ);
-  const V<Real> above = splat(Real(-1)) / J, below = (J - splat(2 * jm)) * splat(Real(1) / (jm * jm));
-  return select(J >= splat(jm), above, below);
+  const V<Real> below = (J - splat(2 * jm)) * splat(Real(1) / (jm * jm));
+  return select(J >= splat(jm), zero<Real>() - inv_j, below);
 }
 
-// P = F + phi'(J) cof F (force_law::shear_stress), F = I + H; also cof F and J.
+// P = F + phi'(J) cof F (force_law::shear_stress), F = I + H; also cof F, J
+// and inv_j = 1 / max(J, J_min).
 template <class Real>
-[[gnu::always_inline]] inline V<Real> shear_stress(const V33<Real>& H, V33<Real>& P, V33<Real>& C) {
+[[gnu::always_inline]] inline V<Real> shear_stress(const V33<Real>& H, V33<Real>& P, V33<Real>& C, V<Real>& inv_j) {
   V33<Real> F;
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) F[r][k] = r == k ? H[r][k] + splat(Real(1)) : H[r][k];
   const V<Real> J = cofactor(F, C);
-  const V<Real> slope = barrier_slope(J);
+  inv_j = splat(Real(1)) / max(J, splat(static_cast<Real>(force_law::kShearElementMinJ)));
+  const V<Real> slope = barrier_slope(J, inv_j);
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) P[r][k] = fmadd(slope, C[r][k], F[r][k]);
   return J;
@@ -421,14 +430,17 @@ void shear_stress_chunk(Data<Real>& D, int32_t c) {
       }
     }
     V33<Real> P, C;
-    shear_stress(H, P, C);
+    V<Real> inv_j;
+    shear_stress(H, P, C, inv_j);
     alignas(64) Real lanes[3][3][kLanes];
     for (int r = 0; r < 3; ++r)
       for (int k = 0; k < 3; ++k) store(lanes[r][k], P[r][k]);
     Real* const out = D.node_stress.data() + kStressRecord * static_cast<size_t>(p0);
-    for (int l = 0; l < kLanes; ++l)
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) out[kStressRecord * l + 4 * r + k] = lanes[r][k][l];
+    Real* const tail = D.stress_tail(D.cur) + Data<Real>::kRecord * static_cast<size_t>(p0);
+    for (int l = 0; l < kLanes; ++l) {
+      for (int j = 0; j < kStressRecord; ++j) out[kStressRecord * l + j] = lanes[j / 3][j % 3][l];
+      tail[Data<Real>::kRecord * l] = lanes[2][2][l];
+    }
   }
 }
 
@@ -456,8 +468,9 @@ void tet_slice(Data<Real>& D, const KernelStepInputs<Real>& in, int slice) {
     V3<Real> f[4];
     if constexpr (kShear) {
       V3<Real> u[4], d[4];
+      V<Real> p22[4];  // the corners' smoothed P_22 (avx512_records.h: the increment's 4th value)
       for (int i = 0; i < 4; ++i) {
-        if (D.damped) gather_xd<kScale>(rec, inc, q[i], u[i], d[i]);
+        if (D.damped || Element == ElementTerm::SmoothedShear) gather_xd<kScale>(rec, inc, q[i], u[i], d[i], p22[i]);
         else gather_x<kScale>(rec, q[i], u[i]);
       }
       V3<Real> g[3];
@@ -467,32 +480,33 @@ void tet_slice(Data<Real>& D, const KernelStepInputs<Real>& in, int slice) {
       for (int r = 0; r < 3; ++r)
         for (int k = 0; k < 3; ++k)
           H[r][k] = fmadd(u[3][r] - u[0][r], g[2][k], fmadd(u[2][r] - u[0][r], g[1][k], (u[1][r] - u[0][r]) * g[0][k]));
-      const V<Real> J = shear_stress(H, P, C);
+      V<Real> inv_j;
+      shear_stress(H, P, C, inv_j);
       for (int r = 0; r < 3; ++r)
         for (int k = 0; k < 3; ++k) A[r][k] = splat(D.shear_per_tet) * P[r][k];
       if constexpr (Element == ElementTerm::SmoothedShear) {
         const V<Real> corners = splat(D.shear_corners);
-        for (int r = 0; r < 3; ++r) {
-          V3<Real> sum, row;
-          gather_x<kStressRecord / 4>(D.node_stress.data() + 4 * r, q[0], sum);
-          for (int i = 1; i < 4; ++i) {
-            gather_x<kStressRecord / 4>(D.node_stress.data() + 4 * r, q[i], row);
-            for (int k = 0; k < 3; ++k) sum[k] = sum[k] + row[k];
-          }
-          for (int k = 0; k < 3; ++k) A[r][k] = fmadd(corners, sum[k], A[r][k]);
+        V<Real> sum[kStressRecord], row[kStressRecord];
+        gather_8<kStressRecord / 4>(D.node_stress.data(), q[0], sum);
+        for (int i = 1; i < 4; ++i) {
+          gather_8<kStressRecord / 4>(D.node_stress.data(), q[i], row);
+          for (int j = 0; j < kStressRecord; ++j) sum[j] = sum[j] + row[j];
         }
+        for (int j = 0; j < kStressRecord; ++j) A[j / 3][j % 3] = fmadd(corners, sum[j], A[j / 3][j % 3]);
+        A[2][2] = fmadd(corners, p22[0] + p22[1] + p22[2] + p22[3], A[2][2]);
       }
       if (D.damped) {
         V33<Real> G, GC;  // G and G cof^T + cof G^T
         for (int r = 0; r < 3; ++r)
           for (int k = 0; k < 3; ++k)
             G[r][k] = fmadd(d[3][r] - d[0][r], g[2][k], fmadd(d[2][r] - d[0][r], g[1][k], (d[1][r] - d[0][r]) * g[0][k]));
+        // Symmetric: the upper triangle, mirrored (the same products, so
+        // the same bits as computing both).
         for (int r = 0; r < 3; ++r)
-          for (int k = 0; k < 3; ++k)
-            GC[r][k] = fmadd(G[r][2], C[k][2], fmadd(G[r][1], C[k][1], G[r][0] * C[k][0])) +
-                       fmadd(C[r][2], G[k][2], fmadd(C[r][1], G[k][1], C[r][0] * G[k][0]));
-        const V<Real> damper =
-            splat(in.shear_damping) / max(J, splat(static_cast<Real>(force_law::kShearElementMinJ)));
+          for (int k = r; k < 3; ++k)
+            GC[k][r] = GC[r][k] = fmadd(G[r][2], C[k][2], fmadd(G[r][1], C[k][1], G[r][0] * C[k][0])) +
+                                  fmadd(C[r][2], G[k][2], fmadd(C[r][1], G[k][1], C[r][0] * G[k][0]));
+        const V<Real> damper = splat(in.shear_damping) * inv_j;
         for (int r = 0; r < 3; ++r)
           for (int k = 0; k < 3; ++k)
             A[r][k] = fmadd(damper, fmadd(GC[r][2], C[2][k], fmadd(GC[r][1], C[1][k], GC[r][0] * C[0][k])), A[r][k]);
