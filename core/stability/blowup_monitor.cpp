@@ -29,11 +29,12 @@ std::string kind_name(BlowupFinding::Kind k) {
 }
 
 // (L - r) / r > bound, i.e. L^2 > (1 + bound)^2 r^2, for some tissue spring
-// (a suture is a thread, not tissue: its length says nothing of stability).
-bool any_spring_beyond(const Model& model, const std::vector<Vec3>& x, double bound) {
+// of [begin, end) (a suture is a thread, not tissue: its length says
+// nothing of stability).
+bool any_spring_beyond(const Model& model, const std::vector<Vec3>& x, double bound, int32_t begin, int32_t end) {
   const double c = (1 + bound) * (1 + bound);
   int found = 0;
-  for (int32_t s = 0; s < model.first_suture(); ++s) {
+  for (int32_t s = begin; s < end; ++s) {
     const auto [a, b] = model.spring_ends[s];
     const double r = model.spring_rest[s];
     found |= (x[b] - x[a]).squaredNorm() > c * r * r;
@@ -41,14 +42,40 @@ bool any_spring_beyond(const Model& model, const std::vector<Vec3>& x, double bo
   return found != 0;
 }
 
-// V < -bound V_r for some tet (rest volumes are positive).
-bool any_tet_beyond(const Model& model, const std::vector<Vec3>& x, double bound) {
+// V < -bound V_r for some tet of [begin, end) (rest volumes are positive).
+bool any_tet_beyond(const Model& model, const std::vector<Vec3>& x, double bound, int32_t begin, int32_t end) {
   int found = 0;
-  for (int32_t t = 0; t < model.ntet(); ++t) {
+  for (int32_t t = begin; t < end; ++t) {
     const Tet& p = model.tet_points[t];
     found |= signed_volume(x[p[0]], x[p[1]], x[p[2]], x[p[3]]) < -bound * model.tet_rest_volume[t];
   }
   return found != 0;
+}
+
+// Check 1: the first non-finite position.
+std::optional<BlowupFinding> check_finite(const Model& model, const std::vector<Vec3>& x) {
+  for (int32_t i = 0; i < model.npoint(); ++i) {
+    if (!x[i].allFinite()) {
+      BlowupFinding f;
+      f.kind = BlowupFinding::Kind::NonFinite;
+      f.point = model.input_of_internal[i];
+      f.detail = "position is not finite";
+      return f;
+    }
+  }
+  return std::nullopt;
+}
+
+// Checks 3 and 4 on share `share` of `shares` of the springs and tets: whether
+// any is beyond its bound; `items`: how many were looked at.
+bool share_beyond(const Model& model, const std::vector<Vec3>& x, const BlowupMonitorOptions& options, int32_t share,
+                  int32_t shares, int64_t& items) {
+  const auto part = [&](int32_t n, int32_t k) { return static_cast<int32_t>(static_cast<int64_t>(n) * k / shares); };
+  const int32_t s0 = part(model.first_suture(), share), s1 = part(model.first_suture(), share + 1);
+  const int32_t t0 = part(model.ntet(), share), t1 = part(model.ntet(), share + 1);
+  items = (s1 - s0) + (options.check_inversion ? t1 - t0 : 0);
+  return any_spring_beyond(model, x, options.max_strain, s0, s1) ||
+         (options.check_inversion && any_tet_beyond(model, x, options.max_inversion, t0, t1));
 }
 
 }  // namespace
@@ -76,15 +103,7 @@ double elastic_energy(const Model& model, const std::vector<Vec3>& x) {
 
 std::optional<BlowupFinding> check_geometry(const Model& model, const std::vector<Vec3>& x,
                                             const BlowupMonitorOptions& options) {
-  for (int32_t i = 0; i < model.npoint(); ++i) {
-    if (!x[i].allFinite()) {
-      BlowupFinding f;
-      f.kind = BlowupFinding::Kind::NonFinite;
-      f.point = model.input_of_internal[i];
-      f.detail = "position is not finite";
-      return f;
-    }
-  }
+  if (auto f = check_finite(model, x)) return f;
   // The worst spring, if any is beyond the bound. A quick pass first, on
   // squared lengths (no square root or division): a check that finds
   // nothing, the usual case, then costs a few percent of the steps between
@@ -92,7 +111,7 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
   // parallel region here costs far more than it saves.
   int32_t worst = -1;
   double worst_strain = options.max_strain;
-  if (any_spring_beyond(model, x, options.max_strain)) {
+  if (any_spring_beyond(model, x, options.max_strain, 0, model.first_suture())) {
     for (int32_t s = 0; s < model.first_suture(); ++s) {
       const auto [a, b] = model.spring_ends[s];
       const double strain = ((x[b] - x[a]).norm() - model.spring_rest[s]) / model.spring_rest[s];
@@ -116,7 +135,7 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
                fmt(100 * options.max_strain, "%.0f") + " %)";
     return f;
   }
-  if (options.check_inversion && any_tet_beyond(model, x, options.max_inversion)) {
+  if (options.check_inversion && any_tet_beyond(model, x, options.max_inversion, 0, model.ntet())) {
     int32_t worst_tet = -1;
     double worst_ratio = 0;  // V / V_r, the most negative
     for (int32_t t = 0; t < model.ntet(); ++t) {
@@ -161,6 +180,7 @@ void BlowupMonitor::on_start(const Model& model, Backend& backend) {
   tool_work_ = 0;
   last_check_t_ = backend.time();
   checks_ = 0;
+  scan_share_ = -1;
   // Floor: KE of the whole mass moving at 1e-3 of the model's size per second.
   Vec3 lo = x_start_.empty() ? Vec3::Zero() : x_start_[0], hi = lo;
   for (const Vec3& p : x_start_) {
@@ -210,19 +230,26 @@ void BlowupMonitor::on_tick(const Model& model, Backend& backend, const TickInfo
   // tick's own path, the first tick's included (a grasp that pulls from the
   // first tick on puts energy in at once).
   if (info.tool_active) tool_work_ += info.reaction.force.norm() * (info.tool_center - info.tool_from).norm();
-  if ((info.tick + 1) % options_.interval_ticks != 0) return;
-  std::swap(x_prev_, x_);
-  backend.positions(x_);
-  ++checks_;
-  std::optional<BlowupFinding> finding = check_geometry(model, x_, options_);
-  if (finding && finding->kind != BlowupFinding::Kind::NonFinite) {
+  if ((info.tick + 1) % options_.interval_ticks == 0) {
+    std::swap(x_prev_, x_);
+    backend.positions(x_);
+    ++checks_;
     // A growing mode shows as energy first; report that as the cause when it holds.
-    if (auto energy = check_energy(model, info.t - last_check_t_)) finding = energy;
-  } else if (!finding) {
-    finding = check_energy(model, info.t - last_check_t_);
+    std::optional<BlowupFinding> finding = check_finite(model, x_);
+    if (!finding) finding = check_energy(model, info.t - last_check_t_);
+    last_check_t_ = info.t;
+    if (finding) throw Error(ErrorKind::Numerical, describe(model, *finding, info.t, info));
+    scan_share_ = 0;
   }
-  last_check_t_ = info.t;
-  if (finding) throw Error(ErrorKind::Numerical, describe(model, *finding, info.t, info));
+  if (scan_share_ < 0) return;
+  int64_t items = 0;
+  const bool beyond = share_beyond(model, x_, options_, scan_share_, options_.interval_ticks, items);
+  largest_tick_scan_ = std::max(largest_tick_scan_, items);
+  if (++scan_share_ == options_.interval_ticks) scan_share_ = -1;
+  // The whole pass names the worst spring or tet (a finding is rare: its cost does not matter).
+  if (beyond)
+    if (auto finding = check_geometry(model, x_, options_))
+      throw Error(ErrorKind::Numerical, describe(model, *finding, info.t, info));
 }
 
 std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, double t, const TickInfo& info) const {

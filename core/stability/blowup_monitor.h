@@ -10,6 +10,12 @@
 //      magnitude within a few ticks while physical motion never does;
 //   3. spring strain beyond a bound (default 400 % stretch);
 //   4. tet inversion beyond a bound (signed volume < -3 rest volumes).
+// 1 and 2 run on the tick that reads the positions (one pass over the
+// points); 3 and 4, a pass over every spring and tet, are spread over that
+// tick and the next interval_ticks - 1, a share each, on the positions read,
+// so that no tick of a live session pays for the whole pass (at liver size
+// it costs about half a 1 kHz tick's stepping). A finding therefore stops
+// the run at most 2 interval_ticks - 1 ticks after it arose.
 // A finding stops the run: on_tick throws Error(Numerical) naming the
 // simulated time, the point (input numbering) and the likely cause. The run
 // loop then writes the force log with completed = false and this reason.
@@ -70,6 +76,8 @@ class BlowupMonitor final : public RunObserver {
   void on_topology_changed(const Model& next, Backend& backend) override;
 
   int64_t checks() const { return checks_; }
+  // The most springs and tets one tick has checked so far (3 and 4 above).
+  int64_t largest_tick_scan() const { return largest_tick_scan_; }
   // The full message of a finding at simulated time t (what on_tick throws).
   std::string describe(const Model& model, const BlowupFinding& finding, double t, const TickInfo& info) const;
 
@@ -84,6 +92,9 @@ class BlowupMonitor final : public RunObserver {
   double energy_floor_ = 0;    // J
   double last_check_t_ = 0;
   int64_t checks_ = 0;
+  // The geometric pass over x_: the share a tick checks next, or -1 when done.
+  int32_t scan_share_ = -1;
+  int64_t largest_tick_scan_ = 0;
 };
 
 // Cost of one check on `model` with `backend` (positions() included), for

@@ -137,6 +137,55 @@ TEST(StabilityBlowup, GeometryChecksNameThePoint) {
   EXPECT_NEAR(elastic_energy(model, model.rest_position), 0.0, 1e-18);  // rest state stores nothing
 }
 
+// With a check every 10 ticks, the springs and tets are checked a tenth per
+// tick (so no tick of a live session pays for the whole pass), and a spring
+// stretched beyond the bound still stops the run within the ten ticks that
+// follow the positions being read.
+TEST(StabilityBlowup, GeometryPassIsSpreadOverTheIntervalAndStillFindsAStretchedSpring) {
+  const Model model = testing::stability_box(3, 0.03, testing::undamped_material());
+  BlowupMonitorOptions options;
+  options.interval_ticks = 10;
+  options.energy_factor = 1e30;  // the geometric checks alone
+  const int64_t items = model.first_suture() + model.ntet();
+  auto backend = make_cpu_backend(model, {}, testing::one_thread());
+  const double dt = 0.5 * estimate_critical_step(model).dt_crit;
+  BlowupMonitor quiet(options, {dt, 0, 0, std::nullopt});
+  EXPECT_EQ(run_with_monitor(model, *backend, quiet, dt, 1, 30), "");
+  EXPECT_EQ(quiet.checks(), 3);
+  EXPECT_GT(quiet.largest_tick_scan(), 0);
+  EXPECT_LE(quiet.largest_tick_scan(), items / 10 + 2) << items << " springs and tets";
+
+  // A free interior point moved 10 cells: its springs stretch about tenfold (bound 400 %).
+  const int32_t internal = model.internal_of_input[21];
+  ASSERT_FALSE(model.fixed[internal]);
+  std::vector<Vec3> x = model.rest_position;
+  x[internal] += Vec3(0.1, 0, 0);
+  auto stretched = make_cpu_backend(model, {}, testing::one_thread());
+  stretched->set_state(x, x);
+  BlowupMonitor monitor(options, {dt, 0, 0, std::nullopt});
+  monitor.on_start(model, *stretched);
+  TickRequest request;
+  request.dt = dt;
+  int stopped_at = -1;
+  std::string msg;
+  for (int i = 0; i < 40 && stopped_at < 0; ++i) {
+    TickInfo info;
+    info.tick = i;
+    info.reaction = stretched->tick(request);
+    info.t = stretched->time();
+    try {
+      monitor.on_tick(model, *stretched, info);
+    } catch (const Error& e) {
+      stopped_at = i;
+      msg = e.what();
+    }
+  }
+  // Positions read at tick 9; their pass runs over ticks 9 to 18.
+  EXPECT_GE(stopped_at, 9) << msg;
+  EXPECT_LE(stopped_at, 18) << msg;
+  EXPECT_NE(msg.find("stretched by"), std::string::npos) << msg;
+}
+
 // Through the run loop: the stop leaves a valid forces.json that says the run
 // was cut short and why, with the samples up to the stop.
 TEST(StabilityBlowup, RunLoopWritesTruncatedLog) {
