@@ -54,6 +54,32 @@ template <int Scale>
   }
 }
 
+// The inverse of gather8 for 16 consecutive points: writes the 8-float
+// records of points p0.. from a[j] (value j of every lane). Per half of the
+// values a 4 x 4 transpose in each 128-bit quarter, then each register of
+// two records is paired from the two halves and stored as two 32-byte rows.
+[[gnu::always_inline]] inline void store8(float* out, const __m512 (&a)[8]) {
+  __m512 r[2][4];  // r[h][i], quarter k: values 4h..4h+3 of point 4k + i
+  for (int h = 0; h < 2; ++h) {
+    const __m512 t0 = _mm512_unpacklo_ps(a[4 * h], a[4 * h + 1]), t1 = _mm512_unpackhi_ps(a[4 * h], a[4 * h + 1]);
+    const __m512 t2 = _mm512_unpacklo_ps(a[4 * h + 2], a[4 * h + 3]), t3 = _mm512_unpackhi_ps(a[4 * h + 2], a[4 * h + 3]);
+    r[h][0] = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+    r[h][1] = _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+    r[h][2] = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+    r[h][3] = _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+  }
+  // Quarters (r0.k, r1.k, r0.k+1, r1.k+1): the records of points 4k + i and 4(k + 1) + i.
+  const __m512i lo = _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 4, 5, 6, 7, 20, 21, 22, 23);
+  const __m512i hi = _mm512_add_epi32(lo, _mm512_set1_epi32(8));
+  for (int i = 0; i < 4; ++i) {
+    const __m512 p01 = _mm512_permutex2var_ps(r[0][i], lo, r[1][i]), p23 = _mm512_permutex2var_ps(r[0][i], hi, r[1][i]);
+    _mm256_store_ps(out + 8 * i, _mm512_castps512_ps256(p01));
+    _mm256_store_ps(out + 8 * (4 + i), _mm512_extractf32x8_ps(p01, 1));
+    _mm256_store_ps(out + 8 * (8 + i), _mm512_castps512_ps256(p23));
+    _mm256_store_ps(out + 8 * (12 + i), _mm512_extractf32x8_ps(p23, 1));
+  }
+}
+
 // Neighbour positions and the records' 4th float (tets): 16-byte loads, four
 // per register, and a 4 x 4 transpose inside each 128-bit quarter.
 template <int Scale>
@@ -175,12 +201,8 @@ template <int Scale>
   gather4<Scale>(base, q, x, y, z, unused);
 }
 
-// All eight doubles of 8 points' 64-byte records (a[j] holds value j of
-// every lane): one load per point and an 8 x 8 transpose in three rounds.
-template <int Scale>
-[[gnu::always_inline]] inline void gather8(const double* base, const int32_t* q, __m512d (&a)[8]) {
-  __m512d r[8];
-  for (int i = 0; i < 8; ++i) r[i] = _mm512_load_pd(base + Scale * static_cast<ptrdiff_t>(q[i]));
+// An 8 x 8 transpose in three rounds: a[j] lane i = r[i] lane j.
+[[gnu::always_inline]] inline void transpose8(const __m512d (&r)[8], __m512d (&a)[8]) {
   // t[2i] = (r_2i[0] r_2i+1[0] | r_2i[2] r_2i+1[2] | ...), t[2i+1] the odd values.
   __m512d t[8];
   for (int i = 0; i < 4; ++i) {
@@ -199,6 +221,22 @@ template <int Scale>
     a[j] = _mm512_shuffle_f64x2(u[j], u[4 + j], _MM_SHUFFLE(2, 0, 2, 0));
     a[j + 4] = _mm512_shuffle_f64x2(u[j], u[4 + j], _MM_SHUFFLE(3, 1, 3, 1));
   }
+}
+
+// All eight doubles of 8 points' 64-byte records (a[j] holds value j of
+// every lane): one load per point and a transpose.
+template <int Scale>
+[[gnu::always_inline]] inline void gather8(const double* base, const int32_t* q, __m512d (&a)[8]) {
+  __m512d r[8];
+  for (int i = 0; i < 8; ++i) r[i] = _mm512_load_pd(base + Scale * static_cast<ptrdiff_t>(q[i]));
+  transpose8(r, a);
+}
+
+// The inverse for 8 consecutive points: their records from a[j] (value j of every lane).
+[[gnu::always_inline]] inline void store8(double* out, const __m512d (&a)[8]) {
+  __m512d r[8];
+  transpose8(a, r);
+  for (int i = 0; i < 8; ++i) _mm512_store_pd(out + 8 * i, r[i]);
 }
 
 // The inverse of gather3 for 8 consecutive points: out[i] holds the quads
@@ -302,12 +340,19 @@ template <int Scale, class Real>
   V<Real> unused;
   gather_xd<Scale>(rec, inc, q, x, d, unused);
 }
-// Eight values per point from 8-value records (float 32 bytes, double 64).
+// Eight values per point from 8-value records (float 32 bytes, double 64),
+// and the records of the points p0.. from eight values per lane.
 template <int Scale, class Real>
 [[gnu::always_inline]] inline void gather_8(const Real* base, const int32_t* q, V<Real> (&a)[8]) {
   decltype(a[0].r) r[8];
   gather8<Scale>(base, q, r);
   for (int j = 0; j < 8; ++j) a[j].r = r[j];
+}
+template <class Real>
+[[gnu::always_inline]] inline void store_8(Real* out, const V<Real> (&a)[8]) {
+  decltype(a[0].r) r[8];
+  for (int j = 0; j < 8; ++j) r[j] = a[j].r;
+  store8(out, r);
 }
 // Position only, and position with w.
 template <int Scale, class Real>

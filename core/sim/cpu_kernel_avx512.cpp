@@ -432,15 +432,12 @@ void shear_stress_chunk(Data<Real>& D, int32_t c) {
     V33<Real> P, C;
     V<Real> inv_j;
     shear_stress(H, P, C, inv_j);
-    alignas(64) Real lanes[3][3][kLanes];
-    for (int r = 0; r < 3; ++r)
-      for (int k = 0; k < 3; ++k) store(lanes[r][k], P[r][k]);
-    Real* const out = D.node_stress.data() + kStressRecord * static_cast<size_t>(p0);
+    const V<Real> record[kStressRecord] = {P[0][0], P[0][1], P[0][2], P[1][0], P[1][1], P[1][2], P[2][0], P[2][1]};
+    store_8(D.node_stress.data() + kStressRecord * static_cast<size_t>(p0), record);
+    alignas(64) Real p22[kLanes];
+    store(p22, P[2][2]);
     Real* const tail = D.stress_tail(D.cur) + Data<Real>::kRecord * static_cast<size_t>(p0);
-    for (int l = 0; l < kLanes; ++l) {
-      for (int j = 0; j < kStressRecord; ++j) out[kStressRecord * l + j] = lanes[j / 3][j % 3][l];
-      tail[Data<Real>::kRecord * l] = lanes[2][2][l];
-    }
+    for (int l = 0; l < kLanes; ++l) tail[Data<Real>::kRecord * l] = p22[l];
   }
 }
 
