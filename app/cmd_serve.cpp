@@ -48,7 +48,7 @@ struct ServeArgs {
 bool write_session(const fs::path& path, const ServeArgs& args, const LiveSession& session, const Backend& backend) {
   if (session.ticks() == 0) return false;
   const nlohmann::json j = session_scenario(args.scenario, session.keyframes(), session.end_time(), backend.name(),
-                                            backend.precision(), session.cuts());
+                                            backend.precision(), session.cuts(), session.scripted_applied());
   write_file_atomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
   return true;
 }
@@ -103,6 +103,8 @@ void serve_command(const ServeArgs& args) {
   live.log = &std::cerr;
   live.surface_rate = args.surface_rate;
   for (const CutEvent& c : s.events.cuts) live.cut_names.push_back(c.name);
+  // The scenario's cuts over one tick go to the run through the session, off the tick's path like a client's.
+  live.scripted_cuts = take_one_tick_cuts(s.events, s.time.tick());
   live.tool = backend_tool(s);
   if (stderr_is_terminal()) live.status = [](const std::string& line) { std::cerr << "organsim " << line << "\n"; };
   LiveSession session(server, live);

@@ -29,9 +29,33 @@ std::string ms(double s) { return format_number(s * 1e3, "%.3g") + " ms"; }
 
 }  // namespace
 
+bool sweeps_one_tick(const CutEvent& cut, double tick) {
+  if (cut.keyframes.size() != 2 || cut.applied_at || cut.when_ready || !(tick > 0)) return false;
+  // The run loop's tick i is [i tick, (i + 1) tick] (those products), active
+  // for the cut when t1 > start and t0 < end. The first such tick: the
+  // smallest i with t1 > start; the next is active too unless its t0 >= end.
+  int64_t i = std::max<int64_t>(0, static_cast<int64_t>(std::floor(cut.start() / tick)) - 2);
+  while (static_cast<double>(i + 1) * tick <= cut.start()) ++i;
+  return static_cast<double>(i + 1) * tick >= cut.end();
+}
+
+std::vector<std::pair<size_t, CutEvent>> take_one_tick_cuts(EventsDef& events, double tick) {
+  std::vector<std::pair<size_t, CutEvent>> taken;
+  std::vector<CutEvent> kept;
+  for (size_t i = 0; i < events.cuts.size(); ++i) {
+    if (sweeps_one_tick(events.cuts[i], tick)) taken.emplace_back(i, events.cuts[i]);
+    else kept.push_back(events.cuts[i]);
+  }
+  events.cuts = std::move(kept);
+  std::stable_sort(taken.begin(), taken.end(),
+                   [](const auto& a, const auto& b) { return a.second.start() < b.second.start(); });
+  return taken;
+}
+
 LiveSession::LiveSession(LiveLink& link, LiveOptions options)
     : link_(link), o_(std::move(options)), refusals_(o_.log), command_refusals_(o_.log), device_(o_.device), current_(o_.start) {
   keyframes_.push_back({0.0, o_.start});
+  scripted_applied_at_.resize(o_.scripted_cuts.size());
 }
 
 std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
@@ -56,7 +80,16 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
   if (!pending_) link_.receive_until(scheduled, *this);
   if (stopped()) return std::nullopt;
   apply_pending(tick, t_start, t_end);
-  if (cut_requested_) make_cut(tick, t_start, t_end);
+  // A scripted cut at its tick; a client's waits until no cut is in flight
+  // (and is made at the pose of the tick it goes out with).
+  const auto& scripted = o_.scripted_cuts;
+  if (next_scripted_ < scripted.size() && scripted[next_scripted_].second.start() < t_end) {
+    cut_this_tick_ = scripted[next_scripted_].second;
+    cut_this_tick_->when_ready = true;
+    in_flight_.emplace_back(true, next_scripted_++);
+  } else if (cut_requested_ && in_flight_.empty()) {
+    make_cut(tick, t_start, t_end);
+  }
   end_time_ = t_end;
   return current_;
 }
@@ -68,10 +101,23 @@ std::optional<CutEvent> LiveSession::cut_for_tick() {
 }
 
 void LiveSession::cut_applied(double t0) {
-  if (!cut_in_flight_) return;
-  cuts_.back().applied_at = t0;
-  cut_log_.back()["applied_tick"] = ticks_;  // the tick that starts now (ticks_ were served before it)
-  cut_in_flight_ = false;
+  if (in_flight_.empty()) return;
+  const auto [is_scripted, i] = in_flight_.front();
+  in_flight_.pop_front();
+  if (is_scripted) {
+    scripted_applied_at_[i] = t0;
+    return;
+  }
+  cuts_[i].applied_at = t0;
+  cut_log_[i]["applied_tick"] = ticks_;  // the tick that starts now (ticks_ were served before it)
+}
+
+std::vector<std::pair<size_t, double>> LiveSession::scripted_applied() const {
+  std::vector<std::pair<size_t, double>> out;
+  // A cut still being built: no tick of the replay starts at the session's end (as cuts()).
+  for (size_t i = 0; i < next_scripted_; ++i)
+    out.emplace_back(o_.scripted_cuts[i].first, scripted_applied_at_[i].value_or(end_time_));
+  return out;
 }
 
 std::vector<CutEvent> LiveSession::cuts() const {
@@ -94,7 +140,7 @@ void LiveSession::on_text(const ClientText& text) {
     command_refusals_.refuse("cut_without_pose", text.client, "CUT before any tool pose (the cut is made at the tool's pose)");
     return;
   }
-  if (cut_requested_ || cut_in_flight_) {
+  if (cut_requested_ || !in_flight_.empty()) {
     command_refusals_.refuse("cut_busy", text.client,
                              "CUT while the previous cut is not in the model yet (it is being built off the tick's path)");
     return;
@@ -118,7 +164,7 @@ void LiveSession::make_cut(int64_t tick, double t_start, double t_end) {
   cut.when_ready = true;
   cuts_.push_back(cut);
   cut_this_tick_ = cut;
-  cut_in_flight_ = true;
+  in_flight_.emplace_back(false, cuts_.size() - 1);
   const auto vec = [](const Vec3& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
   cut_log_.push_back({{"tick", tick},
                       {"name", cut.name},

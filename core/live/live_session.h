@@ -14,10 +14,12 @@
 // leaves after start + t1.
 #include <atomic>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <optional>
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/live/client_command.h"
@@ -25,6 +27,7 @@
 #include "core/live/live_link.h"
 #include "core/live/refusal_log.h"
 #include "core/run/tool_driver.h"
+#include "core/scenario/events.h"
 #include "core/scenario/tool_spec.h"
 #include "core/sim/run_observer.h"
 #include "core/sim/tool.h"
@@ -46,7 +49,21 @@ struct LiveOptions {
   double surface_rate = 0;  // Hz
   std::vector<std::string> cut_names;  // the scenario's cuts: a client's cut gets another name
   BackendTool tool;  // for the contact stiffness in each reply (push only)
+  // The scenario's cuts that sweep over one tick (take_one_tick_cuts), with
+  // their index among its cuts, by start time: each is handed to the run at
+  // its tick as a client's cut is, so that it is built off the tick's path.
+  std::vector<std::pair<size_t, CutEvent>> scripted_cuts;
 };
+
+// Whether `cut` is active over exactly one tick [i tick, (i + 1) tick] of the
+// run loop (two keyframes, neither applied_at nor when_ready): a cut that a
+// live session can build off the tick's path. A sweep over several ticks
+// cannot be: each tick's part starts from the Model the last one made.
+bool sweeps_one_tick(const CutEvent& cut, double tick);
+
+// Moves the cuts of `events` that sweep over one tick out of it, with their
+// index among its cuts, for LiveOptions::scripted_cuts.
+std::vector<std::pair<size_t, CutEvent>> take_one_tick_cuts(EventsDef& events, double tick);
 
 // One applied pose, for the force log: the tick it was applied at, when it
 // arrived (s after the session started), who sent it and the matrix as sent.
@@ -62,10 +79,11 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
 
   // ToolDriver: waits for the first client (tick 0), then for the tick's time.
   std::optional<Vec3> tool_at_end_of(int64_t tick, double t_end) override;
-  // The client's cut over the tick just asked for, if a CUT came before it;
-  // built off the tick's path (when_ready).
+  // The cut over the tick just asked for: a scripted one-tick cut due then,
+  // or else the client's, if a CUT came before it; built off the tick's
+  // path (when_ready).
   std::optional<CutEvent> cut_for_tick() override;
-  // Records the tick that swapped the cut in (its applied_at in session.json).
+  // Records the tick that swapped the oldest cut in flight in (its applied_at in session.json).
   void cut_applied(double t0) override;
   void add_meta(nlohmann::json& extra) const override;
   // RunObserver: sends the tick's reaction and keeps the timing (and the surface now and then).
@@ -85,6 +103,10 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   // the tick that swapped each in (applied_at; for a cut still being built
   // when the session ended, its end: never), for session.json.
   std::vector<CutEvent> cuts() const;
+  // The scripted one-tick cuts handed to the run: their index among the
+  // scenario's cuts and the tick that swapped each in (as cuts()), for
+  // their applied_at in session.json.
+  std::vector<std::pair<size_t, double>> scripted_applied() const;
   // Why the session ended early ("SIGINT"), empty otherwise.
   const std::string& stopped_by() const { return stopped_by_; }
 
@@ -117,7 +139,12 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::optional<std::pair<CutCommand, ClientText>> cut_requested_;
   std::optional<CutEvent> cut_this_tick_;
   std::vector<CutEvent> cuts_;
-  bool cut_in_flight_ = false;  // the last cut is made but not yet swapped in
+  // The scripted cuts' swap-in times (o_.scripted_cuts' order) and the next one due.
+  std::vector<std::optional<double>> scripted_applied_at_;
+  size_t next_scripted_ = 0;
+  // Cuts handed to the run and not yet swapped in, oldest first: (scripted,
+  // index into o_.scripted_cuts or cuts_).
+  std::deque<std::pair<bool, size_t>> in_flight_;
   nlohmann::json cut_log_ = nlohmann::json::array();
   std::vector<Keyframe> keyframes_;
   std::vector<AppliedPose> applied_;

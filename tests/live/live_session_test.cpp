@@ -6,11 +6,13 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <thread>
 
 #include "core/live/live_session.h"
+#include "core/live/session_scenario.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/run/run.h"
 #include "core/sim/contact_stiffness.h"
@@ -93,6 +95,7 @@ struct Served {
   RunResult result;
   std::vector<Keyframe> keyframes;
   std::vector<CutEvent> cuts;
+  std::vector<std::pair<size_t, double>> scripted;  // LiveSession::scripted_applied
   double end_time = 0;
   nlohmann::json live;
 };
@@ -117,6 +120,8 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObser
   o.start = s.tool->spec.position_at(0);
   o.scene = scene_box(model.rest_position);
   o.stop = &link.stop;
+  Scenario run = s;  // as organsim serve: the one-tick cuts go through the session
+  o.scripted_cuts = take_one_tick_cuts(run.events, o.tick);
   LiveSession session(link, o);
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session";
@@ -124,9 +129,10 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObser
   if (probe) r.observers.push_back(probe);
   r.tool_driver = &session;
   Served out;
-  out.result = run_scenario(s, model, *backend, r);
+  out.result = run_scenario(run, model, *backend, r);
   out.keyframes = session.keyframes();
   out.cuts = session.cuts();
+  out.scripted = session.scripted_applied();
   out.end_time = session.end_time();
   out.live = out.result.meta.extra["live"];
   return out;
@@ -342,6 +348,84 @@ TEST(LiveSession, AClientCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
   expect_same_samples(again.samples, served.result.samples);
   EXPECT_EQ(again.meta.extra["events"][0]["applied_t"], *cut.applied_at);
   EXPECT_EQ(again.meta.extra["final_points"], served.result.meta.extra["final_points"]);
+}
+
+// A cut goes off the tick's path only when it is active over one tick of the run loop.
+TEST(LiveSession, OnlyACutOverOneTickOfTheRunLoopIsTakenOffTheTicksPath) {
+  const double tick = 1e-3;
+  const auto cut = [&](double from, double to) {
+    CutEvent c;
+    c.keyframes = {{from * tick, Vec3(0, 0, 0), Vec3(0, 0, 1)}, {to * tick, Vec3(1, 0, 0), Vec3(1, 0, 1)}};
+    return c;
+  };
+  EXPECT_TRUE(sweeps_one_tick(cut(10, 11), tick));
+  EXPECT_TRUE(sweeps_one_tick(cut(10, 10.5), tick));
+  EXPECT_TRUE(sweeps_one_tick(cut(0, 1), tick));
+  EXPECT_FALSE(sweeps_one_tick(cut(10.5, 11.5), tick));  // across two ticks
+  EXPECT_FALSE(sweeps_one_tick(cut(10, 12), tick));
+  CutEvent replayed = cut(10, 11);
+  replayed.applied_at = 12 * tick;  // a recorded one goes in at its time
+  EXPECT_FALSE(sweeps_one_tick(replayed, tick));
+  CutEvent bent = cut(10, 11);
+  bent.keyframes.insert(bent.keyframes.begin() + 1, {10.5 * tick, Vec3(0.5, 0, 0), Vec3(0.5, 0, 1)});
+  EXPECT_FALSE(sweeps_one_tick(bent, tick));
+
+  EventsDef events;
+  events.cuts = {cut(20, 25), cut(30, 31), cut(10, 11)};
+  const auto taken = take_one_tick_cuts(events, tick);
+  ASSERT_EQ(taken.size(), 2u);
+  EXPECT_EQ(taken[0].first, 2u);  // by start time, with their index among the scenario's cuts
+  EXPECT_EQ(taken[1].first, 1u);
+  ASSERT_EQ(events.cuts.size(), 1u);
+  EXPECT_EQ(events.cuts[0].start(), 20 * tick);
+}
+
+// A scenario's cut over one tick is built on the worker like a client's,
+// swapped in at a later tick, and replays bit for bit with that tick as its
+// applied_at; session.json gives it that applied_at in place.
+TEST(LiveSession, AScenariosOneTickCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
+  Scenario s = cube();
+  CutEvent slit;
+  slit.name = "slit";
+  slit.keyframes = {{10 * s.time.tick(), Vec3(0.010, 0.021, 0.046), Vec3(0.010, 0.021, 0.026)},
+                    {11 * s.time.tick(), Vec3(0.030, 0.021, 0.046), Vec3(0.030, 0.021, 0.026)}};
+  s.events.cuts = {slit};
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  link.script[2] = {pose_down_mm(20, 21, 46)};
+  for (int64_t tick = 11; tick < 31; ++tick) link.pause_ms[tick] = 50;  // time for the worker (as above)
+  const Served served = serve(s, model, link);
+
+  ASSERT_EQ(served.scripted.size(), 1u);
+  EXPECT_EQ(served.scripted[0].first, 0u);
+  const double applied_at = served.scripted[0].second;
+  EXPECT_GE(applied_at, 11 * s.time.tick());
+  const nlohmann::json& events = served.result.meta.extra["events"];
+  ASSERT_EQ(events.size(), 1u) << events;
+  EXPECT_EQ(events[0]["t"], 10 * s.time.tick());
+  EXPECT_EQ(events[0]["sources"][0]["name"], "slit");
+  EXPECT_GT(events[0]["faces_separated"].get<int>(), 0);
+  EXPECT_EQ(events[0]["applied_t"], applied_at);
+  EXPECT_TRUE(events[0].contains("backend_prepare_ms")) << events[0];  // prepared on the worker
+  EXPECT_TRUE(served.cuts.empty());
+
+  Scenario again = s;
+  again.events.cuts[0].applied_at = applied_at;
+  const RunResult replayed = replay(again, model, served);
+  expect_same_samples(replayed.samples, served.result.samples);
+  EXPECT_EQ(replayed.meta.extra["events"][0]["applied_t"], applied_at);
+
+  // session.json: the n-th cut among the scenario's events gets the applied_at, nothing is added.
+  const fs::path file = fs::path(ORGANSIM_TEST_TMP) / "scripted_cut_scenario.json";
+  {
+    std::ofstream out(file);
+    out << R"({"events": [{"suture": {"t": 1, "pairs": [[0, 1]], "stiffness": 10}},
+                          {"cut": {"keyframes": []}}, {"cut": {"name": "slit", "keyframes": []}}]})";
+  }
+  const nlohmann::json j = session_scenario(file, served.keyframes, served.end_time, "cpu", "double", {}, {{1, applied_at}});
+  ASSERT_EQ(j["events"].size(), 3u);
+  EXPECT_FALSE(j["events"][1]["cut"].contains("applied_at"));
+  EXPECT_EQ(j["events"][2]["cut"]["applied_at"], applied_at);
 }
 
 }  // namespace
