@@ -230,10 +230,10 @@ template <class Real>
   return select(J >= splat(jm), zero<Real>() - inv_j, below);
 }
 
-// P = F + phi'(J) cof F (force_law::shear_stress), F = I + H; also cof F, J
+// P = F + phi'(J) cof F (force_law::shear_stress), F = I + H; also cof F
 // and inv_j = 1 / max(J, J_min).
 template <class Real>
-[[gnu::always_inline]] inline V<Real> shear_stress(const V33<Real>& H, V33<Real>& P, V33<Real>& C, V<Real>& inv_j) {
+[[gnu::always_inline]] inline void shear_stress(const V33<Real>& H, V33<Real>& P, V33<Real>& C, V<Real>& inv_j) {
   V33<Real> F;
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) F[r][k] = r == k ? H[r][k] + splat(Real(1)) : H[r][k];
@@ -242,7 +242,6 @@ template <class Real>
   const V<Real> slope = barrier_slope(J, inv_j);
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) P[r][k] = fmadd(slope, C[r][k], F[r][k]);
-  return J;
 }
 
 // Position Verlet with drag for the points p0..: d' = (1 - alpha dt) d +

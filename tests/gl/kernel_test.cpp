@@ -20,6 +20,7 @@
 #include "core/util/error.h"
 #include "gl_test_scenes.h"
 #include "shaders/bindings.glsl.h"
+#include "tests/core/contact_test_util.h"
 
 namespace organsim {
 namespace {
@@ -100,12 +101,7 @@ TEST_P(GlKernel, PushContactAndReactionMatchTheReference) {
     // Tool centre 1.2 cm above the top face's centre: the top points nearest the
     // centre are inside the 2 cm sphere (the capsule's tip).
     const Vec3 center(0.05, 0.05, 0.062);
-    TickRequest request;
-    request.dt = kDt;
-    request.substeps = 1;
-    request.tool_active = true;
-    request.tool_from = request.tool_to = center;
-    request.turn_from = request.turn_to = turn;
+    TickRequest request = testing::one_step_at(kDt, center, turn);
     EXPECT_EQ(gl.tick(request).contacts, 0);  // latency: nothing read yet
     std::vector<Vec3> got, want;
     gl.forces(got);
@@ -160,11 +156,7 @@ TEST_P(GlKernel, PullAttachmentsAndReactionMatchTheReference) {
   ASSERT_LT(smallest_scale, 0.5);
   gl.attach(attachment);
   const Vec3 center = grasp + Vec3(0.003, -0.002, 0.01);  // dragged up and sideways: force and torque
-  TickRequest request;
-  request.dt = kDt;
-  request.substeps = 1;
-  request.tool_active = true;
-  request.tool_from = request.tool_to = center;
+  TickRequest request = testing::one_step_at(kDt, center);
   gl.tick(request);
   std::vector<Vec3> got, want;
   gl.forces(got);
