@@ -83,7 +83,7 @@ std::pair<Model, Model> suture_models(const MaterialBenchOptions& options, int32
   s.time.settle = 0;
   s.outputs = OutputsDef{};
   s.outputs.forces = false;
-  BackendSelection sel;
+  BackendSelection sel;  // on the CPU whatever the rows run on: only the Model versions count here
   sel.name = "cpu";
   sel.precision = options.precision;
   sel.threads = options.threads;
@@ -144,7 +144,7 @@ MaterialComparison measure_materials(const MaterialBenchOptions& options, const 
   entries[4].model = &sutured;
 
   BackendSelection sel;
-  sel.name = "cpu";
+  sel.name = options.backend;
   sel.precision = options.precision;
   sel.threads = options.threads;
   std::vector<Vec3> positions;
@@ -168,11 +168,12 @@ MaterialComparison measure_materials(const MaterialBenchOptions& options, const 
 
   MaterialComparison out;
   out.target_points = target_points;
+  out.backend = options.backend;
   out.precision = options.precision;
   for (Entry& e : entries) {
     e.row.timing = summarise_ms(e.ms);
     e.row.device = e.backend->device();  // after the timing: the thread count and kernel it ran on
-    e.row.kernel = kernel_of(e.row.device);
+    e.row.kernel = options.backend == "cpu" ? kernel_of(e.row.device) : "glsl";
     out.rows.push_back(e.row);
   }
   auto ratio = [&](size_t of, size_t over, double target) {
@@ -193,6 +194,7 @@ MaterialComparison measure_materials(const MaterialBenchOptions& options, const 
 nlohmann::json to_json(const MaterialComparison& c) {
   nlohmann::json j;
   j["target_points"] = c.target_points;
+  j["backend"] = c.backend;
   j["precision"] = c.precision;
   j["rows"] = nlohmann::json::array();
   for (const MaterialBenchRow& r : c.rows) {
@@ -211,7 +213,7 @@ nlohmann::json to_json(const MaterialComparison& c) {
 }
 
 void print_materials(std::ostream& out, const MaterialComparison& c) {
-  out << "materials at " << c.target_points << " target points, cpu " << c.precision << ", timed side by side (repetitions interleaved),"
+  out << "materials at " << c.target_points << " target points, " << c.backend << " " << c.precision << ", timed side by side (repetitions interleaved),"
       << " median (min..max) ms per step:\n";
   out << "  " << std::left << std::setw(15) << "row" << std::right << std::setw(7) << "points" << std::setw(8)
       << "springs" << std::setw(8) << "sutures" << std::setw(8) << "dt us" << "  " << std::left << std::setw(8)

@@ -4,8 +4,9 @@
 // row instead of differing between runs. Rows: the old per-tet
 // `volume_modulus` material, poisson_ratio 0.45 (the averaged nodal volume
 // term), poisson_ratio 0.2 (the smoothed shear element), and a scenario with
-// sutures (scenarios/liver_suture.json) before and after they are tied. Each
-// row names the CPU kernel it ran on; the ratios are of medians.
+// sutures (scenarios/liver_suture.json) before and after they are tied, on
+// the CPU backend (each row names the kernel it ran on) or the GL backend.
+// The ratios are of medians.
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -19,6 +20,7 @@
 namespace organsim::app {
 
 struct MaterialBenchOptions {
+  std::string backend = "cpu";  // or "gl"
   std::string precision = "float";
   int32_t threads = 0;  // 0: the backend's choice
   BenchSteps steps;
@@ -34,7 +36,7 @@ struct MaterialBenchRow {
   int32_t points = 0, springs = 0, tets = 0, sutures = 0;
   double dt = 0, dt_crit = 0;  // s
   std::string device;    // the backend's device line after the timing
-  std::string kernel;    // "avx512" or "generic": the CPU kernel this row ran on
+  std::string kernel;    // "avx512" or "generic": the CPU kernel this row ran on; "glsl" on gl
   std::vector<std::string> passes;
   BenchTiming timing;
 };
@@ -48,6 +50,7 @@ struct MaterialBenchRatio {
 
 struct MaterialComparison {
   int32_t target_points = 0;
+  std::string backend;    // of every row
   std::string precision;  // of every row
   std::vector<MaterialBenchRow> rows;
   std::vector<MaterialBenchRatio> ratios;
