@@ -6,15 +6,18 @@
 # half and holding it there. Prints ticks served, late ticks, reply latency
 # (receipt of a pose to the force reply of its tick: median, p99, max) and
 # the real-time factor from the force log's meta, with the CPU and the load.
+# ORGANSIM_LIVE_BENCH_SCENARIO=FILE serves another scenario of examples/liver.off
+# (e.g. the same one meshed finer, for a GPU); the client's path is the same.
 # With ORGANSIM_LIVE_BENCH_CUT=S the client's tool points down into the liver
 # and it sends the STRING command "CUT 40 30" after S seconds; the cut's figures are
 # printed: what was built off the tick's path on a worker thread (the new
-# Model, model_ms, and the backend's tables, backend_prepare_ms), what stayed
+# Model, model_ms, its dt check, dt_check_prepare_ms, and the backend's
+# tables, backend_prepare_ms), what stayed
 # on it (the backend's adoption of those tables and the dt check, ms), and
 # how many ticks after the request it went in.
 # A benchmark, not a test: its figures depend on the machine and its load
 # (docs/live.md lists what it measured).
-# Usage: [ORGANSIM_LIVE_BENCH_CUT=S] scripts/live_bench.sh [SECONDS (default 60)] [extra organsim serve options...]
+# Usage: [ORGANSIM_LIVE_BENCH_SCENARIO=FILE] [ORGANSIM_LIVE_BENCH_CUT=S] scripts/live_bench.sh [SECONDS (default 60)] [extra organsim serve options...]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ORGANSIM_BUILD_DIR:-$root/build}
@@ -29,7 +32,8 @@ out=${ORGANSIM_LIVE_BENCH_OUT:-$root/out/live_bench}
 rm -rf "$out"
 mkdir -p "$out"
 
-"$organsim" serve "$root/scenarios/liver7750_realtime.json" --port 0 --duration "$seconds" -o "$out/session" "$@" \
+scenario=${ORGANSIM_LIVE_BENCH_SCENARIO:-$root/scenarios/liver7750_realtime.json}
+"$organsim" serve "$scenario" --port 0 --duration "$seconds" -o "$out/session" "$@" \
   >"$out/serve.out" 2>"$out/serve.err" &
 serve_pid=$!
 trap 'kill "$serve_pid" 2>/dev/null || true' EXIT
@@ -67,8 +71,9 @@ for cut in live.get("cuts", []):
         continue
     print(f"cut:      {cut['name']} asked at tick {cut['tick']}, in at tick {cut.get('applied_tick', '-')}: "
           f"{e['faces_separated']} faces, {e['points_added']} points added; off the tick's path {e['model_ms']:.1f} ms "
-          f"(the new Model) + {e.get('backend_prepare_ms', 0):.1f} ms (the backend's tables) on the worker, "
-          f"on it {e['backend_rebuild_ms']:.2f} ms backend adopt + {e['dt_check_ms']:.2f} ms dt check ({e['dt_check']})")
+          f"(the new Model) + {e.get('dt_check_prepare_ms', 0):.1f} ms (dt check, {e['dt_check']}) "
+          f"+ {e.get('backend_prepare_ms', 0):.1f} ms (the backend's tables) on the worker, "
+          f"on it {e['backend_rebuild_ms']:.2f} ms backend adopt + {e['dt_check_ms']:.2f} ms dt check")
 if live.get("commands_refused"):
     print(f"refused:  {live['commands_refused']}")
 PY

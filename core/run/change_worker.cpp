@@ -5,13 +5,17 @@
 namespace organsim {
 
 void ChangeWorker::start(TopologyEvents& events, const Model& current, std::vector<Vec3> x, double t0, double t1,
-                         const ToolSpec* tool, const Backend& backend, const OffPathPlan& when) {
+                         double dt, const ToolSpec* tool, const Backend& backend, const OffPathPlan& when) {
   at_ = when.at;
-  future_ = std::async(std::launch::async, [&events, &current, x = std::move(x), t0, t1, tool, &backend] {
+  future_ = std::async(std::launch::async, [&events, &current, x = std::move(x), t0, t1, dt, tool, &backend] {
     Built b;
     auto next = std::make_unique<Model>();
     if (!events.before_tick(t0, t1, current, x, *next)) return b;
-    b.guaranteed = events.guaranteed_step(current, *next, critical_step_options(*next, tool));
+    const auto check_start = std::chrono::steady_clock::now();
+    const CriticalStepOptions step_options = critical_step_options(*next, tool);
+    b.guaranteed = events.guaranteed_step(current, *next, step_options);
+    if (!(dt <= b.guaranteed)) b.full = estimate_critical_step(*next, step_options);
+    b.check_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - check_start).count();
     const auto start = std::chrono::steady_clock::now();
     b.prepared = backend.prepare(*next);
     b.prepare_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

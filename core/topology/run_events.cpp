@@ -195,6 +195,7 @@ void TopologyEvents::changed(const Model& previous, const Model& next, const Cha
   pending_["dt_check"] = full ? "power iteration" : "gershgorin";
   if (full) pending_["dt_crit"] = full->dt_crit;
   pending_["dt_check_ms"] = 1e3 * times.check_seconds;
+  if (times.check_prepare_seconds) pending_["dt_check_prepare_ms"] = 1e3 * *times.check_prepare_seconds;
   log_.push_back(std::move(pending_));
   pending_ = nlohmann::json();
 }

@@ -41,7 +41,8 @@ struct OffPathPlan {
 struct ChangeTimes {
   double rebuild_seconds = 0;  // the backend's part on the tick's path: adopt(), or the whole rebuild()
   std::optional<double> prepare_seconds;  // its part off the tick's path (prepare() on the worker), if any
-  double check_seconds = 0;               // the dt check
+  double check_seconds = 0;               // the dt check on the tick's path
+  std::optional<double> check_prepare_seconds;  // the dt check off the tick's path (on the worker), if any
 };
 
 class TopologyEvents {

@@ -238,5 +238,38 @@ TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {
   EXPECT_NO_THROW(run_scenario(s, model, *again, options));
 }
 
+// The same change built off the tick's path (applied_at two ticks later):
+// the worker makes the full estimate as well as the Model, so that at 28k
+// points the second of power iteration never lands on a tick. The tick it
+// goes in at only reads the decision, which stops the run the same way with
+// the same dt_crit.
+TEST(TopologyRun, OffTheTicksPathTheWorkerMakesTheFullDtEstimate) {
+  Scenario s = hanging_block();
+  const Model model = block_model(s);
+  s.time.dt = 1.5 * estimate_critical_step(model).dt_crit;
+  s.time.substeps = 1;
+  s.events.cuts[0].keyframes[0].t = 0.0;
+  s.events.cuts[0].keyframes[1].t = 0.5 * s.time.dt;  // within the first tick
+  auto run_until_refused = [&](const Scenario& scenario, const std::string& name) {
+    auto backend = make_cpu_backend(model, backend_tool(scenario), {Precision::Double, 1});
+    RunOptions options;
+    options.outdir = fs::path(ORGANSIM_TEST_TMP) / name;
+    EXPECT_THROW(run_scenario(scenario, model, *backend, options), Error) << name;
+    return nlohmann::json::parse(read_text_file(options.outdir / "forces.json"))["meta"]["events"].at(0);
+  };
+  const nlohmann::json on_path = run_until_refused(s, "topology_dt_check_on_path");
+  s.events.cuts[0].applied_at = 2 * s.time.dt;
+  const nlohmann::json off_path = run_until_refused(s, "topology_dt_check_off_path");
+  EXPECT_EQ(off_path["applied_t"], 2 * s.time.dt) << off_path;
+  EXPECT_EQ(off_path["dt_check"], "power iteration");
+  EXPECT_EQ(off_path["dt_crit"], on_path["dt_crit"]);  // the same Model, the same estimate
+  EXPECT_LT(off_path["dt_crit"].get<double>(), s.time.dt);
+  // Timed on the worker; nothing of it on the tick's path.
+  EXPECT_TRUE(off_path.contains("dt_check_prepare_ms")) << off_path;
+  EXPECT_EQ(off_path["dt_check_ms"], 0.0);
+  EXPECT_FALSE(on_path.contains("dt_check_prepare_ms")) << on_path;
+  EXPECT_GT(on_path["dt_check_ms"].get<double>(), 0.0);
+}
+
 }  // namespace
 }  // namespace organsim
