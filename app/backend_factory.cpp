@@ -33,6 +33,7 @@ std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, 
   }
   GlBackendOptions o;
   o.threads_per_point = s.gl_threads_per_point;
+  o.keep_reaction_positions = s.gl_keep_reaction_positions;
   // Throws Error(Backend) naming the EGL call when no context can be made.
   return make_gl_backend(model, tool, o);
 }

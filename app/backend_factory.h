@@ -17,6 +17,7 @@ struct BackendSelection {
   std::optional<std::string> precision;  // "double" | "float"; default: cpu double, gl float
   int32_t threads = 0;                   // cpu: 0 = all hardware threads
   int32_t gl_threads_per_point = 0;      // gl: invocations per point, 0 = the backend's choice
+  bool gl_keep_reaction_positions = false;  // gl: GlBackendOptions::keep_reaction_positions (organsim serve)
 };
 
 // The backend a scenario runs on, with the command line's --backend,

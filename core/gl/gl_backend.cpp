@@ -176,6 +176,16 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   if (options_.record_forces) {
     force_ = create_buffer("recorded forces", static_cast<size_t>(npad_) * 4 * sizeof(float), nullptr, 0);
   }
+  if (options_.keep_reaction_positions && (plan_.tool == ToolTerm::Push || plan_.tool == ToolTerm::Surface)) {
+    // Written by a GPU copy at each pushing tick's end, read by the CPU after that tick's fence.
+    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    const size_t ring = static_cast<size_t>(kSlots) * xbytes;
+    reaction_x_ = create_buffer("end positions per ring slot (mapped)", ring, nullptr, map);
+    reaction_x_map_ = static_cast<const float*>(glMapNamedBufferRange(reaction_x_, 0, static_cast<GLsizeiptr>(ring), map));
+    if (!reaction_x_map_) {
+      throw Error(ErrorKind::Backend, "GL backend: glMapNamedBufferRange(end positions ring, persistent coherent) failed");
+    }
+  }
   readback_.resize(static_cast<size_t>(npad_) * 4);
 
   // Bindings that never change until the next rebuild; the position buffers
@@ -198,6 +208,10 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
 }
 
 void GlBackend::delete_model_buffers() {
+  if (reaction_x_map_) glUnmapNamedBuffer(reaction_x_);
+  reaction_x_map_ = nullptr;
+  if (reaction_x_) glDeleteBuffers(1, &reaction_x_);
+  reaction_x_ = 0;
   for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &anchors_, &partials_, &force_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
@@ -255,6 +269,13 @@ void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
       x[4 * static_cast<size_t>(i) + k] = x[4 * static_cast<size_t>(from) + k];
       d[4 * static_cast<size_t>(i) + k] = d[4 * static_cast<size_t>(from) + k];
     }
+  }
+  // The ring's copies go with the old buffers; the reaction the next tick
+  // returns is of the last tick before this one, which ended in this state.
+  for (Slot& s : slots_) s.has_positions = s.positions_adopted = false;
+  if (reaction_x_ && ticks_ > 0) {
+    adopted_x_ = x;
+    slots_[static_cast<size_t>((ticks_ - 1) % kSlots)].positions_adopted = true;
   }
   delete_model_buffers();
   plan_ = p->plan;
@@ -494,6 +515,12 @@ Reaction GlBackend::tick(const TickRequest& request) {
   // Make this tick's reaction and status writes visible to the CPU through
   // the mappings, and to the status clear that reuses the slot later.
   glMemoryBarrier(GL_CLIENT_MAPPED_BUFFER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  current.has_positions = reaction_x_ && tool_acts;
+  current.positions_adopted = false;
+  if (current.has_positions) {
+    const GLsizeiptr xbytes = static_cast<GLsizeiptr>(static_cast<size_t>(npad_) * 4 * sizeof(float));
+    glCopyNamedBufferSubData(x_[cur_], reaction_x_, 0, slot * xbytes, xbytes);
+  }
   if (current.fence) glDeleteSync(current.fence);
   current.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   glFlush();  // start the work now; the fence is polled next tick
@@ -522,6 +549,7 @@ Reaction GlBackend::read_slot(int slot) {
   }
   glDeleteSync(s.fence);
   s.fence = nullptr;
+  reaction_slot_ = slot;
   const uint32_t bad = status_map_[slot];
   if (bad != kNoPoint) {
     const int32_t p = static_cast<int32_t>(bad);
@@ -548,6 +576,23 @@ void GlBackend::positions(std::vector<Vec3>& out) const {
   out.resize(static_cast<size_t>(npoint_));
   for (int32_t i = 0; i < npoint_; ++i) out[i] = Vec3(readback_[4 * i], readback_[4 * i + 1], readback_[4 * i + 2]);
   context_->check_errors("GL backend positions");
+}
+
+void GlBackend::reaction_positions(std::vector<Vec3>& out) const {
+  if (!options_.keep_reaction_positions) {
+    throw Error(ErrorKind::Backend, "GL backend: reaction_positions() needs GlBackendOptions::keep_reaction_positions");
+  }
+  const Slot* s = reaction_slot_ >= 0 ? &slots_[static_cast<size_t>(reaction_slot_)] : nullptr;
+  const float* x = !s                      ? nullptr
+                   : s->positions_adopted ? adopted_x_.data()
+                   : s->has_positions     ? reaction_x_map_ + static_cast<size_t>(reaction_slot_) * npad_ * 4
+                                          : nullptr;
+  if (!x) {
+    throw Error(ErrorKind::Backend,
+                "GL backend: reaction_positions(): the reaction tick() returned last is of no tick with a pushing tool");
+  }
+  out.resize(static_cast<size_t>(npoint_));
+  for (int32_t i = 0; i < npoint_; ++i) out[i] = Vec3(x[4 * i], x[4 * i + 1], x[4 * i + 2]);
 }
 
 void GlBackend::forces(std::vector<Vec3>& out) const {

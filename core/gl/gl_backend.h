@@ -25,6 +25,10 @@ struct GlBackendOptions {
   // a software renderer (llvmpipe runs each invocation on the CPU, where more
   // of them only add barriers) and 8 on a hardware GPU (docs/gl.md).
   int32_t threads_per_point = 0;
+  // Copy every pushing tick's end positions into a mapped ring on the GPU,
+  // for reaction_positions() (organsim serve's reply stiffness) without a
+  // read-back that waits for the tick in flight. Off: reaction_positions() throws.
+  bool keep_reaction_positions = false;
 };
 
 // Creates its own headless context (gl::EglContext); throws Error(Backend)
@@ -53,6 +57,7 @@ class GlBackend final : public Backend {
   std::unique_ptr<PreparedModel> prepare(const Model& next) const override;
   void adopt(std::unique_ptr<PreparedModel> prepared) override;
   void positions(std::vector<Vec3>& out) const override;
+  void reaction_positions(std::vector<Vec3>& out) const override;
   double time() const override { return time_; }
 
   // For a renderer drawing straight from the simulation (same or shared
@@ -105,6 +110,10 @@ class GlBackend final : public Backend {
          shear_stress_ = 0, attach_ = 0, surface_range_ = 0, surface_tris_ = 0, anchors_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
+  // keep_reaction_positions: x at the end of each pushing tick, persistently
+  // mapped (READBACK_SLOTS x npad x 4 floats); made with the model's buffers.
+  GLuint reaction_x_ = 0;
+  const float* reaction_x_map_ = nullptr;
   std::vector<std::pair<const char*, size_t>> buffer_sizes_;
   size_t ring_buffers_ = 0;  // entries of buffer_sizes_ that outlive a rebuild
 
@@ -113,8 +122,14 @@ class GlBackend final : public Backend {
     GLsync fence = nullptr;
     bool has_reaction = false;
     double t_end = 0;  // simulated time at the end of that tick, s
+    bool has_positions = false;      // its end positions are in reaction_x_ (keep_reaction_positions)
+    bool positions_adopted = false;  // they are adopted_x_ (the tick before an adopt())
   };
   std::vector<Slot> slots_;
+  int reaction_slot_ = -1;  // the slot whose reaction tick() last returned
+  // The state an adopt() carried over (npad x 4): the end positions of the
+  // tick before it, whose ring copy went with the old buffers.
+  std::vector<float> adopted_x_;
   int64_t ticks_ = 0;
   double time_ = 0;
   int64_t dispatches_ = 0, blocked_readbacks_ = 0;

@@ -223,12 +223,17 @@ void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
 }
 
 void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& info) {
-  // The contact's stiffness at the tissue's end-of-tick positions; only in
-  // contact (a copy of the positions and one pass over the surface).
+  // The contact's stiffness at the end of the tick the reaction is of (on
+  // the GL backend the one before: its positions kept on the GPU, so that
+  // this never waits for the tick in flight); only in contact (a copy of
+  // the positions and one pass over the surface).
+  recent_centers_.push_back(info.tool_center);
+  const size_t latency = static_cast<size_t>(backend.reaction_latency_ticks());
+  while (recent_centers_.size() > latency + 1) recent_centers_.pop_front();
   Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
-    backend.positions(stiffness_positions_);
-    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, info.tool_center);
+    backend.reaction_positions(stiffness_positions_);
+    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_centers_.front());
   }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));

@@ -164,7 +164,10 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::vector<int32_t> surface_points_;
   std::vector<Tri> surface_triangles_;
   std::vector<Vec3> positions_, surface_client_;
-  std::vector<Vec3> stiffness_positions_;  // the tissue at the end of a tick in contact
+  std::vector<Vec3> stiffness_positions_;  // the tissue at the end of the reaction's tick (in contact)
+  // The tool centres at the ends of the last ticks, newest last: the
+  // reaction a tick returns is reaction_latency_ticks() older (GL: 1).
+  std::deque<Vec3> recent_centers_;
   LiveClock::time_point last_surface_{};
   int64_t surfaces_ = 0;
 };

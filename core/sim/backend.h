@@ -96,6 +96,13 @@ class Backend {
 
   // Current positions x_t, in internal numbering (may synchronise a GPU).
   virtual void positions(std::vector<Vec3>& out) const = 0;
+  // The positions at the end of the tick whose reaction the last tick()
+  // returned: the state that reaction was computed from (organsim serve's
+  // contact stiffness is evaluated on it). With no latency these are
+  // positions(); the GL backend keeps a copy of each tick's on the GPU
+  // (GlBackendOptions::keep_reaction_positions), so that reading them never
+  // waits for the tick in flight.
+  virtual void reaction_positions(std::vector<Vec3>& out) const { positions(out); }
   // Replaces x_t and x_{t-1} (internal numbering), e.g. to start from a
   // deformed or moving state in tests. Not for use inside a run.
   virtual void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) = 0;

@@ -9,6 +9,7 @@
 #include "core/gl/gl_backend.h"
 #include "core/model/model_rebuild.h"
 #include "core/sim/cpu_backend.h"
+#include "core/util/error.h"
 #include "gl_test_scenes.h"
 #include "tests/core/test_models.h"
 
@@ -123,6 +124,49 @@ TEST(GlRebuild, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
     pushed = std::max(pushed, reactions[0][i].force.norm());
   }
   EXPECT_GT(pushed, 0) << "the tool touched the box";
+}
+
+// keep_reaction_positions: after each tick, reaction_positions() are the
+// positions at the end of the tick whose reaction it returned (the one
+// before), bit for bit as positions() read them then, without waiting for
+// the tick in flight; across an adopt() too (the copies' positions are their
+// origins'). Without the option it refuses rather than read back the wrong tick.
+TEST(GlRebuild, ReactionPositionsAreThoseOfTheReactionsTickAcrossAnAdopt) {
+  const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
+  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.05));
+  const BackendTool tool{true, ToolMode::Push, 0.02, 500};
+  GlBackendOptions keep;
+  keep.keep_reaction_positions = true;
+  GlBackend gl(model, tool, keep);
+  TickRequest r;
+  r.dt = kDt;
+  r.substeps = kSubsteps;
+  r.tool_active = true;
+  r.tool_from = r.tool_to = Vec3(0.05, 0.05, 0.045);
+  std::vector<Vec3> before, kept;
+  gl.tick(r);
+  for (int i = 1; i < 12; ++i) {
+    gl.positions(before);  // the end of tick i - 1
+    if (i == 6) gl.adopt(gl.prepare(cut));
+    ASSERT_GT(gl.tick(r).contacts, 0) << "tick " << i;
+    gl.reaction_positions(kept);
+    if (i == 6) {
+      // The state carried over: the old points as they were, each copy at its origin.
+      ASSERT_EQ(kept.size(), static_cast<size_t>(cut.npoint()));
+      for (int32_t p = 0; p < cut.npoint(); ++p)
+        ASSERT_EQ(kept[p], before[p < model.npoint() ? p : cut.origin[p]]) << "point " << p;
+    } else {
+      ASSERT_EQ(kept, before) << "tick " << i;
+    }
+  }
+  std::vector<Vec3> now;
+  gl.positions(now);
+  EXPECT_NE(kept, now);  // the box sags and the tool presses: the tick in flight differs
+
+  GlBackend plain(model, tool, {});
+  plain.tick(r);
+  plain.tick(r);
+  EXPECT_THROW(plain.reaction_positions(kept), Error);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <map>
 #include <thread>
 
+#include "core/gl/gl_backend.h"
 #include "core/live/live_session.h"
 #include "core/live/session_scenario.h"
 #include "core/mesh/tet_mesh.h"
@@ -111,9 +112,13 @@ struct StiffnessProbe : RunObserver {
   }
 };
 
-// `probe`, if given, watches the run beside the session.
-Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObserver* probe = nullptr) {
-  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+// `probe`, if given, watches the run beside the session; `on`, if given, is
+// the backend (else the double CPU backend).
+Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObserver* probe = nullptr,
+             Backend* on = nullptr) {
+  std::unique_ptr<Backend> cpu;
+  if (!on) cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  Backend* backend = on ? on : cpu.get();
   LiveOptions o;
   o.tool = backend_tool(s);
   o.tick = s.time.tick();
@@ -224,6 +229,36 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
   EXPECT_EQ(served.live["ticks"], 80);
 
   expect_same_samples(replay(s, model, served).samples, f);
+}
+
+// On the GL backend a tick returns the reaction of the tick before
+// (reaction_latency_ticks 1), and the reply's stiffness is of that tick too:
+// the contact at its end positions (kept on the GPU, so the reply never
+// waits for the tick in flight) about its tool centre.
+TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessIsThatOfTheReactionsTick) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  for (int64_t k = 3; k < 70; k += 2) link.script[k] = {pose_mm("Tool", 20, 20, 51 - 0.2 * k)};
+  StiffnessProbe probe;
+  probe.tool = backend_tool(s);
+  GlBackendOptions keep;
+  keep.keep_reaction_positions = true;
+  GlBackend gl(model, backend_tool(s), keep);
+  const Served served = serve(s, model, link, &probe, &gl);
+  const ForceSamples& f = served.result.samples;
+  ASSERT_EQ(link.stiffness.size(), 80u);
+  int in_contact = 0;
+  for (size_t k = 1; k < 80; ++k) {
+    if (f.contacts[k] == 0) {
+      ASSERT_EQ(link.stiffness[k], Eigen::Matrix3d::Zero()) << "tick " << k;
+    } else {
+      ++in_contact;
+      ASSERT_EQ(link.stiffness[k], probe.k[k - 1]) << "tick " << k;
+      ASSERT_LT(link.stiffness[k](2, 2), 0) << "tick " << k;
+    }
+  }
+  EXPECT_GT(in_contact, 20);
 }
 
 // What the run loop hands each observer as a pulling tool's stiffness.
