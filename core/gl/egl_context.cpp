@@ -236,6 +236,12 @@ void EglContext::make_current() const {
   }
 }
 
+void EglContext::release_current() const {
+  if (!eglMakeCurrent(static_cast<EGLDisplay>(display_), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT)) {
+    fail("eglMakeCurrent(EGL_NO_CONTEXT)", platform_);
+  }
+}
+
 bool EglContext::software() const {
   return renderer_.find("llvmpipe") != std::string::npos || renderer_.find("softpipe") != std::string::npos ||
          platform_ == "device (software)";

@@ -30,6 +30,9 @@ class EglContext {
 
   // Makes this context current on the calling thread (the constructor does).
   void make_current() const;
+  // Leaves the calling thread with no current context (a context must not
+  // stay current on a thread that ends).
+  void release_current() const;
 
   const std::string& vendor() const { return vendor_; }      // GL_VENDOR
   const std::string& renderer() const { return renderer_; }  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 
 #include "core/gl/gl_model_pack.h"
@@ -18,6 +19,22 @@ namespace {
 constexpr int kSlots = ORGANSIM_GL_READBACK_SLOTS;
 constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // status slot value: every position finite
 constexpr GLuint64 kReadbackTimeoutNs = 10'000'000'000ull;  // a tick taking 10 s is a hung device
+
+// An immutable-storage buffer on the current context (16 bytes for an empty
+// table: zero-sized storage is an error in GL).
+GLuint make_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags) {
+  GLuint buffer = 0;
+  glCreateBuffers(1, &buffer);
+  const size_t size = bytes > 0 ? bytes : 16;
+  glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(size), bytes > 0 ? data : nullptr, flags);
+  const GLenum error = glGetError();
+  if (error != GL_NO_ERROR) {
+    glDeleteBuffers(1, &buffer);
+    throw Error(ErrorKind::Backend, std::string("GL backend: glNamedBufferStorage(") + what + ", " +
+                                        std::to_string(size) + " bytes) failed, error " + std::to_string(error));
+  }
+  return buffer;
+}
 
 // `value` as a GLSL float literal that rounds to the same float.
 std::string float_literal(double value) {
@@ -95,7 +112,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   // x_t = rest, d_t = 0.
   const gl::PackedModel packed = gl::pack_model(model);
   const std::vector<float> zero(packed.rest.size(), 0.0f);
-  upload_model(packed, packed.rest, zero);
+  install(create_tables(packed, plan_), packed, packed.rest, zero);
   if (plan_.gravity) {
     glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
                        static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
@@ -110,8 +127,53 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   context_->check_errors("GL backend setup");
 }
 
-void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
-                             std::vector<float> anchors) {
+GlBackend::Tables GlBackend::create_tables(const gl::PackedModel& packed, const StepPlan& plan) const {
+  Tables t;
+  auto make = [&](const char* what, size_t bytes, const void* data, GLbitfield flags) {
+    const GLuint b = make_buffer(what, bytes, data, flags);
+    t.sizes.emplace_back(what, bytes > 0 ? bytes : 16);
+    return b;
+  };
+  const size_t npad = static_cast<size_t>(packed.npad);
+  t.mass = make("mass {1/m, m, tool k scale, 0}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
+  t.chunks = make("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
+  // Sutures' rest lengths are rewritten per tick (refresh_suture_rest).
+  t.springs = make("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
+                   packed.springs.data(), packed.suture_entries.empty() ? 0 : GL_DYNAMIC_STORAGE_BIT);
+  if (plan.volume() || plan.shear()) {
+    t.tets = make("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry), packed.tets.data(), 0);
+  }
+  if (plan.shear()) {
+    t.rest = make("rest positions", packed.rest.size() * sizeof(float), packed.rest.data(), 0);
+    t.shear_params = make("shear element entries {g_a k_t, g_b d_t, g_c w}",
+                          packed.shear.size() * sizeof(gl::ShearEntry), packed.shear.data(), 0);
+  }
+  if (plan.element == ElementTerm::NodalVolume) {
+    t.nodal_params = make("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
+    t.pressure = make("nodal pressures", npad * sizeof(float), nullptr, 0);
+  }
+  if (plan.element == ElementTerm::SmoothedShear) {
+    t.shear_stress = make("smoothed shear stress P(Fbar) (3 vec4 per point)", npad * 12 * sizeof(float), nullptr, 0);
+  }
+  if (plan.tool == ToolTerm::Surface) {
+    t.surface_range = make("surface triangles per point {first, count}", packed.surface_range.size() * sizeof(int32_t),
+                           packed.surface_range.data(), 0);
+    // An empty surface still needs a buffer to bind: one unused entry.
+    const std::vector<int32_t> none(4, 0);
+    const auto& entries = packed.surface_entries.empty() ? none : packed.surface_entries;
+    t.surface_tris =
+        make("surface triangle entries {corners, which}", entries.size() * sizeof(int32_t), entries.data(), 0);
+  }
+  if (tool_.present) {
+    t.partials =
+        make("reaction partials per workgroup", static_cast<size_t>(packed.nchunk) * 8 * sizeof(float), nullptr, 0);
+  }
+  if (options_.record_forces) t.force = make("recorded forces", npad * 4 * sizeof(float), nullptr, 0);
+  return t;
+}
+
+void GlBackend::install(Tables tables, const gl::PackedModel& packed, const std::vector<float>& x,
+                        const std::vector<float>& d, std::vector<float> anchors) {
   npoint_ = packed.npoint;
   nchunk_ = packed.nchunk;
   npad_ = packed.npad;
@@ -123,44 +185,18 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
   x_[1] = create_buffer("x_{t+1}", xbytes, x.data(), GL_DYNAMIC_STORAGE_BIT);
   d_[0] = create_buffer("x_t - x_{t-1}", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
   d_[1] = create_buffer("x_{t+1} - x_t", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
-  mass_ = create_buffer("mass {1/m, m, tool k scale, 0}", packed.mass.size() * sizeof(float), packed.mass.data(), 0);
-  chunks_ = create_buffer("chunks", packed.chunks.size() * sizeof(int32_t), packed.chunks.data(), 0);
-  // Sutures' rest lengths are rewritten per tick (refresh_suture_rest).
+  mass_ = tables.mass, chunks_ = tables.chunks, springs_ = tables.springs, tets_ = tables.tets, rest_ = tables.rest;
+  shear_params_ = tables.shear_params, nodal_params_ = tables.nodal_params, pressure_ = tables.pressure;
+  shear_stress_ = tables.shear_stress, surface_range_ = tables.surface_range, surface_tris_ = tables.surface_tris;
+  partials_ = tables.partials, force_ = tables.force;
+  buffer_sizes_.insert(buffer_sizes_.end(), tables.sizes.begin(), tables.sizes.end());
   suture_entries_ = packed.suture_entries;
   suture_rest_.assign(suture_entries_.size(), -1.0f);
-  springs_ = create_buffer("spring entries {other, rest, k, d}", packed.springs.size() * sizeof(gl::SpringEntry),
-                           packed.springs.data(), suture_entries_.empty() ? 0 : GL_DYNAMIC_STORAGE_BIT);
-  if (plan_.volume() || plan_.shear()) {
-    tets_ = create_buffer("tet entries {a, b, c, k_v, V_r}", packed.tets.size() * sizeof(gl::TetEntry),
-                          packed.tets.data(), 0);
-  }
-  if (plan_.shear()) {
-    rest_ = create_buffer("rest positions", packed.rest.size() * sizeof(float), packed.rest.data(), 0);
-    shear_params_ = create_buffer("shear element entries {g_a k_t, g_b d_t, g_c w}",
-                                  packed.shear.size() * sizeof(gl::ShearEntry), packed.shear.data(), 0);
-  }
-  if (plan_.element == ElementTerm::NodalVolume) {
-    nodal_params_ = create_buffer("nodal {k_a, V_a^r}", packed.nodal.size() * sizeof(float), packed.nodal.data(), 0);
-    pressure_ = create_buffer("nodal pressures", static_cast<size_t>(npad_) * sizeof(float), nullptr, 0);
-  }
-  if (plan_.element == ElementTerm::SmoothedShear) {
-    shear_stress_ = create_buffer("smoothed shear stress P(Fbar) (3 vec4 per point)",
-                                  static_cast<size_t>(npad_) * 12 * sizeof(float), nullptr, 0);
-  }
   if (plan_.tool == ToolTerm::Pull) {
     // Attachments survive a rebuild: the ids they name are kept.
     attach_upload_.resize(static_cast<size_t>(npad_) * 4, 0.0f);
     attach_ = create_buffer("attachments {offset, attached}", attach_upload_.size() * sizeof(float),
                             attach_upload_.data(), GL_DYNAMIC_STORAGE_BIT);
-  }
-  if (plan_.tool == ToolTerm::Surface) {
-    surface_range_ = create_buffer("surface triangles per point {first, count}",
-                                   packed.surface_range.size() * sizeof(int32_t), packed.surface_range.data(), 0);
-    // An empty surface still needs a buffer to bind: one unused entry.
-    const std::vector<int32_t> none(4, 0);
-    const auto& entries = packed.surface_entries.empty() ? none : packed.surface_entries;
-    surface_tris_ = create_buffer("surface triangle entries {corners, which}", entries.size() * sizeof(int32_t),
-                                  entries.data(), 0);
   }
   if (plan_.tool == ToolTerm::Surface && tool_.friction.on()) {
     // Friction anchors are per point id, which a rebuild keeps: a grip holds through a cut.
@@ -168,14 +204,7 @@ void GlBackend::upload_model(const gl::PackedModel& packed, const std::vector<fl
     anchors_ = create_buffer("friction anchors {in the tool frame, anchored}", anchors.size() * sizeof(float),
                              anchors.data(), 0);
   }
-  if (tool_.present) {
-    partials_ = create_buffer("reaction partials per workgroup", static_cast<size_t>(nchunk_) * 8 * sizeof(float),
-                              nullptr, 0);
-    glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
-  }
-  if (options_.record_forces) {
-    force_ = create_buffer("recorded forces", static_cast<size_t>(npad_) * 4 * sizeof(float), nullptr, 0);
-  }
+  if (tool_.present) glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
   if (options_.keep_reaction_positions && (plan_.tool == ToolTerm::Push || plan_.tool == ToolTerm::Surface)) {
     // Written by a GPU copy at each pushing tick's end, read by the CPU after that tick's fence.
     const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
@@ -218,25 +247,82 @@ void GlBackend::delete_model_buffers() {
   }
 }
 
-namespace {
+std::vector<GLuint> GlBackend::Tables::buffers() const {
+  std::vector<GLuint> out;
+  for (GLuint b : {mass, chunks, springs, tets, rest, shear_params, nodal_params, pressure, shear_stress, surface_range,
+                   surface_tris, partials, force})
+    if (b) out.push_back(b);
+  return out;
+}
 
-// What GlBackend::prepare hands to adopt: the host-side arrays of every
-// buffer and the step's passes.
-struct GlPrepared final : PreparedModel {
-  GlPrepared(const Model& next, const BackendTool& tool)
-      : PreparedModel(next), packed(gl::pack_model(next)), plan(make_step_plan(next, tool)) {}
+// What GlBackend::prepare hands to adopt: the host-side arrays, the step's
+// passes and the tables already on the device. Dropped without an adopt(),
+// it hands its buffers back to the backend to delete on its own context.
+struct GlBackend::Prepared final : PreparedModel {
+  Prepared(const Model& next, const BackendTool& tool, const GlBackend& owner)
+      : PreparedModel(next), packed(gl::pack_model(next)), plan(make_step_plan(next, tool)), owner(&owner) {}
+  ~Prepared() override {
+    if (tables) owner->discard(tables->buffers());
+  }
   gl::PackedModel packed;
   StepPlan plan;
+  std::optional<Tables> tables;
+  const GlBackend* owner;
 };
 
-}  // namespace
-
 std::unique_ptr<PreparedModel> GlBackend::prepare(const Model& next) const {
-  return std::make_unique<GlPrepared>(next, tool_);
+  auto prepared = std::make_unique<Prepared>(next, tool_, *this);
+  // The tables go up on a context of their own that shares objects with the
+  // backend's, so that on the worker thread the upload costs the ticks
+  // nothing (at 28k points it is most of a rebuild: 6 ms on llvmpipe). The
+  // calling thread's context is restored after, for a prepare() on the loop.
+  std::lock_guard<std::mutex> lock(upload_mutex_);
+  const EGLDisplay display = eglGetCurrentDisplay();
+  const EGLContext previous = eglGetCurrentContext();
+  if (!upload_context_) {
+    gl::EglContextOptions o;
+    o.debug = options_.debug;
+    o.share = context_.get();
+    upload_context_ = std::make_unique<gl::EglContext>(o);  // current on this thread
+  } else {
+    upload_context_->make_current();
+  }
+  const auto restore = [&] {
+    if (previous != EGL_NO_CONTEXT) {
+      eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, previous);
+    } else {
+      upload_context_->release_current();
+    }
+  };
+  try {
+    prepared->tables = create_tables(prepared->packed, prepared->plan);
+    glFinish();  // every upload done before the backend's context uses them
+    upload_context_->check_errors("GL backend prepare");
+  } catch (...) {
+    if (prepared->tables) {
+      for (GLuint b : prepared->tables->buffers()) glDeleteBuffers(1, &b);
+      prepared->tables.reset();
+    }
+    restore();
+    throw;
+  }
+  restore();
+  return prepared;
+}
+
+void GlBackend::discard(std::vector<GLuint> buffers) const {
+  std::lock_guard<std::mutex> lock(upload_mutex_);
+  discarded_.insert(discarded_.end(), buffers.begin(), buffers.end());
+}
+
+void GlBackend::delete_discarded() {
+  std::lock_guard<std::mutex> lock(upload_mutex_);
+  for (GLuint b : discarded_) glDeleteBuffers(1, &b);
+  discarded_.clear();
 }
 
 void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
-  auto* p = dynamic_cast<GlPrepared*>(prepared.get());
+  auto* p = dynamic_cast<Prepared*>(prepared.get());
   if (!p) throw Error(ErrorKind::Backend, "GL backend: adopt() of a version it did not prepare");
   const Model& next = p->model();
   const gl::PackedModel& packed = p->packed;
@@ -250,6 +336,7 @@ void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
   // spring entries, so the same programs run the next version.
   if (p->plan.element != plan_.element || p->plan.gravity != plan_.gravity || p->plan.tool != plan_.tool)
     throw Error(ErrorKind::Backend, "GL backend: a rebuild changed the step's passes beyond sutures");
+  if (!p->tables) throw Error(ErrorKind::Backend, "GL backend: adopt() of a version already adopted");
   make_current();
   // The state comes back once per topology change (an event, not per step):
   // x_t and d_t of the points that stay, copies of their origin's for the new.
@@ -280,12 +367,15 @@ void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
   delete_model_buffers();
   plan_ = p->plan;
   model_ = &next;
-  upload_model(packed, x, d, std::move(anchors));
+  Tables tables = std::move(*p->tables);
+  p->tables.reset();
+  install(std::move(tables), packed, x, d, std::move(anchors));
   context_->check_errors("GL backend rebuild");
 }
 
 GlBackend::~GlBackend() {
   make_current();
+  delete_discarded();
   for (Slot& s : slots_) {
     if (s.fence) glDeleteSync(s.fence);
   }
@@ -307,17 +397,8 @@ void GlBackend::make_current() const {
 }
 
 GLuint GlBackend::create_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags) {
-  GLuint buffer = 0;
-  glCreateBuffers(1, &buffer);
-  // Zero-sized storage is an error in GL; an empty table still gets 16 bytes.
-  const size_t size = bytes > 0 ? bytes : 16;
-  glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(size), bytes > 0 ? data : nullptr, flags);
-  const GLenum error = glGetError();
-  if (error != GL_NO_ERROR) {
-    throw Error(ErrorKind::Backend, std::string("GL backend: glNamedBufferStorage(") + what + ", " +
-                                        std::to_string(size) + " bytes) failed, error " + std::to_string(error));
-  }
-  buffer_sizes_.emplace_back(what, size);
+  const GLuint buffer = make_buffer(what, bytes, data, flags);
+  buffer_sizes_.emplace_back(what, bytes > 0 ? bytes : 16);
   return buffer;
 }
 
@@ -448,6 +529,7 @@ void GlBackend::refresh_suture_rest() {
 
 Reaction GlBackend::tick(const TickRequest& request) {
   make_current();
+  delete_discarded();
   const GLuint program = step_.id();
   glUseProgram(program);
   glProgramUniform1f(program, ORGANSIM_GL_U_DT, static_cast<float>(request.dt));

@@ -7,6 +7,8 @@
 // and read back the same way: tick() then throws Error(Numerical). See docs/gl.md.
 #include <array>
 #include <memory>
+#include <mutex>
+#include <utility>
 #include <vector>
 
 #include "core/gl/egl_context.h"
@@ -85,8 +87,22 @@ class GlBackend final : public Backend {
   Reaction read_slot(int slot);
   // Creates the buffers sized by the model (state x_t, d_t given, npad x 4).
   // `anchors`: friction anchors carried over a rebuild (4 floats per old point; empty: none yet).
-  void upload_model(const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
-                    std::vector<float> anchors = {});
+  // The model's tables (everything but the state), on whichever context is
+  // current: the backend's, or prepare()'s upload context.
+  struct Tables {
+    GLuint mass = 0, chunks = 0, springs = 0, tets = 0, rest = 0, shear_params = 0, nodal_params = 0, pressure = 0,
+           shear_stress = 0, surface_range = 0, surface_tris = 0, partials = 0, force = 0;
+    std::vector<std::pair<const char*, size_t>> sizes;  // for plan().buffers
+    std::vector<GLuint> buffers() const;                // the non-zero ids
+  };
+  struct Prepared;
+  Tables create_tables(const gl::PackedModel& packed, const StepPlan& plan) const;
+  void install(Tables tables, const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
+               std::vector<float> anchors = {});
+  // Buffers of a Prepared dropped without adopt(), deleted on the backend's
+  // context at its next tick (or at its end).
+  void discard(std::vector<GLuint> buffers) const;
+  void delete_discarded();
   void delete_model_buffers();
   // Writes the sutures' rest lengths at time_ into their spring entries.
   void refresh_suture_rest();
@@ -95,6 +111,10 @@ class GlBackend final : public Backend {
   BackendTool tool_;
   GlBackendOptions options_;
   std::unique_ptr<gl::EglContext> context_;
+  // prepare()'s context, sharing objects with context_ (made by the first prepare()).
+  mutable std::unique_ptr<gl::EglContext> upload_context_;
+  mutable std::mutex upload_mutex_;  // upload_context_ and discarded_
+  mutable std::vector<GLuint> discarded_;
   int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0;
   StepPlan plan_;  // the passes of the current version's step (the shader variants follow it)
   int32_t threads_per_point_ = 1;

@@ -4,6 +4,8 @@
 // after a cut made by hand (the topology code has its own tests).
 #include <gtest/gtest.h>
 
+#include <EGL/egl.h>
+
 #include <future>
 
 #include "core/gl/gl_backend.h"
@@ -124,6 +126,42 @@ TEST(GlRebuild, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
     pushed = std::max(pushed, reactions[0][i].force.norm());
   }
   EXPECT_GT(pushed, 0) << "the tool touched the box";
+}
+
+// prepare() uploads the tables on a context of its own that shares the
+// backend's objects, so that adopt() on the tick only carries the state over:
+// it leaves the calling thread's context as it found it (the backend's on
+// the run loop, none on a worker), a version dropped without adopt() costs
+// the backend nothing, and an adopted one has the buffers of a backend made
+// from it.
+TEST(GlRebuild, PrepareUploadsOnItsOwnContextAndRestoresTheCallers) {
+  const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
+  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.05));
+  const BackendTool tool{true, ToolMode::Push, 0.02, 500};
+  GlBackend gl(model, tool, {});
+  run(gl, 3);
+  const void* loop_context = eglGetCurrentContext();
+  ASSERT_EQ(loop_context, gl.context().egl_context());
+  auto dropped = gl.prepare(cut);
+  EXPECT_EQ(eglGetCurrentContext(), loop_context);
+  dropped.reset();
+  run(gl, 3);  // the dropped tables are deleted here, on the backend's context
+  const void* worker_after = reinterpret_cast<void*>(1);
+  auto prepared = std::async(std::launch::async, [&] {
+                    auto p = gl.prepare(cut);
+                    worker_after = eglGetCurrentContext();
+                    return p;
+                  }).get();
+  EXPECT_EQ(worker_after, nullptr);  // EGL_NO_CONTEXT: nothing left current on a thread that ends
+  gl.adopt(std::move(prepared));
+  run(gl, 3);
+  GlBackend fresh(cut, tool, {});
+  const auto a = gl.plan().buffers, b = fresh.plan().buffers;
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].name, b[i].name);
+    EXPECT_EQ(a[i].bytes, b[i].bytes) << a[i].name;
+  }
 }
 
 // keep_reaction_positions: after each tick, reaction_positions() are the
