@@ -205,8 +205,8 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const std:
                              anchors.data(), 0);
   }
   if (tool_.present) glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
-  if (options_.keep_reaction_positions && (plan_.tool == ToolTerm::Push || plan_.tool == ToolTerm::Surface)) {
-    // Written by a GPU copy at each pushing tick's end, read by the CPU after that tick's fence.
+  if (options_.keep_reaction_positions) {
+    // Written by a GPU copy at each tick's end, read by the CPU after that tick's fence.
     const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
     const size_t ring = static_cast<size_t>(kSlots) * xbytes;
     reaction_x_ = create_buffer("end positions per ring slot (mapped)", ring, nullptr, map);
@@ -257,7 +257,8 @@ std::vector<GLuint> GlBackend::Tables::buffers() const {
 
 // What GlBackend::prepare hands to adopt: the host-side arrays, the step's
 // passes and the tables already on the device. Dropped without an adopt(),
-// it hands its buffers back to the backend to delete on its own context.
+// it hands its buffers back to the backend to delete on its own context
+// (so it must not outlive the backend that made it).
 struct GlBackend::Prepared final : PreparedModel {
   Prepared(const Model& next, const BackendTool& tool, const GlBackend& owner)
       : PreparedModel(next), packed(gl::pack_model(next)), plan(make_step_plan(next, tool)), owner(&owner) {}
@@ -597,7 +598,7 @@ Reaction GlBackend::tick(const TickRequest& request) {
   // Make this tick's reaction and status writes visible to the CPU through
   // the mappings, and to the status clear that reuses the slot later.
   glMemoryBarrier(GL_CLIENT_MAPPED_BUFFER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  current.has_positions = reaction_x_ && tool_acts;
+  current.has_positions = reaction_x_ != 0;
   current.positions_adopted = false;
   if (current.has_positions) {
     const GLsizeiptr xbytes = static_cast<GLsizeiptr>(static_cast<size_t>(npad_) * 4 * sizeof(float));
@@ -669,10 +670,7 @@ void GlBackend::reaction_positions(std::vector<Vec3>& out) const {
                    : s->positions_adopted ? adopted_x_.data()
                    : s->has_positions     ? reaction_x_map_ + static_cast<size_t>(reaction_slot_) * npad_ * 4
                                           : nullptr;
-  if (!x) {
-    throw Error(ErrorKind::Backend,
-                "GL backend: reaction_positions(): the reaction tick() returned last is of no tick with a pushing tool");
-  }
+  if (!x) throw Error(ErrorKind::Backend, "GL backend: reaction_positions() before the first tick's end");
   out.resize(static_cast<size_t>(npoint_));
   for (int32_t i = 0; i < npoint_; ++i) out[i] = Vec3(x[4 * i], x[4 * i + 1], x[4 * i + 2]);
 }

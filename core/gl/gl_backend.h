@@ -27,9 +27,10 @@ struct GlBackendOptions {
   // a software renderer (llvmpipe runs each invocation on the CPU, where more
   // of them only add barriers) and 8 on a hardware GPU (docs/gl.md).
   int32_t threads_per_point = 0;
-  // Copy every pushing tick's end positions into a mapped ring on the GPU,
-  // for reaction_positions() (organsim serve's reply stiffness) without a
-  // read-back that waits for the tick in flight. Off: reaction_positions() throws.
+  // Copy every tick's end positions into a mapped ring on the GPU, for
+  // reaction_positions() (organsim serve's reply stiffness and surface)
+  // without a read-back that waits for the tick in flight. Off:
+  // reaction_positions() throws.
   bool keep_reaction_positions = false;
 };
 
@@ -54,8 +55,10 @@ class GlBackend final : public Backend {
   Reaction tick(const TickRequest& request) override;
   void attach(const Attachment& attachment) override;
   void release() override;
-  // prepare: gl::pack_model (host-side arrays, no GL call); adopt: the
-  // state read back, the buffers re-created and uploaded.
+  // prepare: gl::pack_model and the tables uploaded on a context of its own
+  // that shares this one's objects (safe on another thread while this
+  // backend ticks; the caller's current context is restored); adopt: the
+  // state read back and uploaded, the tables swapped in.
   std::unique_ptr<PreparedModel> prepare(const Model& next) const override;
   void adopt(std::unique_ptr<PreparedModel> prepared) override;
   void positions(std::vector<Vec3>& out) const override;
@@ -85,8 +88,6 @@ class GlBackend final : public Backend {
   void make_current() const;
   GLuint create_buffer(const char* what, size_t bytes, const void* data, GLbitfield flags);
   Reaction read_slot(int slot);
-  // Creates the buffers sized by the model (state x_t, d_t given, npad x 4).
-  // `anchors`: friction anchors carried over a rebuild (4 floats per old point; empty: none yet).
   // The model's tables (everything but the state), on whichever context is
   // current: the backend's, or prepare()'s upload context.
   struct Tables {
@@ -97,6 +98,10 @@ class GlBackend final : public Backend {
   };
   struct Prepared;
   Tables create_tables(const gl::PackedModel& packed, const StepPlan& plan) const;
+  // Makes `tables` the model's and creates the state buffers (x_t, d_t
+  // given, npad x 4) and the attachment, friction-anchor and end-position
+  // buffers; binds them all. `anchors`: friction anchors carried over a
+  // rebuild (4 floats per old point; empty: none yet).
   void install(Tables tables, const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
                std::vector<float> anchors = {});
   // Buffers of a Prepared dropped without adopt(), deleted on the backend's
@@ -130,7 +135,7 @@ class GlBackend final : public Backend {
          shear_stress_ = 0, attach_ = 0, surface_range_ = 0, surface_tris_ = 0, anchors_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0;
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
-  // keep_reaction_positions: x at the end of each pushing tick, persistently
+  // keep_reaction_positions: x at the end of each tick, persistently
   // mapped (READBACK_SLOTS x npad x 4 floats); made with the model's buffers.
   GLuint reaction_x_ = 0;
   const float* reaction_x_map_ = nullptr;

@@ -227,13 +227,13 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   // the GL backend the one before: its positions kept on the GPU, so that
   // this never waits for the tick in flight); only in contact (a copy of
   // the positions and one pass over the surface).
-  recent_centers_.push_back(info.tool_center);
+  recent_ends_.push_back({info.t, info.tool_center});
   const size_t latency = static_cast<size_t>(backend.reaction_latency_ticks());
-  while (recent_centers_.size() > latency + 1) recent_centers_.pop_front();
+  while (recent_ends_.size() > latency + 1) recent_ends_.pop_front();
   Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
     backend.reaction_positions(stiffness_positions_);
-    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_centers_.front());
+    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_ends_.front().second);
   }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
@@ -243,7 +243,7 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   if (tick_pose_received_) latencies_.push_back(seconds(now - *tick_pose_received_));
   wall_seconds_ = seconds(now - start_);
   maybe_status(now);
-  maybe_surface(backend, info.t, now);
+  if (recent_ends_.size() == latency + 1) maybe_surface(backend, recent_ends_.front().first, now);
 }
 
 void LiveSession::on_start(const Model& model, Backend& /*backend*/) { find_surface(model); }
@@ -275,7 +275,7 @@ void LiveSession::find_surface(const Model& model) {
 void LiveSession::maybe_surface(Backend& backend, double t, LiveClock::time_point now) {
   if (o_.surface_rate <= 0 || surface_points_.empty() || seconds(now - last_surface_) < 1.0 / o_.surface_rate) return;
   last_surface_ = now;
-  backend.positions(positions_);
+  backend.reaction_positions(positions_);  // the reaction's tick: never waits for the tick in flight
   surface_client_.resize(surface_points_.size());
   for (size_t k = 0; k < surface_points_.size(); ++k)
     surface_client_[k] = o_.frame.client_position(positions_[static_cast<size_t>(surface_points_[k])]);

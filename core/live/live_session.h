@@ -117,6 +117,7 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   void apply_pending(int64_t tick, double t_start, double t_end);
   void maybe_status(LiveClock::time_point now);
   void find_surface(const Model& model);
+  // The surface at the end of the reaction's tick (time t), at most surface_rate times a second.
   void maybe_surface(Backend& backend, double t, LiveClock::time_point now);
 
   LiveLink& link_;
@@ -165,9 +166,9 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::vector<Tri> surface_triangles_;
   std::vector<Vec3> positions_, surface_client_;
   std::vector<Vec3> stiffness_positions_;  // the tissue at the end of the reaction's tick (in contact)
-  // The tool centres at the ends of the last ticks, newest last: the
+  // Time and tool centre at the ends of the last ticks, newest last: the
   // reaction a tick returns is reaction_latency_ticks() older (GL: 1).
-  std::deque<Vec3> recent_centers_;
+  std::deque<std::pair<double, Vec3>> recent_ends_;
   LiveClock::time_point last_surface_{};
   int64_t surfaces_ = 0;
 };

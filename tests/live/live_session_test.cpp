@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <array>
 #include <map>
+#include <set>
 #include <thread>
 
 #include "core/gl/gl_backend.h"
@@ -53,7 +55,10 @@ class ScriptedLink : public LiveLink {
     replies.push_back({t, force});
     stiffness.push_back(k);
   }
-  void send_surface(double, const std::vector<Vec3>&, const std::vector<Tri>&) override {}
+  std::vector<std::pair<double, std::vector<Vec3>>> surfaces;  // (t, points in the client's frame)
+  void send_surface(double t, const std::vector<Vec3>& points, const std::vector<Tri>&) override {
+    surfaces.push_back({t, points});
+  }
   void send_notice(const std::string&) override {}
   nlohmann::json report() const override { return nlohmann::json::object(); }
 
@@ -105,17 +110,20 @@ struct Served {
 struct StiffnessProbe : RunObserver {
   BackendTool tool;
   std::vector<Eigen::Matrix3d> k;
-  std::vector<Vec3> x;
+  std::vector<double> t;
+  std::vector<std::vector<Vec3>> x;
   void on_tick(const Model& model, Backend& backend, const TickInfo& info) override {
-    backend.positions(x);
-    k.push_back(tool_contact_stiffness(model, x, tool, info.tool_center));
+    x.emplace_back();
+    backend.positions(x.back());
+    t.push_back(info.t);
+    k.push_back(tool_contact_stiffness(model, x.back(), tool, info.tool_center));
   }
 };
 
 // `probe`, if given, watches the run beside the session; `on`, if given, is
 // the backend (else the double CPU backend).
 Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObserver* probe = nullptr,
-             Backend* on = nullptr) {
+             Backend* on = nullptr, double surface_rate = 0) {
   std::unique_ptr<Backend> cpu;
   if (!on) cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
   Backend* backend = on ? on : cpu.get();
@@ -125,6 +133,7 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObser
   o.start = s.tool->spec.position_at(0);
   o.scene = scene_box(model.rest_position);
   o.stop = &link.stop;
+  o.surface_rate = surface_rate;
   Scenario run = s;  // as organsim serve: the one-tick cuts go through the session
   o.scripted_cuts = take_one_tick_cuts(run.events, o.tick);
   LiveSession session(link, o);
@@ -234,8 +243,9 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
 // On the GL backend a tick returns the reaction of the tick before
 // (reaction_latency_ticks 1), and the reply's stiffness is of that tick too:
 // the contact at its end positions (kept on the GPU, so the reply never
-// waits for the tick in flight) about its tool centre.
-TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessIsThatOfTheReactionsTick) {
+// waits for the tick in flight) about its tool centre. So is the surface
+// sent for display (here at every tick), with that tick's time.
+TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessAndSurfaceAreThoseOfTheReactionsTick) {
   const Scenario s = cube();
   const Model model = cube_model(s);
   ScriptedLink link;
@@ -245,7 +255,7 @@ TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessIsThatOfTheReactionsTick) {
   GlBackendOptions keep;
   keep.keep_reaction_positions = true;
   GlBackend gl(model, backend_tool(s), keep);
-  const Served served = serve(s, model, link, &probe, &gl);
+  const Served served = serve(s, model, link, &probe, &gl, 1e9);
   const ForceSamples& f = served.result.samples;
   ASSERT_EQ(link.stiffness.size(), 80u);
   int in_contact = 0;
@@ -259,6 +269,20 @@ TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessIsThatOfTheReactionsTick) {
     }
   }
   EXPECT_GT(in_contact, 20);
+  // Every tick from the second on sends the surface at the previous tick's
+  // end: each point is one of that tick's positions, in the client's frame.
+  ASSERT_EQ(link.surfaces.size(), 79u);
+  const ClientFrame frame;
+  for (size_t k = 1; k < 80; ++k) {
+    const auto& [t, points] = link.surfaces[k - 1];
+    ASSERT_EQ(t, probe.t[k - 1]) << "tick " << k;
+    std::set<std::array<double, 3>> then;
+    for (const Vec3& p : probe.x[k - 1]) {
+      const Vec3 c = frame.client_position(p);
+      then.insert({c.x(), c.y(), c.z()});
+    }
+    for (const Vec3& c : points) ASSERT_TRUE(then.count({c.x(), c.y(), c.z()})) << "tick " << k << ": " << c.transpose();
+  }
 }
 
 // What the run loop hands each observer as a pulling tool's stiffness.
