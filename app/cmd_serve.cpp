@@ -71,7 +71,7 @@ void serve_command(const ServeArgs& args) {
   if (!args.client_transform.empty()) frame.to_scene = read_client_transform(args.client_transform);
 
   BackendSelection selection = scenario_backend_selection(s, args.backend, args.precision, args.threads);
-  selection.gl_keep_reaction_positions = true;  // the reply's stiffness without waiting for the tick in flight
+  selection.gl_keep_reaction_positions = true;  // the reply's stiffness and the surface without waiting for the tick in flight
   const std::string backend_choice = resolve_auto_backend(selection);
   if (!backend_choice.empty()) std::cout << "backend:  " << backend_choice << "\n";
   s.backend.name = selection.name;

@@ -62,6 +62,8 @@ print(f"model:    {meta['points']} points on {meta['backend']} ({meta['precision
 print(f"served:   {live['ticks']} ticks, {live['late_ticks']} late, real-time factor {live['real_time_factor']:.3f}")
 print(f"latency:  median {lat['median_ms']:.3f} ms, p99 {lat['p99_ms']:.3f} ms, max {lat['max_ms']:.3f} ms over {lat['count']} poses")
 peak = max((sum(c * c for c in f) ** 0.5 for f in json.load(open(sys.argv[1]))["samples"]["force"]), default=0)
+slow = ", ".join(f"tick {s['tick']} {s['ms']:.1f} ms" for s in live.get("slowest_ticks", []))
+print(f"slowest:  {slow} (wall time from the reply before)")
 print(f"contact:  peak tool force {peak:.3g} N; replies sent {live['link']['replies_sent']}, dropped {live['link']['replies_dropped']}")
 tick = meta["dt"] * meta["substeps"]
 for cut in live.get("cuts", []):

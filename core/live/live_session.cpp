@@ -238,6 +238,8 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
   const LiveClock::time_point now = LiveClock::now();
+  note_tick_wall(info.tick, seconds(now - (ticks_ == 0 ? start_ : last_reply_)));
+  last_reply_ = now;
   ++ticks_;
   if (now > start_ + from_seconds(info.t)) ++late_;
   if (tick_pose_received_) latencies_.push_back(seconds(now - *tick_pose_received_));
@@ -302,6 +304,14 @@ void LiveSession::maybe_status(LiveClock::time_point now) {
   status_latencies_ = latencies_.size();
 }
 
+void LiveSession::note_tick_wall(int64_t tick, double seconds) {
+  constexpr size_t kKept = 5;
+  if (slowest_.size() == kKept && !(seconds > slowest_.back().second)) return;
+  if (slowest_.size() == kKept) slowest_.pop_back();
+  const auto at = std::find_if(slowest_.begin(), slowest_.end(), [&](const auto& s) { return seconds > s.second; });
+  slowest_.insert(at, {tick, seconds});
+}
+
 void LiveSession::add_meta(nlohmann::json& extra) const {
   std::vector<double> all = latencies_;
   nlohmann::json poses = nlohmann::json::array();
@@ -314,9 +324,12 @@ void LiveSession::add_meta(nlohmann::json& extra) const {
   }
   nlohmann::json m = nlohmann::json::array();
   for (int r = 0; r < 4; ++r) m.push_back({o_.frame.to_scene(r, 0), o_.frame.to_scene(r, 1), o_.frame.to_scene(r, 2), o_.frame.to_scene(r, 3)});
+  nlohmann::json slowest = nlohmann::json::array();
+  for (const auto& [tick, s] : slowest_) slowest.push_back({{"tick", tick}, {"ms", 1e3 * s}});
   extra["live"] = {
       {"ticks", ticks_},
       {"late_ticks", late_},
+      {"slowest_ticks", slowest},
       {"latency", latency_json(summarise_latency(all))},
       {"real_time_factor", wall_seconds_ > 0 ? end_time_ / wall_seconds_ : 0.0},
       {"wall_seconds", wall_seconds_},

@@ -116,6 +116,8 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   void make_cut(int64_t tick, double t_start, double t_end);
   void apply_pending(int64_t tick, double t_start, double t_end);
   void maybe_status(LiveClock::time_point now);
+  // Keeps the slowest ticks (wall time from the last reply to this one).
+  void note_tick_wall(int64_t tick, double seconds);
   void find_surface(const Model& model);
   // The surface at the end of the reaction's tick (time t), at most surface_rate times a second.
   void maybe_surface(Backend& backend, double t, LiveClock::time_point now);
@@ -169,6 +171,8 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   // Time and tool centre at the ends of the last ticks, newest last: the
   // reaction a tick returns is reaction_latency_ticks() older (GL: 1).
   std::deque<std::pair<double, Vec3>> recent_ends_;
+  LiveClock::time_point last_reply_{};
+  std::vector<std::pair<int64_t, double>> slowest_;  // (tick, s), slowest first, at most 5
   LiveClock::time_point last_surface_{};
   int64_t surfaces_ = 0;
 };

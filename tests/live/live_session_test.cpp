@@ -285,6 +285,31 @@ TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessAndSurfaceAreThoseOfTheReacti
   }
 }
 
+// meta.live.slowest_ticks names the ticks that took longest between two
+// replies, slowest first: here the two a slow client held up.
+TEST(LiveSession, TheSlowestTicksAreNamedWithTheirWallTime) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  link.pause_ms[7] = 30;
+  link.pause_ms[15] = 60;
+  const Served served = serve(s, model, link);
+  const nlohmann::json& slowest = served.live["slowest_ticks"];
+  ASSERT_LE(slowest.size(), 5u);
+  ASSERT_GE(slowest.size(), 2u);
+  std::map<int64_t, double> ms;
+  for (size_t i = 0; i < slowest.size(); ++i) {
+    ms[slowest[i]["tick"].get<int64_t>()] = slowest[i]["ms"].get<double>();
+    if (i > 0) {
+      EXPECT_GE(slowest[i - 1]["ms"].get<double>(), slowest[i]["ms"].get<double>());
+    }
+  }
+  ASSERT_EQ(ms.count(15), 1u) << slowest;
+  ASSERT_EQ(ms.count(7), 1u) << slowest;
+  EXPECT_GE(ms[15], 60.0);
+  EXPECT_GE(ms[7], 30.0);
+}
+
 // What the run loop hands each observer as a pulling tool's stiffness.
 struct HeldStiffnessProbe : RunObserver {
   std::vector<Eigen::Matrix3d> k;
