@@ -227,9 +227,14 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   // the GL backend the one before: its positions kept on the GPU, so that
   // this never waits for the tick in flight); only in contact (a copy of
   // the positions and one pass over the surface).
-  recent_ends_.push_back({info.t, info.tool_center});
+  // A window of latency + 1 entries, shifted in place: no allocation per tick.
   const size_t latency = static_cast<size_t>(backend.reaction_latency_ticks());
-  while (recent_ends_.size() > latency + 1) recent_ends_.pop_front();
+  if (recent_ends_.size() <= latency) {
+    recent_ends_.push_back({info.t, info.tool_center});
+  } else {
+    std::move(recent_ends_.begin() + 1, recent_ends_.end(), recent_ends_.begin());
+    recent_ends_.back() = {info.t, info.tool_center};
+  }
   Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
     backend.reaction_positions(stiffness_positions_);

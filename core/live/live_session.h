@@ -170,7 +170,7 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::vector<Vec3> stiffness_positions_;  // the tissue at the end of the reaction's tick (in contact)
   // Time and tool centre at the ends of the last ticks, newest last: the
   // reaction a tick returns is reaction_latency_ticks() older (GL: 1).
-  std::deque<std::pair<double, Vec3>> recent_ends_;
+  std::vector<std::pair<double, Vec3>> recent_ends_;
   LiveClock::time_point last_reply_{};
   std::vector<std::pair<int64_t, double>> slowest_;  // (tick, s), slowest first, at most 5
   LiveClock::time_point last_surface_{};
