@@ -318,7 +318,7 @@ void LiveSession::note_tick_wall(int64_t tick, double seconds) {
 }
 
 void LiveSession::add_meta(nlohmann::json& extra) const {
-  std::vector<double> all = latencies_;
+  std::vector<double> all(latencies_.begin(), latencies_.end());
   nlohmann::json poses = nlohmann::json::array();
   for (const AppliedPose& a : applied_) {
     poses.push_back({{"tick", a.tick},

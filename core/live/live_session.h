@@ -94,11 +94,11 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   // The tool path as keyframes that reproduce every tick's tool centre
   // exactly with ToolSpec::position_at (a hold, then the step to the new
   // pose at the end of the tick that applied it).
-  const std::vector<Keyframe>& keyframes() const { return keyframes_; }
+  std::vector<Keyframe> keyframes() const { return {keyframes_.begin(), keyframes_.end()}; }
   // Simulated time at the end of the last tick served, s (0 before any).
   double end_time() const { return end_time_; }
   int64_t ticks() const { return ticks_; }
-  const std::vector<AppliedPose>& applied() const { return applied_; }
+  const std::deque<AppliedPose>& applied() const { return applied_; }
   // The client's cuts as scripted cuts over the ticks that made them, with
   // the tick that swapped each in (applied_at; for a cut still being built
   // when the session ended, its end: never), for session.json.
@@ -149,13 +149,18 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   // index into o_.scripted_cuts or cuts_).
   std::deque<std::pair<bool, size_t>> in_flight_;
   nlohmann::json cut_log_ = nlohmann::json::array();
-  std::vector<Keyframe> keyframes_;
-  std::vector<AppliedPose> applied_;
+  // The session's records grow by a tick's entries at a time for as long as
+  // it runs: a deque never moves what it holds, where a vector's doubling
+  // would copy them all on some tick (8193, 16385, ...: a stall of
+  // milliseconds at a few thousand poses, page faults on the new block
+  // included).
+  std::deque<Keyframe> keyframes_;
+  std::deque<AppliedPose> applied_;
   std::optional<LiveClock::time_point> tick_pose_received_;  // of the pose this tick applied
   double end_time_ = 0;
   int64_t ticks_ = 0;
   int64_t late_ = 0;
-  std::vector<double> latencies_;  // s, one per tick that applied a pose
+  std::deque<double> latencies_;  // s, one per tick that applied a pose
   std::string stopped_by_;
 
   LiveClock::time_point last_status_{};

@@ -310,6 +310,44 @@ TEST(LiveSession, TheSlowestTicksAreNamedWithTheirWallTime) {
   EXPECT_GE(ms[7], 30.0);
 }
 
+// Where the session's first applied pose lives, after every tick.
+struct RecordAddressProbe : RunObserver {
+  const LiveSession* session = nullptr;
+  std::set<const AppliedPose*> first;
+  size_t applied = 0;
+  void on_tick(const Model&, Backend&, const TickInfo&) override {
+    applied = session->applied().size();
+    if (applied > 0) first.insert(&session->applied().front());
+  }
+};
+
+// The records grow by a tick at a time and are never moved (a vector's
+// doubling would copy them all on one tick: a stall of milliseconds a few
+// thousand poses into a session), so the first applied pose stays where it
+// was first recorded while a pose arrives every tick.
+TEST(LiveSession, ItsRecordsGrowWithoutMovingWhatTheyHold) {
+  const Scenario s = cube();
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  for (int64_t k = 0; k < 80; ++k) link.script[k] = {pose_mm("Tool", 20, 20, 51 - 0.01 * k)};
+  auto backend = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  LiveOptions o;
+  o.tool = backend_tool(s);
+  o.tick = s.time.tick();
+  o.start = s.tool->spec.position_at(0);
+  o.scene = scene_box(model.rest_position);
+  LiveSession session(link, o);
+  RecordAddressProbe probe;
+  probe.session = &session;
+  RunOptions r;
+  r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session_records";
+  r.observers = {&session, &probe};
+  r.tool_driver = &session;
+  run_scenario(s, model, *backend, r);
+  EXPECT_EQ(probe.applied, 80u);
+  EXPECT_EQ(probe.first.size(), 1u) << "the first applied pose was moved " << probe.first.size() - 1 << " times";
+}
+
 // What the run loop hands each observer as a pulling tool's stiffness.
 struct HeldStiffnessProbe : RunObserver {
   std::vector<Eigen::Matrix3d> k;
