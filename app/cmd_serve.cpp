@@ -86,7 +86,8 @@ void serve_command(const ServeArgs& args) {
   const PreparedRun prepared = prepare_run(s, model, prepare_options);
   const std::string step_warning = check_time_step(prepared.stability, s.time.dt, s.time.substeps, args.allow_unstable);
   if (!step_warning.empty()) std::cerr << "organsim: " << step_warning << "\n";
-  BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks());
+  // On the reaction's tick's positions (GL: kept on the GPU), so that a check never waits for the tick in flight.
+  BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks(), true);
   prepared.start(*backend);
 
   StopSignals signals;  // SIGINT ends the session after the current tick, with its record written

@@ -26,9 +26,11 @@ PreparedRun prepare_run(const Scenario& scenario, const Model& model, const Prep
   return prepared;
 }
 
-BlowupMonitor PreparedRun::blowup_monitor(const Scenario& scenario, double dt, int32_t interval_ticks) const {
+BlowupMonitor PreparedRun::blowup_monitor(const Scenario& scenario, double dt, int32_t interval_ticks,
+                                          bool reaction_positions) const {
   BlowupMonitorOptions options;
   options.interval_ticks = interval_ticks;
+  options.reaction_positions = reaction_positions;
   BlowupContext context;
   context.dt = dt;
   if (scenario.tool) {

@@ -38,7 +38,9 @@ struct PreparedRun {
   // The blow-up monitor for a run at step dt (s), checking every
   // `interval_ticks` ticks (a backend's default_check_interval_ticks(), or 1
   // to see a blow-up at the tick it starts).
-  BlowupMonitor blowup_monitor(const Scenario& scenario, double dt, int32_t interval_ticks) const;
+  // reaction_positions: BlowupMonitorOptions::reaction_positions (organsim serve).
+  BlowupMonitor blowup_monitor(const Scenario& scenario, double dt, int32_t interval_ticks,
+                               bool reaction_positions = false) const;
   // Puts the backend at the settled start with zero velocity (nothing without settle).
   void start(Backend& backend) const;
   // {"dt_crit", "stability", "settle"} for the force log's meta.

@@ -178,7 +178,7 @@ void BlowupMonitor::on_start(const Model& model, Backend& backend) {
   x_ = x_start_;
   elastic_start_ = elastic_energy(model, x_start_);
   tool_work_ = 0;
-  last_check_t_ = backend.time();
+  last_check_t_ = last_tick_t_ = backend.time();
   checks_ = 0;
   scan_share_ = -1;
   // Floor: KE of the whole mass moving at 1e-3 of the model's size per second.
@@ -230,14 +230,20 @@ void BlowupMonitor::on_tick(const Model& model, Backend& backend, const TickInfo
   // tick's own path, the first tick's included (a grasp that pulls from the
   // first tick on puts energy in at once).
   if (info.tool_active) tool_work_ += info.reaction.force.norm() * (info.tool_center - info.tool_from).norm();
-  if ((info.tick + 1) % options_.interval_ticks == 0) {
+  const int32_t behind = options_.reaction_positions ? backend.reaction_latency_ticks() : 0;
+  const double tick_length = info.t - last_tick_t_;
+  last_tick_t_ = info.t;
+  // Before the reaction's tick exists (the first `behind` ticks) there is nothing new to check.
+  if ((info.tick + 1) % options_.interval_ticks == 0 && info.tick >= behind) {
     std::swap(x_prev_, x_);
-    backend.positions(x_);
+    if (options_.reaction_positions) backend.reaction_positions(x_);
+    else backend.positions(x_);
     ++checks_;
+    const double t_x = info.t - behind * tick_length;  // the end of the tick x_ is of
     // A growing mode shows as energy first; report that as the cause when it holds.
     std::optional<BlowupFinding> finding = check_finite(model, x_);
-    if (!finding) finding = check_energy(model, info.t - last_check_t_);
-    last_check_t_ = info.t;
+    if (!finding) finding = check_energy(model, t_x - last_check_t_);
+    last_check_t_ = t_x;
     if (finding) throw Error(ErrorKind::Numerical, describe(model, *finding, info.t, info));
     scan_share_ = 0;
   }

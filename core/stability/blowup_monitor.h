@@ -15,7 +15,8 @@
 // tick and the next interval_ticks - 1, a share each, on the positions read,
 // so that no tick of a live session pays for the whole pass (at liver size
 // it costs about half a 1 kHz tick's stepping). A finding therefore stops
-// the run at most 2 interval_ticks - 1 ticks after it arose.
+// the run at most 2 interval_ticks - 1 ticks after it arose (plus the
+// reaction's latency with BlowupMonitorOptions::reaction_positions).
 // A finding stops the run: on_tick throws Error(Numerical) naming the
 // simulated time, the point (input numbering) and the likely cause. The run
 // loop then writes the force log with completed = false and this reason.
@@ -42,6 +43,13 @@ struct BlowupMonitorOptions {
   // KE > energy_factor * (budget) + floor stops the run. The slack covers the
   // measured KE (from position differences) versus Verlet's conserved energy.
   double energy_factor = 4.0;
+  // Check the positions of the reaction's tick (Backend::reaction_positions,
+  // reaction_latency_ticks before the tick just asked for) instead of the
+  // tick's own: organsim serve, where the GL backend keeps them on the GPU
+  // so that a check never waits for the tick in flight. The tick's reply
+  // carries that same tick's reaction, so no client sees a state the
+  // monitor has not checked; a finding comes that many ticks later.
+  bool reaction_positions = false;
 };
 
 // What the monitor knows about the run, for naming the likely cause.
@@ -90,7 +98,8 @@ class BlowupMonitor final : public RunObserver {
   double elastic_start_ = 0;   // J
   double tool_work_ = 0;       // J, upper bound: sum |F| |dc| over ticks
   double energy_floor_ = 0;    // J
-  double last_check_t_ = 0;
+  double last_check_t_ = 0;   // s, the time of x_
+  double last_tick_t_ = 0;    // s, the end of the last tick seen
   int64_t checks_ = 0;
   // The geometric pass over x_: the share a tick checks next, or -1 when done.
   int32_t scan_share_ = -1;

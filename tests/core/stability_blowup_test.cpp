@@ -186,6 +186,99 @@ TEST(StabilityBlowup, GeometryPassIsSpreadOverTheIntervalAndStillFindsAStretched
   EXPECT_NE(msg.find("stretched by"), std::string::npos) << msg;
 }
 
+// A CPU backend that answers as the GL backend of organsim serve does: each
+// tick returns the reaction of the tick before (latency 1), and
+// reaction_positions() are that tick's end positions, kept without waiting.
+// Counts what a monitor reads.
+class LaggingBackend final : public Backend {
+ public:
+  explicit LaggingBackend(std::unique_ptr<Backend> inner) : inner_(std::move(inner)) {}
+  mutable int positions_reads = 0, reaction_reads = 0;
+
+  std::string name() const override { return inner_->name(); }
+  std::string device() const override { return inner_->device(); }
+  std::string precision() const override { return inner_->precision(); }
+  Plan plan() const override { return inner_->plan(); }
+  const StepPlan& step_plan() const override { return inner_->step_plan(); }
+  int32_t reaction_latency_ticks() const override { return 1; }
+  Reaction tick(const TickRequest& request) override {
+    inner_->positions(before_);  // the end of the tick before: the one this tick's reaction is of
+    const Reaction now = inner_->tick(request);
+    const Reaction out = last_;
+    last_ = now;
+    started_ = true;
+    return out;
+  }
+  void attach(const Attachment& a) override { inner_->attach(a); }
+  void release() override { inner_->release(); }
+  void positions(std::vector<Vec3>& out) const override {
+    ++positions_reads;
+    inner_->positions(out);
+  }
+  void reaction_positions(std::vector<Vec3>& out) const override {
+    if (!started_) throw Error(ErrorKind::Backend, "reaction_positions() before the first tick");
+    ++reaction_reads;
+    out = before_;
+  }
+  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override { inner_->set_state(x, x_prev); }
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override { return inner_->prepare(next); }
+  void adopt(std::unique_ptr<PreparedModel> prepared) override { inner_->adopt(std::move(prepared)); }
+  double time() const override { return inner_->time(); }
+
+ private:
+  std::unique_ptr<Backend> inner_;
+  std::vector<Vec3> before_;
+  Reaction last_;
+  bool started_ = false;
+};
+
+// organsim serve's monitor checks the reaction's tick's positions: it never
+// reads the tick in flight (positions() only at the start, when nothing is
+// in flight), stays quiet on a stable run, and still stops an unstable one
+// with the energy finding, at most the latency later than on positions().
+TEST(StabilityBlowup, OnTheReactionsPositionsItNeverWaitsForTheTickInFlightAndStillStopsABlowUp) {
+  const Model sag = sagging_box();
+  const StabilityReport rs = estimate_critical_step(sag);
+  BlowupMonitorOptions options;
+  options.interval_ticks = 10;
+  options.reaction_positions = true;
+  LaggingBackend quiet_backend(make_cpu_backend(sag, {}, testing::one_thread()));
+  BlowupMonitor quiet(options, {0.9 * rs.dt_crit, 0, 0, rs});
+  EXPECT_EQ(run_with_monitor(sag, quiet_backend, quiet, 0.9 * rs.dt_crit, 10, 200), "");
+  EXPECT_EQ(quiet.checks(), 20);
+  EXPECT_EQ(quiet_backend.positions_reads, 1);  // on_start
+  EXPECT_EQ(quiet_backend.reaction_reads, 20);
+
+  const Model model = testing::stability_box(3, 0.03, testing::undamped_material());
+  const StabilityReport r = estimate_critical_step(model);
+  std::vector<Vec3> x = model.rest_position;
+  for (int32_t i = 0; i < model.npoint(); ++i)
+    if (!model.fixed[i]) x[i] += 1e-9 * Vec3(std::sin(i), std::cos(3 * i), std::sin(7 * i));
+  const double dt = 1.3 * r.dt_crit;
+  const auto stop_time = [&](bool reaction_positions, std::string& msg) {
+    LaggingBackend backend(make_cpu_backend(model, {}, testing::one_thread()));
+    backend.set_state(x, x);
+    BlowupMonitorOptions o;
+    o.interval_ticks = 10;
+    o.reaction_positions = reaction_positions;
+    BlowupMonitor monitor(o, {dt, 0, 0, r});
+    msg = run_with_monitor(model, backend, monitor, dt, 5, 2000);
+    if (reaction_positions) {
+      EXPECT_EQ(backend.positions_reads, 1);
+    }
+    return backend.time();
+  };
+  std::string direct, lagged;
+  const double t_direct = stop_time(false, direct), t_lagged = stop_time(true, lagged);
+  ASSERT_NE(direct, "");
+  ASSERT_NE(lagged, "");
+  EXPECT_NE(lagged.find("kinetic energy"), std::string::npos) << lagged;
+  EXPECT_EQ(lagged.find("non-finite"), std::string::npos) << lagged;
+  // The same checks on positions one tick older: found at the same check or the next one.
+  EXPECT_GE(t_lagged, t_direct);
+  EXPECT_LE(t_lagged, t_direct + 10.5 * 5 * dt) << direct << "\n" << lagged;
+}
+
 // Through the run loop: the stop leaves a valid forces.json that says the run
 // was cut short and why, with the samples up to the stop.
 TEST(StabilityBlowup, RunLoopWritesTruncatedLog) {
