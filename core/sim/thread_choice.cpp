@@ -15,9 +15,12 @@ void ThreadChoice::record_tick(int32_t steps, double seconds) {
   recent_step_ = recent_step_ == 0 ? per_step : 0.75 * recent_step_ + 0.25 * per_step;
   --ticks_to_probe_;
   ++ticks_since_probe_;
-  // Load arrived: a tick much slower than the best so far brings the next
-  // probe forward, though not within early_gap_ ticks of the last.
-  if (best_step_ > 0 && per_step > options_.slowdown * best_step_ && ticks_since_probe_ >= early_gap_)
+  // Load arrived: the last few ticks' average much slower than the best so
+  // far brings the next probe forward, though not within early_gap_ ticks
+  // of the last. The average, not the tick: one tick slowed by another
+  // process's wake-up (a live session's client, every millisecond) is not
+  // load, and a probe step then only makes a slow tick slower.
+  if (best_step_ > 0 && recent_step_ > options_.slowdown * best_step_ && ticks_since_probe_ >= early_gap_)
     ticks_to_probe_ = 0;
   if (best_step_ == 0 || per_step < best_step_) best_step_ = per_step;
 }

@@ -9,8 +9,8 @@
 // the other count, and switches when the probe is clearly faster than the
 // chosen count's last few ticks. Probes
 // come at intervals that double after each one (cheap on a steady machine)
-// and sooner when the chosen count's steps become much slower than its best
-// (load arrived), though ever more rarely while the other count stays far
+// and sooner when the chosen count's last few ticks become much slower than
+// its best (load arrived; a single slow tick is not), though ever more rarely while the other count stays far
 // slower (on a loaded machine a two-thread probe step can cost 50 one-thread
 // steps, and one-thread ticks are noisy). Results do not depend on the
 // thread count, so a switch changes only the speed.
@@ -27,7 +27,7 @@ class ThreadChoice {
     int32_t first_interval = 16;   // ticks before the first probe (and the shortest interval)
     int32_t max_interval = 1024;   // ticks; the interval doubles after each probe up to this
     double switch_margin = 0.1;    // switch when the probe is this much faster per step
-    double slowdown = 2.0;         // probe early when a tick's step time exceeds this x the best
+    double slowdown = 2.0;         // probe early when the recent ticks' step time exceeds this x the best
     double much_slower = 3.0;      // a probe this many times slower doubles the gap before an early one
   };
 

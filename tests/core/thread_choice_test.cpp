@@ -80,14 +80,25 @@ TEST(ThreadChoice, LoadLeavingMovesTheRunBackToTwoThreads) {
 
 TEST(ThreadChoice, UnderLoadAFarSlowerOtherCountIsProbedEverMoreRarely) {
   ThreadChoice choice(1, 2);
-  // One thread on a loaded machine: every other tick 2.4x slower than the
-  // best (each such tick asks for an early probe); a two-thread step costs
-  // 20 one-thread steps.
-  run_ticks(choice, 0, 1000, [](int32_t n, int32_t tick) { return n == 2 ? 5e-3 : (tick % 2 ? 6e-4 : 2.5e-4); });
+  // One thread on a loaded machine: after a quiet first tick (the best),
+  // every tick 2.4x slower (so the recent ticks ask for an early probe all
+  // along); a two-thread step costs 20 one-thread steps.
+  run_ticks(choice, 0, 1000, [](int32_t n, int32_t tick) { return n == 2 ? 5e-3 : (tick == 0 ? 2.5e-4 : 6e-4); });
   EXPECT_EQ(choice.chosen(), 1);
   // After each far slower probe the gap before an early one doubles (16,
   // 32, 64, ... ticks): 5 probes in 1000 ticks, where a fixed 16-tick gap
   // probes 62 times (measured by breaking the doubling).
+  EXPECT_EQ(choice.probes(), 5);
+}
+
+// A tick slowed by another process's wake-up (a live session's client
+// every millisecond) is not load: single ticks at 3x the best, one in 25,
+// leave the probes on their doubling schedule (five in 1000 ticks, as on a
+// steady machine), where each would otherwise bring one forward.
+TEST(ThreadChoice, ASingleSlowTickDoesNotBringAProbeForward) {
+  ThreadChoice choice(2, 1);
+  run_ticks(choice, 0, 1000, [](int32_t n, int32_t tick) { return idle(n) * (tick % 25 == 7 ? 3 : 1); });
+  EXPECT_EQ(choice.chosen(), 2);
   EXPECT_EQ(choice.probes(), 5);
 }
 
