@@ -7,16 +7,18 @@
 // scheduled (a liver run at load 8 did not finish in 300 s). So the run keeps
 // timing its ticks on the chosen count and, now and then, one probe step on
 // the other count, and switches when the probe is clearly faster than the
-// chosen count's last few ticks. Probes
+// median of the chosen count's last few ticks. Probes
 // come at intervals that double after each one (cheap on a steady machine)
-// and sooner when the chosen count's last few ticks become much slower than
-// its best (load arrived; a single slow tick is not), though ever more rarely while the other count stays far
+// and sooner when the chosen count's recent ticks (their median) become much
+// slower than its best (load arrived; a single slow tick is not), though
+// ever more rarely while the other count stays far
 // slower (on a loaded machine a two-thread probe step can cost 50 one-thread
 // steps, and one-thread ticks are noisy). Results do not depend on the
 // thread count, so a switch changes only the speed.
 //
 // Pure bookkeeping on the times it is given, so it can be tested with made-up
 // timings; the backend measures them.
+#include <array>
 #include <cstdint>
 
 namespace organsim {
@@ -27,7 +29,7 @@ class ThreadChoice {
     int32_t first_interval = 16;   // ticks before the first probe (and the shortest interval)
     int32_t max_interval = 1024;   // ticks; the interval doubles after each probe up to this
     double switch_margin = 0.1;    // switch when the probe is this much faster per step
-    double slowdown = 2.0;         // probe early when the recent ticks' step time exceeds this x the best
+    double slowdown = 2.0;         // probe early when the recent ticks' median step time exceeds this x the best
     double much_slower = 3.0;      // a probe this many times slower doubles the gap before an early one
   };
 
@@ -52,8 +54,11 @@ class ThreadChoice {
   int32_t chosen_, other_;
   int32_t interval_, ticks_to_probe_, ticks_since_probe_ = 0;
   int32_t early_gap_;  // fewest ticks after a probe before an early one
-  // chosen(), time per step: a moving average over the last few ticks (what
-  // a probe is compared with) and the fastest tick since it was chosen; 0: none yet.
+  // chosen(), time per step: the median of the last kRecent ticks (what a
+  // probe is compared with) and the fastest tick since it was chosen; 0: none yet.
+  static constexpr int kRecent = 7;
+  std::array<double, kRecent> last_{};  // the last ticks' times per step, a ring
+  int64_t nlast_ = 0;                   // ticks recorded into last_
   double recent_step_ = 0, best_step_ = 0;
   int32_t switches_ = 0, probes_ = 0;
 };

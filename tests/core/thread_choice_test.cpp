@@ -92,14 +92,32 @@ TEST(ThreadChoice, UnderLoadAFarSlowerOtherCountIsProbedEverMoreRarely) {
 }
 
 // A tick slowed by another process's wake-up (a live session's client
-// every millisecond) is not load: single ticks at 3x the best, one in 25,
+// every millisecond) is not load: single ticks at 8x the best, one in 25,
 // leave the probes on their doubling schedule (five in 1000 ticks, as on a
-// steady machine), where each would otherwise bring one forward.
+// steady machine) and the choice on two threads, where each would
+// otherwise bring a probe forward (and a one-thread probe look faster).
 TEST(ThreadChoice, ASingleSlowTickDoesNotBringAProbeForward) {
   ThreadChoice choice(2, 1);
-  run_ticks(choice, 0, 1000, [](int32_t n, int32_t tick) { return idle(n) * (tick % 25 == 7 ? 3 : 1); });
+  run_ticks(choice, 0, 1000, [](int32_t n, int32_t tick) { return idle(n) * (tick % 25 == 7 ? 8 : 1); });
+  EXPECT_EQ(choice.switches(), 0);
   EXPECT_EQ(choice.chosen(), 2);
   EXPECT_EQ(choice.probes(), 5);
+}
+
+// A switch made in a bad moment is undone at the shortest interval: on an
+// idle machine the two-thread ticks from 40 to 47 are slowed to 2.5x (a
+// client waking on the same cores), so the probe they bring forward
+// switches to one thread; the next probe, 16 ticks later rather than the
+// doubled interval (64), finds two threads faster again.
+TEST(ThreadChoice, AMistakenSwitchIsUndoneAtTheShortestInterval) {
+  ThreadChoice choice(2, 1);
+  const auto cost = [](int32_t n, int32_t tick) { return n == 2 && tick >= 40 && tick < 48 ? 2.5e-4 : idle(n); };
+  int32_t tick = 0;
+  for (; choice.switches() == 0 && tick < 48; ++tick) run_ticks(choice, tick, 1, cost);
+  ASSERT_EQ(choice.chosen(), 1) << "no switch by tick " << tick;
+  run_ticks(choice, tick, 17, cost);
+  EXPECT_EQ(choice.chosen(), 2);
+  EXPECT_EQ(choice.switches(), 2);
 }
 
 TEST(ThreadChoice, AProbeOnlyAsFastAsTheChoiceWithinTheMarginDoesNotSwitch) {
