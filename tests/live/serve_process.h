@@ -7,9 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
 #include <filesystem>
-#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -48,15 +48,26 @@ class ServeProcess {
   // The port from "OpenIGTLink on 127.0.0.1:PORT", waiting up to `seconds`; 0 if it never came.
   int port(double seconds = 120) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-    const std::regex line("OpenIGTLink on [0-9.]+:([0-9]+)");
     while (std::chrono::steady_clock::now() < until) {
-      std::smatch m;
-      const std::string out = stdout_text();
-      if (std::regex_search(out, m, line)) return std::stoi(m[1]);
+      if (const int p = announced_port(stdout_text())) return p;
       if (exited()) return 0;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     return 0;
+  }
+  // The PORT of "OpenIGTLink on ADDRESS:PORT" followed by another character
+  // (the line written whole), 0 if there is none yet. Plain string search:
+  // <regex> trips gcc 12's -Wmaybe-uninitialized in the sanitizer build.
+  static int announced_port(const std::string& out) {
+    const std::string key = "OpenIGTLink on ";
+    const size_t at = out.find(key);
+    if (at == std::string::npos) return 0;
+    const size_t colon = out.find(':', at + key.size());
+    if (colon == std::string::npos) return 0;
+    size_t end = colon + 1;
+    while (end < out.size() && std::isdigit(static_cast<unsigned char>(out[end]))) ++end;
+    if (end == colon + 1 || end == out.size()) return 0;
+    return std::stoi(out.substr(colon + 1, end - colon - 1));
   }
   void interrupt() { kill(pid_, SIGINT); }
   // The exit code, waiting up to `seconds` (-1: killed after that).
