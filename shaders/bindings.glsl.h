@@ -37,6 +37,7 @@
 #define ORGANSIM_GL_B_SURFACE 18  // ivec2 {first entry, count} of each point's surface triangles (npad); surface contact
 #define ORGANSIM_GL_B_SURFACE_TRIS 19  // ivec4 {corners 0, 1, 2, the point's corner} per (point, triangle), ascending
 #define ORGANSIM_GL_B_ANCHOR 20   // vec4 {friction anchor in the tool frame (m), anchored 0/1} (npad); FRICTION
+#define ORGANSIM_GL_B_CARRY 21    // int: the old point each appended lane copies (carry_state.comp, an adopt)
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
@@ -57,5 +58,7 @@
 #define ORGANSIM_GL_U_FRICTION 15     // vec2 {mu_s, mu_k}; FRICTION
 #define ORGANSIM_GL_U_TOOL_ROTATION 16  // mat3 the tool frame's rotation into the world (locations 16-18); FRICTION
 #define ORGANSIM_GL_U_JAW_AXIS 19     // vec3 the grasper's jaw axis in the world (its first jaw closes along -it); GRASPER
+#define ORGANSIM_GL_U_CARRY_FIRST 20  // int: the first appended lane (carry_state.comp)
+#define ORGANSIM_GL_U_CARRY_COUNT 21  // int: appended lanes to fill (carry_state.comp)
 
 #endif

@@ -80,6 +80,12 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   step_ = gl::ComputeProgram("step.comp", defines);
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
   if (nodal) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
+  carry_ = gl::ComputeProgram("carry_state.comp", {});
+  // One empty dispatch now: a driver may compile a program at its first
+  // dispatch (llvmpipe does), which would otherwise fall on a cut's tick.
+  glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_COUNT, 0);
+  glUseProgram(carry_.id());
+  glDispatchCompute(1, 1, 1);
   if (smoothed) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
 
   // Buffers that do not depend on the model's size: the readback rings.
@@ -112,7 +118,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   // x_t = rest, d_t = 0.
   const gl::PackedModel packed = gl::pack_model(model);
   const std::vector<float> zero(packed.rest.size(), 0.0f);
-  install(create_tables(packed, plan_), packed, packed.rest, zero);
+  install(create_tables(packed, plan_), packed, packed.rest.data(), zero.data());
   if (plan_.gravity) {
     glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
                        static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
@@ -172,8 +178,7 @@ GlBackend::Tables GlBackend::create_tables(const gl::PackedModel& packed, const 
   return t;
 }
 
-void GlBackend::install(Tables tables, const gl::PackedModel& packed, const std::vector<float>& x,
-                        const std::vector<float>& d, std::vector<float> anchors) {
+void GlBackend::install(Tables tables, const gl::PackedModel& packed, const float* x, const float* d) {
   npoint_ = packed.npoint;
   nchunk_ = packed.nchunk;
   npad_ = packed.npad;
@@ -181,10 +186,10 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const std:
   // Two pairs of buffers swapped after each substep.
   const size_t xbytes = packed.rest.size() * sizeof(float);
   cur_ = 0;
-  x_[0] = create_buffer("x_t", xbytes, x.data(), GL_DYNAMIC_STORAGE_BIT);
-  x_[1] = create_buffer("x_{t+1}", xbytes, x.data(), GL_DYNAMIC_STORAGE_BIT);
-  d_[0] = create_buffer("x_t - x_{t-1}", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
-  d_[1] = create_buffer("x_{t+1} - x_t", xbytes, d.data(), GL_DYNAMIC_STORAGE_BIT);
+  x_[0] = create_buffer("x_t", xbytes, x, GL_DYNAMIC_STORAGE_BIT);
+  x_[1] = create_buffer("x_{t+1}", xbytes, x, GL_DYNAMIC_STORAGE_BIT);
+  d_[0] = create_buffer("x_t - x_{t-1}", xbytes, d, GL_DYNAMIC_STORAGE_BIT);
+  d_[1] = create_buffer("x_{t+1} - x_t", xbytes, d, GL_DYNAMIC_STORAGE_BIT);
   mass_ = tables.mass, chunks_ = tables.chunks, springs_ = tables.springs, tets_ = tables.tets, rest_ = tables.rest;
   shear_params_ = tables.shear_params, nodal_params_ = tables.nodal_params, pressure_ = tables.pressure;
   shear_stress_ = tables.shear_stress, surface_range_ = tables.surface_range, surface_tris_ = tables.surface_tris;
@@ -199,10 +204,11 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const std:
                             attach_upload_.data(), GL_DYNAMIC_STORAGE_BIT);
   }
   if (plan_.tool == ToolTerm::Surface && tool_.friction.on()) {
-    // Friction anchors are per point id, which a rebuild keeps: a grip holds through a cut.
-    anchors.resize(static_cast<size_t>(npad_) * 4, 0.0f);
-    anchors_ = create_buffer("friction anchors {in the tool frame, anchored}", anchors.size() * sizeof(float),
-                             anchors.data(), 0);
+    // None anchored; a rebuild copies the old points' anchors in on the GPU
+    // (they are per point id, which it keeps: a grip holds through a cut).
+    anchors_ = create_buffer("friction anchors {in the tool frame, anchored}", static_cast<size_t>(npad_) * 4 * sizeof(float),
+                             nullptr, 0);
+    glClearNamedBufferData(anchors_, GL_R32F, GL_RED, GL_FLOAT, nullptr);
   }
   if (tool_.present) glProgramUniform1i(reduce_.id(), ORGANSIM_GL_U_NPARTIAL, nchunk_);
   if (options_.keep_reaction_positions) {
@@ -339,30 +345,28 @@ void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
     throw Error(ErrorKind::Backend, "GL backend: a rebuild changed the step's passes beyond sutures");
   if (!p->tables) throw Error(ErrorKind::Backend, "GL backend: adopt() of a version already adopted");
   make_current();
-  // The state comes back once per topology change (an event, not per step):
-  // x_t and d_t of the points that stay, copies of their origin's for the new.
-  std::vector<float> x(packed.rest.size()), d(packed.rest.size());
-  const GLsizeiptr old_bytes = static_cast<GLsizeiptr>(static_cast<size_t>(old_n) * 4 * sizeof(float));
-  glGetNamedBufferSubData(x_[cur_], 0, old_bytes, x.data());
-  glGetNamedBufferSubData(d_[cur_], 0, old_bytes, d.data());
-  std::vector<float> anchors;
-  if (anchors_) {
-    anchors.resize(static_cast<size_t>(old_n) * 4);
-    glGetNamedBufferSubData(anchors_, 0, old_bytes, anchors.data());
-  }
+  // The state stays on the GPU: the old points' x_t and d_t are copied as a
+  // block into the new version's buffers, and each appended lane (new
+  // points, padding) gets those of the old point it copies
+  // (carry_state.comp), so an adopt neither waits for the tick in flight
+  // nor uploads the state.
+  std::vector<int32_t> from(static_cast<size_t>(packed.npad - old_n));
   for (int32_t i = old_n; i < packed.npad; ++i) {
     // Padding lanes copy the last point, as pack_model's rest state does.
-    const int32_t from = i < n ? next.origin[static_cast<size_t>(i)] : n - 1;
-    for (int k = 0; k < 4; ++k) {
-      x[4 * static_cast<size_t>(i) + k] = x[4 * static_cast<size_t>(from) + k];
-      d[4 * static_cast<size_t>(i) + k] = d[4 * static_cast<size_t>(from) + k];
-    }
+    int32_t f = i < n ? next.origin[static_cast<size_t>(i)] : n - 1;
+    while (f >= old_n) f = f < n ? next.origin[static_cast<size_t>(f)] : n - 1;
+    from[static_cast<size_t>(i - old_n)] = f;
   }
-  // The ring's copies go with the old buffers; the reaction the next tick
-  // returns is of the last tick before this one, which ended in this state.
+  const GLuint x_old = x_[cur_], d_old = d_[cur_], anchors_old = anchors_;
+  x_[cur_] = d_[cur_] = anchors_ = 0;  // kept from delete_model_buffers() until the copies are issued
+  // The ring's copies of the last tick's end positions stay readable: the
+  // reaction the next tick returns is of that tick, which ended in this state.
   for (Slot& s : slots_) s.has_positions = s.positions_adopted = false;
+  delete_retired_ring();
   if (reaction_x_ && ticks_ > 0) {
-    adopted_x_ = x;
+    retired_ = {reaction_x_, reaction_x_map_, npad_, old_n, from};
+    reaction_x_ = 0;
+    reaction_x_map_ = nullptr;
     slots_[static_cast<size_t>((ticks_ - 1) % kSlots)].positions_adopted = true;
   }
   delete_model_buffers();
@@ -370,7 +374,32 @@ void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
   model_ = &next;
   Tables tables = std::move(*p->tables);
   p->tables.reset();
-  install(std::move(tables), packed, x, d, std::move(anchors));
+  install(std::move(tables), packed, nullptr, nullptr);
+  const GLsizeiptr old_bytes = static_cast<GLsizeiptr>(static_cast<size_t>(old_n) * 4 * sizeof(float));
+  glCopyNamedBufferSubData(x_old, x_[0], 0, 0, old_bytes);
+  glCopyNamedBufferSubData(d_old, d_[0], 0, 0, old_bytes);
+  if (anchors_ && anchors_old) glCopyNamedBufferSubData(anchors_old, anchors_, 0, 0, old_bytes);
+  if (!from.empty()) {
+    const GLuint index = make_buffer("carried lanes' old points", from.size() * sizeof(int32_t), from.data(), 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_old);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_old);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[0]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[0]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CARRY, index);
+    glUseProgram(carry_.id());
+    glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_FIRST, old_n);
+    glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_COUNT, static_cast<GLint>(from.size()));
+    glDispatchCompute(static_cast<GLuint>((from.size() + ORGANSIM_GL_CHUNK - 1) / ORGANSIM_GL_CHUNK), 1, 1);
+    ++dispatches_;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    glDeleteBuffers(1, &index);  // freed by the driver once the dispatch has run
+  }
+  // x_{t+1} and its increment start as x_t's, as a fresh version's do.
+  const GLsizeiptr bytes = static_cast<GLsizeiptr>(packed.rest.size() * sizeof(float));
+  glCopyNamedBufferSubData(x_[0], x_[1], 0, 0, bytes);
+  glCopyNamedBufferSubData(d_[0], d_[1], 0, 0, bytes);
+  for (GLuint b : {x_old, d_old, anchors_old})
+    if (b) glDeleteBuffers(1, &b);
   context_->check_errors("GL backend rebuild");
 }
 
@@ -382,6 +411,7 @@ GlBackend::~GlBackend() {
   }
   if (reaction_map_) glUnmapNamedBuffer(reaction_);
   if (status_map_) glUnmapNamedBuffer(status_);
+  delete_retired_ring();
   delete_model_buffers();
   for (GLuint b : {reaction_, status_}) {
     if (b) glDeleteBuffers(1, &b);
@@ -390,6 +420,7 @@ GlBackend::~GlBackend() {
   reduce_ = gl::ComputeProgram();
   nodal_pressure_ = gl::ComputeProgram();
   shear_smoothing_ = gl::ComputeProgram();
+  carry_ = gl::ComputeProgram();
 }
 
 void GlBackend::make_current() const {
@@ -654,6 +685,7 @@ Reaction GlBackend::read_slot(int slot) {
 
 void GlBackend::positions(std::vector<Vec3>& out) const {
   make_current();
+  ++state_readbacks_;
   glGetNamedBufferSubData(x_[cur_], 0, static_cast<GLsizeiptr>(static_cast<size_t>(npoint_) * 4 * sizeof(float)),
                           readback_.data());
   out.resize(static_cast<size_t>(npoint_));
@@ -666,18 +698,32 @@ void GlBackend::reaction_positions(std::vector<Vec3>& out) const {
     throw Error(ErrorKind::Backend, "GL backend: reaction_positions() needs GlBackendOptions::keep_reaction_positions");
   }
   const Slot* s = reaction_slot_ >= 0 ? &slots_[static_cast<size_t>(reaction_slot_)] : nullptr;
-  const float* x = !s                      ? nullptr
-                   : s->positions_adopted ? adopted_x_.data()
-                   : s->has_positions     ? reaction_x_map_ + static_cast<size_t>(reaction_slot_) * npad_ * 4
-                                          : nullptr;
-  if (!x) throw Error(ErrorKind::Backend, "GL backend: reaction_positions() before the first tick's end");
+  if (!s || !(s->has_positions || s->positions_adopted))
+    throw Error(ErrorKind::Backend, "GL backend: reaction_positions() before the first tick's end");
   out.resize(static_cast<size_t>(npoint_));
-  for (int32_t i = 0; i < npoint_; ++i) out[i] = Vec3(x[4 * i], x[4 * i + 1], x[4 * i + 2]);
+  const auto from = [&](const float* x, int32_t i, int32_t k) { out[i] = Vec3(x[4 * k], x[4 * k + 1], x[4 * k + 2]); };
+  if (s->has_positions) {
+    const float* x = reaction_x_map_ + static_cast<size_t>(reaction_slot_) * npad_ * 4;
+    for (int32_t i = 0; i < npoint_; ++i) from(x, i, i);
+    return;
+  }
+  // The tick before an adopt(): the old version's ring, its appended points
+  // as the adopt carried them over.
+  const float* x = retired_.map + static_cast<size_t>(reaction_slot_) * retired_.npad * 4;
+  for (int32_t i = 0; i < npoint_; ++i)
+    from(x, i, i < retired_.npoint ? i : retired_.appended_from[static_cast<size_t>(i - retired_.npoint)]);
+}
+
+void GlBackend::delete_retired_ring() {
+  if (retired_.map) glUnmapNamedBuffer(retired_.buffer);
+  if (retired_.buffer) glDeleteBuffers(1, &retired_.buffer);
+  retired_ = {};
 }
 
 void GlBackend::forces(std::vector<Vec3>& out) const {
   if (!force_) throw Error(ErrorKind::Backend, "GL backend: forces() needs GlBackendOptions::record_forces");
   make_current();
+  ++state_readbacks_;
   glGetNamedBufferSubData(force_, 0, static_cast<GLsizeiptr>(static_cast<size_t>(npoint_) * 4 * sizeof(float)),
                           readback_.data());
   out.resize(static_cast<size_t>(npoint_));

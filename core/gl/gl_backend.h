@@ -82,6 +82,9 @@ class GlBackend final : public Backend {
   // when read (the CPU then waited for it; 0 means the readback never stalled).
   int64_t dispatches() const { return dispatches_; }
   int64_t blocked_readbacks() const { return blocked_readbacks_; }
+  // Reads of the state back to the CPU (positions(), forces()); an adopt()
+  // carries the state over on the GPU and adds none.
+  int64_t state_readbacks() const { return state_readbacks_; }
   int32_t threads_per_point() const { return threads_per_point_; }
 
  private:
@@ -99,11 +102,10 @@ class GlBackend final : public Backend {
   struct Prepared;
   Tables create_tables(const gl::PackedModel& packed, const StepPlan& plan) const;
   // Makes `tables` the model's and creates the state buffers (x_t, d_t
-  // given, npad x 4) and the attachment, friction-anchor and end-position
-  // buffers; binds them all. `anchors`: friction anchors carried over a
-  // rebuild (4 floats per old point; empty: none yet).
-  void install(Tables tables, const gl::PackedModel& packed, const std::vector<float>& x, const std::vector<float>& d,
-               std::vector<float> anchors = {});
+  // given, npad x 4; null: left for adopt() to fill on the GPU) and the
+  // attachment, friction-anchor (none anchored) and end-position buffers;
+  // binds them all.
+  void install(Tables tables, const gl::PackedModel& packed, const float* x, const float* d);
   // Buffers of a Prepared dropped without adopt(), deleted on the backend's
   // context at its next tick (or at its end).
   void discard(std::vector<GLuint> buffers) const;
@@ -126,7 +128,7 @@ class GlBackend final : public Backend {
 
   // nodal_pressure_ with the nodal volume term only, shear_smoothing_ with the
   // smoothed shear element only (id 0 otherwise).
-  gl::ComputeProgram step_, reduce_, nodal_pressure_, shear_smoothing_;
+  gl::ComputeProgram step_, reduce_, nodal_pressure_, shear_smoothing_, carry_;
   // Ping-pong pairs: x_[cur_], d_[cur_] hold x_t and d_t = x_t - x_{t-1};
   // the step writes x_[1 - cur_], d_[1 - cur_].
   std::array<GLuint, 2> x_{}, d_{};
@@ -148,16 +150,25 @@ class GlBackend final : public Backend {
     bool has_reaction = false;
     double t_end = 0;  // simulated time at the end of that tick, s
     bool has_positions = false;      // its end positions are in reaction_x_ (keep_reaction_positions)
-    bool positions_adopted = false;  // they are adopted_x_ (the tick before an adopt())
+    bool positions_adopted = false;  // they are in retired_ (the tick before an adopt())
   };
   std::vector<Slot> slots_;
   int reaction_slot_ = -1;  // the slot whose reaction tick() last returned
-  // The state an adopt() carried over (npad x 4): the end positions of the
-  // tick before it, whose ring copy went with the old buffers.
-  std::vector<float> adopted_x_;
+  // The end-positions ring of the version before the last adopt(), kept
+  // mapped: the tick before the adopt ended in it, and the reaction the
+  // next tick returns is of that tick. Its points, then the appended ones
+  // (each the old point it copies, as the GPU carried them over).
+  struct RetiredRing {
+    GLuint buffer = 0;
+    const float* map = nullptr;
+    int32_t npad = 0, npoint = 0;
+    std::vector<int32_t> appended_from;
+  } retired_;
+  void delete_retired_ring();
   int64_t ticks_ = 0;
   double time_ = 0;
   int64_t dispatches_ = 0, blocked_readbacks_ = 0;
+  mutable int64_t state_readbacks_ = 0;
   std::vector<float> attach_upload_;  // sized once (npad x 4)
   std::vector<int32_t> suture_entries_;  // spring entries of sutures (2 per suture)
   std::vector<float> suture_rest_;       // the rest length last uploaded to each

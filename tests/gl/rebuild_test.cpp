@@ -1,5 +1,5 @@
 // Backend::rebuild on the GL backend: buffers re-uploaded from the new Model
-// version with the state carried over (read back once per change), checked
+// version with the state carried over on the GPU, checked
 // against itself without a rebuild and against the double CPU reference
 // after a cut made by hand (the topology code has its own tests).
 #include <gtest/gtest.h>
@@ -162,6 +162,35 @@ TEST(GlRebuild, PrepareUploadsOnItsOwnContextAndRestoresTheCallers) {
     EXPECT_EQ(a[i].name, b[i].name);
     EXPECT_EQ(a[i].bytes, b[i].bytes) << a[i].name;
   }
+}
+
+// adopt() carries the state over on the GPU (carry_state.comp): no read of
+// the state back to the CPU, and right after it the old points are where
+// they were and every point the cut added is exactly at the old point it
+// copies (Model::origin, followed back to a point the old version had).
+TEST(GlRebuild, AnAdoptCarriesTheStateOverOnTheGpuWithoutReadingItBack) {
+  const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
+  const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.05));
+  ASSERT_GT(cut.npoint(), model.npoint());
+  GlBackend gl(model, {}, {});
+  run(gl, 10);
+  std::vector<Vec3> before, after;
+  gl.positions(before);
+  const int64_t readbacks = gl.state_readbacks();
+  gl.adopt(gl.prepare(cut));
+  EXPECT_EQ(gl.state_readbacks(), readbacks);
+  gl.positions(after);
+  ASSERT_EQ(after.size(), static_cast<size_t>(cut.npoint()));
+  for (int32_t p = 0; p < cut.npoint(); ++p) {
+    int32_t from = p;
+    while (from >= model.npoint()) from = cut.origin[static_cast<size_t>(from)];
+    ASSERT_EQ(after[p], before[from]) << "point " << p;
+  }
+  // And it goes on as a backend made from the cut in that state would: the
+  // carried increments too (a copy that lost them would jump).
+  run(gl, 5);
+  gl.positions(after);
+  for (const Vec3& x : after) EXPECT_TRUE(x.allFinite());
 }
 
 // keep_reaction_positions: after each tick, reaction_positions() are the
