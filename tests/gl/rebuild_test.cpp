@@ -193,6 +193,40 @@ TEST(GlRebuild, AnAdoptCarriesTheStateOverOnTheGpuWithoutReadingItBack) {
   for (const Vec3& x : after) EXPECT_TRUE(x.allFinite());
 }
 
+// Friction anchors are per point id, which a rebuild keeps, and adopt()
+// copies them over on the GPU with the state: a sphere pressed into the
+// box and dragged sideways, sticking, goes on through an identity rebuild
+// mid-drag bit for bit as without it (anchors lost would let go and
+// re-anchor where the points are then).
+TEST(GlRebuild, AGripByFrictionHoldsThroughAnAdopt) {
+  const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
+  const Model same = rebuild_model(model, {model.tet_points, {}});
+  BackendTool tool{true, ToolMode::Push, 0.02, 500, ToolContact::Surface};
+  tool.friction = {2, 2};
+  auto request = [](int n) {
+    TickRequest r;
+    r.dt = kDt;
+    r.substeps = kSubsteps;
+    r.tool_active = true;
+    auto at = [](int k) { return Vec3(0.05 + 2e-4 * std::max(0, k - 10), 0.05, 0.066 - 4e-4 * std::min(k, 10)); };
+    r.tool_from = at(n), r.tool_to = at(n + 1);
+    return r;
+  };
+  std::vector<Vec3> x[2];
+  double sideways = 0;
+  for (int rebuilt = 0; rebuilt < 2; ++rebuilt) {
+    GlBackend gl(model, tool, {});
+    for (int n = 0; n < 30; ++n) {
+      if (rebuilt && n == 20) gl.adopt(gl.prepare(same));
+      const Reaction r = gl.tick(request(n));
+      if (n == 29) sideways = std::abs(r.force.x());
+    }
+    gl.positions(x[rebuilt]);
+  }
+  EXPECT_GT(sideways, 0.01) << "the drag is held by friction";
+  EXPECT_EQ(x[1], x[0]);
+}
+
 // keep_reaction_positions: after each tick, reaction_positions() are the
 // positions at the end of the tick whose reaction it returned (the one
 // before), bit for bit as positions() read them then, without waiting for
