@@ -81,11 +81,6 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (tool.present) reduce_ = gl::ComputeProgram("reduce_reaction.comp", {});
   if (nodal) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
   carry_ = gl::ComputeProgram("carry_state.comp", {});
-  // One empty dispatch now: a driver may compile a program at its first
-  // dispatch (llvmpipe does), which would otherwise fall on a cut's tick.
-  glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_COUNT, 0);
-  glUseProgram(carry_.id());
-  glDispatchCompute(1, 1, 1);
   if (smoothed) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
 
   // Buffers that do not depend on the model's size: the readback rings.
@@ -119,6 +114,9 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   const gl::PackedModel packed = gl::pack_model(model);
   const std::vector<float> zero(packed.rest.size(), 0.0f);
   install(create_tables(packed, plan_), packed, packed.rest.data(), zero.data());
+  // One empty carry now: a driver may compile a program at its first
+  // dispatch (llvmpipe does), which would otherwise fall on a cut's tick.
+  carry(x_[0], d_[0], x_[0], 0, 0);
   if (plan_.gravity) {
     glProgramUniform3f(step_.id(), ORGANSIM_GL_U_GRAVITY, static_cast<float>(model.gravity.x()),
                        static_cast<float>(model.gravity.y()), static_cast<float>(model.gravity.z()));
@@ -381,17 +379,8 @@ void GlBackend::adopt(std::unique_ptr<PreparedModel> prepared) {
   if (anchors_ && anchors_old) glCopyNamedBufferSubData(anchors_old, anchors_, 0, 0, old_bytes);
   if (!from.empty()) {
     const GLuint index = make_buffer("carried lanes' old points", from.size() * sizeof(int32_t), from.data(), 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_old);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_old);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[0]);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[0]);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CARRY, index);
-    glUseProgram(carry_.id());
-    glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_FIRST, old_n);
-    glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_COUNT, static_cast<GLint>(from.size()));
-    glDispatchCompute(static_cast<GLuint>((from.size() + ORGANSIM_GL_CHUNK - 1) / ORGANSIM_GL_CHUNK), 1, 1);
+    carry(x_old, d_old, index, old_n, static_cast<int32_t>(from.size()));
     ++dispatches_;
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     glDeleteBuffers(1, &index);  // freed by the driver once the dispatch has run
   }
   // x_{t+1} and its increment start as x_t's, as a fresh version's do.
@@ -712,6 +701,19 @@ void GlBackend::reaction_positions(std::vector<Vec3>& out) const {
   const float* x = retired_.map + static_cast<size_t>(reaction_slot_) * retired_.npad * 4;
   for (int32_t i = 0; i < npoint_; ++i)
     from(x, i, i < retired_.npoint ? i : retired_.appended_from[static_cast<size_t>(i - retired_.npoint)]);
+}
+
+void GlBackend::carry(GLuint x_old, GLuint d_old, GLuint index, int32_t first, int32_t count) {
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_CUR, x_old);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_old);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[0]);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[0]);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_CARRY, index);
+  glUseProgram(carry_.id());
+  glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_FIRST, first);
+  glProgramUniform1i(carry_.id(), ORGANSIM_GL_U_CARRY_COUNT, count);
+  glDispatchCompute(static_cast<GLuint>(std::max(1, (count + ORGANSIM_GL_CHUNK - 1) / ORGANSIM_GL_CHUNK)), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
 void GlBackend::delete_retired_ring() {

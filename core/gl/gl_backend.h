@@ -165,6 +165,9 @@ class GlBackend final : public Backend {
     std::vector<int32_t> appended_from;
   } retired_;
   void delete_retired_ring();
+  // carry_state.comp: lanes [first, first + count) of x_[0] and d_[0] from
+  // the old points `index` names in x_old and d_old.
+  void carry(GLuint x_old, GLuint d_old, GLuint index, int32_t first, int32_t count);
   int64_t ticks_ = 0;
   double time_ = 0;
   int64_t dispatches_ = 0, blocked_readbacks_ = 0;
