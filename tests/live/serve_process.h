@@ -56,8 +56,7 @@ class ServeProcess {
     return 0;
   }
   // The PORT of "OpenIGTLink on ADDRESS:PORT" followed by another character
-  // (the line written whole), 0 if there is none yet. Plain string search:
-  // <regex> trips gcc 12's -Wmaybe-uninitialized in the sanitizer build.
+  // (the line written whole), 0 if there is none yet.
   static int announced_port(const std::string& out) {
     const std::string key = "OpenIGTLink on ";
     const size_t at = out.find(key);
