@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/gl/gl_model_pack.h"
-#include "core/sim/friction_plan.h"
+#include "core/sim/contact_plan.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
 
@@ -47,6 +47,10 @@ std::string float_literal(double value) {
 
 GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBackendOptions& options)
     : model_(&model), tool_(tool), options_(options) {
+  if (tool.hertz_layer)
+    throw Error(ErrorKind::Usage,
+                "GL backend: the tool's \"hertz_layer\" (sub-cell Hertz contact) runs on the CPU backend only "
+                "(--backend cpu)");
   gl::EglContextOptions context_options;
   context_options.debug = options.debug;
   context_ = std::make_unique<gl::EglContext>(context_options);

@@ -107,12 +107,15 @@ void VtkSeriesRecorder::write_state(const Model& model, double t, const Vec3& to
   if (tool_ && tool_->mode == ToolMode::Push) {
     // The push contact as the backends apply it (the reference's evaluation
     // of force_law::capsule_triangle_penalty or push_penalty, each point's
-    // stiffness share included).
+    // stiffness share included, and the Hertz layer where the tool has it).
     const ToolPlacement placed = place_tool(tool_->backend_tool(), tool_center, tool_turn);
-    if (tool_->contact == ToolContact::Surface)
-      reference_surface_forces(model, positions_, placed, tool_->contact_stiffness, force);
-    else
+    if (tool_->contact == ToolContact::Surface) {
+      const ContactLayer layer = tool_->hertz_layer ? contact_layer(model) : ContactLayer{};
+      reference_surface_forces(model, positions_, placed, tool_->contact_stiffness, force,
+                               tool_->hertz_layer ? &layer : nullptr);
+    } else {
       reference_push_forces(positions_, placed, tool_->contact_stiffness, force, model.tool_k_scale);
+    }
     attributes.point_data.push_back(point_array("tool_force", order, force));
   }
 

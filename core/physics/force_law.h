@@ -15,6 +15,8 @@
 // from E and nu, rest lengths and volumes) is the Model's business
 // (core/model); how elements are gathered and summed is each backend's.
 
+#include <cmath>
+
 namespace organsim::force_law {
 
 // --- Springs -----------------------------------------------------------------
@@ -407,6 +409,71 @@ inline bool capsule_triangle_penalty(const V3& a, const V3& b, Real radius, cons
   f = k * triangle_penalty_scale(share) * radius * V3(-outward / outward.norm());
   return true;
 }
+
+// --- Sub-cell Hertz layer (a sphere's surface contact) -------------------------
+// A linear triangle under a sphere whose contact is narrower than a cell
+// moves like a flat punch about one vertex ring wide, so the contact is too
+// stiff (a punch's force grows with d, a sphere's with d^(3/2)). The layer
+// is the compliance the cells cannot resolve, carried by the tool, in
+// series with the surface contact: the tissue sees the sphere moved back
+// along its reaction by
+//   delta(F) = a^2 / R - F / (2 E* a_h),  a = (3 F R / (4 E*))^(1/3)   while a < a_h,
+//   delta(F) = a_h^2 / (3 R)                                            beyond,
+// the Hertz indentation of a sphere (radius R, effective modulus E* =
+// E / (1 - nu^2)) less that of a flat punch of radius a_h (the cells'
+// own), constant once the Hertz contact radius a reaches a_h (there the
+// cells resolve the contact). delta(0) = 0, and delta rises with F with a
+// continuous slope (zero at a = a_h). a_h = kHertzLayerPunchFactor x the
+// touched triangles' punch radius sqrt(vertex-ring area / pi) (core/model/
+// contact_layer.h); the factor is fitted to one validation row (docs/
+// validation.md: Hertz at 8 mm cells, d/R 0.1, nu 0.45) and validated on
+// the others.
+inline constexpr double kHertzLayerPunchFactor = 0.8;
+
+// delta(F), m; 0 for F <= 0.
+double hertz_layer_offset(double force, double e_star, double radius, double punch_radius);
+
+// The contact force F (N) of the surface contact in series with the layer:
+// the root of F + K delta(F) = F_lin in [0, F_lin], where F_lin is the
+// surface contact's force with the layer off and K (N/m) its penalties'
+// stiffness along that force (how F_lin falls as the sphere moves back:
+// the sum of each touching triangle's k_t (n_t . n)^2). A backend scales
+// every touching triangle's penalty by F / F_lin, within the substep: the
+// law needs no state and no estimate of the tissue's stiffness.
+double hertz_layer_force(double linear_force, double stiffness, double e_star, double radius, double punch_radius);
+
+// What hertz_layer_force needs of a sphere's touching triangles, summed in
+// the order a backend visits them: F_lin (the penalties' sum), the matrix
+// sum k_t n_t n_t^T that gives K along F_lin, and a_h and E* as the
+// triangles' values weighted by their penalty's magnitude (so they move
+// continuously as the sphere slides from one triangle to the next).
+struct HertzLayerSum {
+  double force[3] = {0, 0, 0};
+  double stiffness[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  double weight = 0, punch = 0, e_star = 0;
+
+  // One triangle's penalty f_t (its k_t, its punch radius and E*).
+  template <class Real>
+  void add(const Real f[3], double k_t, double punch_radius, double triangle_e_star) {
+    const double m = std::sqrt(double(f[0]) * f[0] + double(f[1]) * f[1] + double(f[2]) * f[2]);
+    if (!(m > 0)) return;
+    for (int i = 0; i < 3; ++i) {
+      force[i] += f[i];
+      for (int j = 0; j < 3; ++j) stiffness[i][j] += k_t * (f[i] / m) * (f[j] / m);
+    }
+    weight += m, punch += m * punch_radius, e_star += m * triangle_e_star;
+  }
+  // F / F_lin for a sphere of radius R: what every touching triangle's
+  // penalty is multiplied by (1 with nothing touching).
+  double scale(double radius) const {
+    const double F = std::sqrt(force[0] * force[0] + force[1] * force[1] + force[2] * force[2]);
+    if (!(F > 0) || !(weight > 0)) return 1;
+    double K = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) K += force[i] / F * stiffness[i][j] * force[j] / F;
+    return hertz_layer_force(F, K, e_star / weight, radius, kHertzLayerPunchFactor * punch / weight) / F;
+  }
+};
 
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o
 // (the point's offset from the centre at grasp time).

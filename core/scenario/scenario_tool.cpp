@@ -161,6 +161,15 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
   if (s.shape == ToolShape::Grasper && s.contact != ToolContact::Surface)
     throw r.at("contact").error("a grasper's jaws touch the surface (\"contact\": \"surface\")");
   if (const nlohmann::json* f = r.get("friction")) s.friction = parse_friction(*f, r.at("friction"), s);
+  // The layer is a sphere's Hertz law: a capsule's line contact or a
+  // grasper's jaws would need their own.
+  if (auto v = r.boolean("hertz_layer")) {
+    if (*v && (s.shape != ToolShape::Sphere || s.mode != ToolMode::Push || s.contact != ToolContact::Surface))
+      throw r.at("hertz_layer").error(
+          "the sub-cell Hertz layer is a sphere's surface contact (\"shape\": \"sphere\", \"mode\": \"push\", "
+          "\"contact\": \"surface\")");
+    s.hertz_layer = *v;
+  }
   // Without friction a grasper's jaws only squeeze: it could hold nothing.
   if (s.shape == ToolShape::Grasper && !s.friction.on())
     throw r.at("friction").error("a grasper holds by friction: expected \"friction\": {\"static\": mu_s, \"kinetic\": mu_k}");

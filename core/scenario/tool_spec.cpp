@@ -15,6 +15,7 @@ BackendTool ToolSpec::backend_tool() const {
   t.end_a = end_a;
   t.end_b = end_b;
   t.friction = friction;
+  t.hertz_layer = hertz_layer;
   return t;
 }
 

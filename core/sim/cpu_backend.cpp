@@ -1,5 +1,5 @@
 #include "core/sim/cpu_backend.h"
-#include "core/sim/friction_plan.h"
+#include "core/sim/contact_plan.h"
 
 #include <omp.h>
 
@@ -262,7 +262,7 @@ class CpuBackend final : public Backend {
                " surface triangles, broad phase: the " + shape_name(tool_.shape) +
                " against each triangle's box; each touching "
                "triangle's penalty at its closest point, spread to its corners (box tests on the step's threads, "
-               "penalties on one thread in triangle order)" + friction_plan(tool_);
+               "penalties on one thread in triangle order)" + hertz_layer_plan(tool_) + friction_plan(tool_);
       case Pass::ToolContact:
         return t_.plan.tool == ToolTerm::Push      ? std::string(shape_name(tool_.shape)) + " penalty contact on the points"
                : t_.plan.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
@@ -489,7 +489,7 @@ class CpuBackend final : public Backend {
     }
     t.smoothed_share = static_cast<Real>(model.shear_smoothed_share);
     pack_fast(t);
-    if (t.plan.tool == ToolTerm::Surface) t.surface.pack(model, t.tool_scale, t.tool_scale.size());
+    if (t.plan.tool == ToolTerm::Surface) t.surface.pack(model, t.tool_scale, t.tool_scale.size(), tool_.hertz_layer);
     return t;
   }
 

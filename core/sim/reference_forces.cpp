@@ -71,30 +71,47 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const Vec3& center, d
 }
 
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const ToolPlacement& tool,
-                                  double stiffness, std::vector<Vec3>& force) {
-  Reaction reaction;
-  std::vector<Vec3> received(x.size(), Vec3::Zero());
-  std::vector<uint8_t> touched(x.size(), 0);
+                                  double stiffness, std::vector<Vec3>& force, const ContactLayer* layer) {
+  struct Touch {
+    const Tri* t;
+    Vec3 f;
+    double w[3];
+    int jaw;
+  };
+  std::vector<Touch> touches;
+  force_law::HertzLayerSum sum;
   const Vec3 seg_a[2] = {tool.a, tool.a2}, seg_b[2] = {tool.b, tool.b2};
-  const Vec3 axis = tool.rotation * kJawAxis, closing[2] = {-axis, axis};
   for (const Tri& t : model.surface) {
     double share[3];
     for (int i = 0; i < 3; ++i) share[i] = model.tool_scale(t[i]) / model.surface_count(t[i]);
     for (int jaw = 0; jaw < tool.jaws; ++jaw) {
-      Vec3 f;
-      double w[3];
+      Touch touch{&t, Vec3::Zero(), {0, 0, 0}, jaw};
       if (!force_law::capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], tool.radius, x[t[0]], x[t[1]], x[t[2]],
-                                               stiffness, share, f, w))
+                                               stiffness, share, touch.f, touch.w))
         continue;
-      const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
-      for (int i = 0; i < 3; ++i) {
-        received[t[i]] += w[i] * f;
-        touched[t[i]] = 1;
+      if (layer) {
+        const TriangleLayer tl = triangle_layer(*layer, t);
+        sum.add(touch.f.data(), stiffness * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
       }
-      reaction.force -= f;
-      reaction.torque += (q - tool.origin).cross(-f);
-      if (tool.jaws == 2) reaction.grip += f.dot(closing[jaw]);
+      touches.push_back(touch);
     }
+  }
+  const double scale = layer ? sum.scale(tool.radius) : 1.0;
+  Reaction reaction;
+  std::vector<Vec3> received(x.size(), Vec3::Zero());
+  std::vector<uint8_t> touched(x.size(), 0);
+  const Vec3 axis = tool.rotation * kJawAxis, closing[2] = {-axis, axis};
+  for (const Touch& touch : touches) {
+    const Tri& t = *touch.t;
+    const Vec3 f = scale * touch.f;
+    const Vec3 q = touch.w[0] * x[t[0]] + touch.w[1] * x[t[1]] + touch.w[2] * x[t[2]];
+    for (int i = 0; i < 3; ++i) {
+      received[t[i]] += touch.w[i] * f;
+      touched[t[i]] = 1;
+    }
+    reaction.force -= f;
+    reaction.torque += (q - tool.origin).cross(-f);
+    if (tool.jaws == 2) reaction.grip += f.dot(closing[touch.jaw]);
   }
   for (size_t p = 0; p < x.size(); ++p) {
     force[p] += received[p];
@@ -104,8 +121,8 @@ Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x
 }
 
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
-                                  double radius, double stiffness, std::vector<Vec3>& force) {
-  return reference_surface_forces(model, x, ToolPlacement{center, center, center, radius}, stiffness, force);
+                                  double radius, double stiffness, std::vector<Vec3>& force, const ContactLayer* layer) {
+  return reference_surface_forces(model, x, ToolPlacement{center, center, center, radius}, stiffness, force, layer);
 }
 
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment, const Vec3& center,

@@ -4,6 +4,7 @@
 // simple enough to check by eye.
 #include <vector>
 
+#include "core/model/contact_layer.h"
 #include "core/model/model.h"
 #include "core/sim/tool.h"
 
@@ -34,15 +35,17 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const ToolPlacement& 
 // at its closest point, w_i f_t to its corner i, with share_i =
 // s_i / (surface triangles of i). Adds into force and returns the reaction
 // (F = -sum f_t, T = sum (q_t - c) x (-f_t)); contacts counts the points that
-// received a force.
+// received a force. With `layer`, the contact in series with the sub-cell
+// Hertz layer: every penalty scaled by force_law::HertzLayerSum's scale.
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
-                                  double radius, double stiffness, std::vector<Vec3>& force);
+                                  double radius, double stiffness, std::vector<Vec3>& force,
+                                  const ContactLayer* layer = nullptr);
 // Any shape (force_law::capsule_triangle_penalty, jaw by jaw for a
 // grasper; the torque about the tool frame's origin; a grasper's grip its
 // jaws' penalties along their closing directions). No friction: it has state (the anchors), which
 // the CPU backend in double precision keeps as the reference.
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const ToolPlacement& tool,
-                                  double stiffness, std::vector<Vec3>& force);
+                                  double stiffness, std::vector<Vec3>& force, const ContactLayer* layer = nullptr);
 
 // Pull attachments: f_i = k s_i (c + o_i - x_i). Adds into force, returns reaction.
 Reaction reference_pull_forces(const std::vector<Vec3>& x, const Attachment& attachment,

@@ -23,6 +23,7 @@
 #include <cstring>
 #include <vector>
 
+#include "core/model/contact_layer.h"
 #include "core/model/model.h"
 #include "core/physics/force_law.h"
 #include "core/sim/tool.h"
@@ -35,8 +36,9 @@ class SurfaceContact {
   // Triangles and shares from `model` (a rebuild calls it again: cuts
   // change the surface); `scale` is the backend's Model::tool_k_scale,
   // `lanes` the length of the per-point slot array the kernels read
-  // (padding included, -1 there).
-  void pack(const Model& model, const std::vector<Real>& scale, size_t lanes) {
+  // (padding included, -1 there); `hertz_layer` puts a sphere's contact in
+  // series with the sub-cell Hertz layer (force_law::hertz_layer_force).
+  void pack(const Model& model, const std::vector<Real>& scale, size_t lanes, bool hertz_layer = false) {
     local_of_point_.assign(model.npoint(), -1);
     points_.clear();
     for (int32_t p = 0; p < model.npoint(); ++p)
@@ -53,6 +55,12 @@ class SurfaceContact {
     share_.resize(points_.size());
     for (size_t i = 0; i < points_.size(); ++i)
       share_[i] = scale[points_[i]] / static_cast<Real>(model.surface_count(points_[i]));
+    layer_.clear();
+    if (hertz_layer) {
+      const ContactLayer layer = contact_layer(model);
+      layer_.reserve(ntri);
+      for (const Tri& t : model.surface) layer_.push_back(triangle_layer(layer, t));
+    }
     for (auto* v : {&x_, &y_, &z_}) v->assign(points_.size(), 0);
     slot_.assign(lanes, -1);
     force_.clear();
@@ -124,6 +132,7 @@ class SurfaceContact {
 #pragma omp barrier
       box_tests(i * ntri / n, (i + 1) * ntri / n, lo, hi, r2);
     }
+    force_law::HertzLayerSum layer;
     for (int32_t word = 0; word < ntri; word += 8) {
       uint64_t any;
       std::memcpy(&any, near + word, sizeof any);
@@ -139,6 +148,9 @@ class SurfaceContact {
                                                    at(corner[2]), k, share, f, w))
             continue;
           if (jaws == 2) grip_ += f.dot(closing[jaw]);
+          if (!layer_.empty())
+            layer.add(f.data(), double(k * force_law::triangle_penalty_scale(share)), layer_[i].punch_radius,
+                      layer_[i].e_star);
           for (int j = 0; j < 3; ++j) {
             const int32_t p = points_[corner[j]];
             if (slot_[p] < 0) {
@@ -151,6 +163,10 @@ class SurfaceContact {
           }
         }
       }
+    }
+    if (!layer_.empty() && !touched_.empty()) {
+      const Real scale = static_cast<Real>(layer.scale(placed.radius));
+      for (Real& f : force_) f *= scale;
     }
     if (friction.on()) add_friction(placed, k, friction);
   }
@@ -252,6 +268,7 @@ class SurfaceContact {
   std::array<std::vector<int32_t>, 3> corner_;  // each triangle's corners as indices into points_, one array per corner
   std::vector<uint8_t> near_;            // per triangle: its box comes within the radius of the segment's box (8-byte words)
   std::vector<Real> share_;              // s_p / n_p per surface point (force_law::sphere_triangle_penalty)
+  std::vector<TriangleLayer> layer_;     // per triangle with the Hertz layer on, else empty
   std::vector<Real> x_, y_, z_;          // surface points' positions this substep
   std::vector<int32_t> slot_;            // per lane
   std::vector<Real> force_;              // per touched point, 3 each

@@ -315,6 +315,29 @@ TEST(ScenarioParse, ToolContactIsReadAndChecked) {
   EXPECT_EQ(error_of(j), "scene.json: tool.contact: only used with \"mode\": \"push\"");
 }
 
+// tool.hertz_layer: off unless asked, carried to the backend, and refused
+// where it has no law (points, a capsule, a pulling tool).
+TEST(ScenarioParse, HertzLayerIsReadAndRefusedWhereItHasNoLaw) {
+  json j = minimal();
+  j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}]})");
+  EXPECT_FALSE(parse(j).tool->spec.backend_tool().hertz_layer);
+  j["tool"]["hertz_layer"] = true;
+  EXPECT_TRUE(parse(j).tool->spec.backend_tool().hertz_layer);
+  j["tool"]["hertz_layer"] = "yes";
+  EXPECT_NE(error_of(j).find("tool.hertz_layer: expected true or false"), std::string::npos) << error_of(j);
+  j["tool"]["hertz_layer"] = true;
+  j["tool"]["contact"] = "points";
+  EXPECT_NE(error_of(j).find("tool.hertz_layer: the sub-cell Hertz layer is a sphere's surface contact"),
+            std::string::npos)
+      << error_of(j);
+  j["tool"]["contact"] = "surface";
+  j["tool"]["shape"] = "capsule";
+  j["tool"]["ends"] = json::parse("[[0, 0, 0], [0, 0, 0.1]]");
+  EXPECT_NE(error_of(j).find("tool.hertz_layer: the sub-cell"), std::string::npos) << error_of(j);
+  j["tool"]["hertz_layer"] = false;
+  EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
+}
+
 // The capsule's fields and the keyframes' orientation: read, and every
 // mistake refused with the path and what was expected.
 TEST(ScenarioParse, CapsuleAndOrientationAreReadAndChecked) {

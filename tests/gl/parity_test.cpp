@@ -21,6 +21,7 @@
 #include <functional>
 
 #include "core/gl/gl_backend.h"
+#include "core/util/error.h"
 #include "core/sim/cpu_backend.h"
 #include "gl_test_scenes.h"
 
@@ -305,6 +306,21 @@ TEST(GlParity, LeanSceneMatchesTheDoubleReference) {
   std::cout << "lean: position " << c.position << " of diagonal, " << c.dispatches << " dispatches\n";
   EXPECT_LT(c.position, 1e-5);
   EXPECT_EQ(c.dispatches, (kTicks + 1) * kSubsteps - (kSubsteps - 1));  // no reduction without a tool
+}
+
+// The sub-cell Hertz layer runs on the CPU backend only: the GL backend
+// refuses it by name instead of stepping a stiffer contact than the
+// scenario asked for.
+TEST(GlParity, TheHertzLayerIsRefusedByName) {
+  const Model model = gl_test::box_model(3, 3, 3, true, 0, Vec3::Zero());
+  BackendTool tool{true, ToolMode::Push, 0.01, 500, ToolContact::Surface};
+  tool.hertz_layer = true;
+  try {
+    GlBackend gl(model, tool, GlBackendOptions{});
+    ADD_FAILURE() << "the GL backend stepped the Hertz layer";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("\"hertz_layer\""), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -1,0 +1,153 @@
+// The sub-cell Hertz layer of a sphere's surface contact
+// (force_law::hertz_layer_offset, hertz_layer_force): the law itself, the
+// reference's and the CPU backends' use of it, before and after a cut.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "core/model/contact_layer.h"
+#include "core/physics/force_law.h"
+#include "core/sim/cpu_backend.h"
+#include "core/sim/reference_forces.h"
+#include "tests/core/contact_test_util.h"
+#include "core/model/model_rebuild.h"
+
+namespace organsim {
+namespace {
+
+constexpr double kSize = testing::kContactBox;
+constexpr double kK = testing::kContactK;
+
+// E* 5 kPa, R 2 cm, a_h 4 mm: the liver's tool on 8 mm cells.
+constexpr double kEStar = 5000, kRadius = 0.02, kPunch = 0.004;
+
+double hertz_force(double a) { return 4 * kEStar * a * a * a / (3 * kRadius); }
+
+// delta(F) is Hertz's indentation a^2 / R less the punch's F / (2 E* a_h)
+// below a_h (so nearly all of Hertz's at small F, where the punch's is of
+// higher order), continuous with a zero slope where a reaches a_h, and
+// constant beyond. A layer that kept rising past a_h would soften contacts
+// the cells already resolve.
+TEST(HertzLayer, OffsetIsHertzLessAPunchUpToTheCellsRadiusAndConstantBeyond) {
+  using force_law::hertz_layer_offset;
+  EXPECT_EQ(hertz_layer_offset(0, kEStar, kRadius, kPunch), 0);
+  EXPECT_EQ(hertz_layer_offset(-1, kEStar, kRadius, kPunch), 0);
+  const double a = 0.25 * kPunch, F = hertz_force(a);
+  EXPECT_NEAR(hertz_layer_offset(F, kEStar, kRadius, kPunch), a * a / kRadius - F / (2 * kEStar * kPunch),
+              1e-12 * a * a / kRadius);
+  const double at = hertz_force(kPunch), beyond = kPunch * kPunch / (3 * kRadius);
+  EXPECT_NEAR(hertz_layer_offset(at * (1 - 1e-6), kEStar, kRadius, kPunch), beyond, 1e-9 * beyond);
+  EXPECT_EQ(hertz_layer_offset(at * 1.5, kEStar, kRadius, kPunch), beyond);
+  EXPECT_EQ(hertz_layer_offset(at * 100, kEStar, kRadius, kPunch), beyond);
+  double last = 0;
+  for (double f = at / 1000; f < 2 * at; f *= 1.1) {
+    const double d = hertz_layer_offset(f, kEStar, kRadius, kPunch);
+    EXPECT_GE(d, last) << "F " << f;
+    last = d;
+  }
+}
+
+// hertz_layer_force is the root of F + K delta(F) = F_lin in [0, F_lin],
+// for penalties from a thousandth to a thousand times the punch's own
+// stiffness 2 E* a_h and forces on both sides of a_h; a very stiff penalty
+// leaves the layer alone to carry the depth: F = delta^-1(F_lin / K).
+TEST(HertzLayer, ForceIsTheRootOfTheContactInSeriesWithTheLayer) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> decades(-3, 3);
+  int below = 0, beyond = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const double K = 2 * kEStar * kPunch * std::pow(10.0, decades(rng));
+    const double F_lin = hertz_force(kPunch) * std::pow(10.0, decades(rng));
+    const double F = force_law::hertz_layer_force(F_lin, K, kEStar, kRadius, kPunch);
+    ASSERT_GE(F, 0);
+    ASSERT_LE(F, F_lin);
+    const double residual = F + K * force_law::hertz_layer_offset(F, kEStar, kRadius, kPunch) - F_lin;
+    EXPECT_LT(std::abs(residual), 1e-9 * F_lin) << "F_lin " << F_lin << " K " << K;
+    (F < hertz_force(kPunch) ? below : beyond)++;
+  }
+  EXPECT_GT(below, 100);
+  EXPECT_GT(beyond, 100);
+  const double depth = 0.3 * kPunch * kPunch / kRadius, K = 1e9;  // a quarter of the way to a_h
+  const double F = force_law::hertz_layer_force(K * depth, K, kEStar, kRadius, kPunch);
+  EXPECT_NEAR(force_law::hertz_layer_offset(F, kEStar, kRadius, kPunch), depth, 1e-6 * depth);
+  EXPECT_EQ(force_law::hertz_layer_force(0, K, kEStar, kRadius, kPunch), 0);
+}
+
+// A sphere on a jittered box of 1 cm cells, resting 1.5 mm deep.
+Model box() { return testing::contact_box(4); }
+const Vec3 kCenter(0.52 * kSize, 0.47 * kSize, kSize + 0.01 - 0.0015);
+constexpr double kToolRadius = 0.01;
+
+// The reference scales every touching triangle's penalty by F / F_lin:
+// the reaction is still minus what the tissue receives, each point's force
+// is its layer-less force times that one factor, and the factor is
+// hertz_layer_force's for the triangles' K, a_h and E*.
+TEST(HertzLayer, TheReferenceScalesEveryPenaltyByOneFactor) {
+  const Model m = box();
+  const ContactLayer layer = contact_layer(m);
+  std::vector<Vec3> plain(m.npoint(), Vec3::Zero()), layered(m.npoint(), Vec3::Zero());
+  const Reaction without = reference_surface_forces(m, m.rest_position, kCenter, kToolRadius, kK, plain);
+  const Reaction with = reference_surface_forces(m, m.rest_position, kCenter, kToolRadius, kK, layered, &layer);
+  ASSERT_GT(without.force.norm(), 0.1 * kK * 0.0015);
+  const double scale = with.force.norm() / without.force.norm();
+  EXPECT_GT(scale, 0.05);
+  EXPECT_LT(scale, 0.95);
+  Vec3 sum = Vec3::Zero();
+  for (int32_t p = 0; p < m.npoint(); ++p) {
+    sum += layered[p];
+    EXPECT_LT((layered[p] - scale * plain[p]).norm(), 1e-12 * without.force.norm()) << "point " << p;
+  }
+  EXPECT_LT((with.force + sum).norm(), 1e-12 * sum.norm());
+  EXPECT_EQ(with.contacts, without.contacts);
+  // The factor from the law, summed here independently of the reference.
+  force_law::HertzLayerSum s;
+  for (const Tri& t : m.surface) {
+    double share[3], w[3];
+    for (int i = 0; i < 3; ++i) share[i] = m.tool_scale(t[i]) / m.surface_count(t[i]);
+    Vec3 f;
+    if (!force_law::sphere_triangle_penalty(kCenter, kToolRadius, m.rest_position[t[0]], m.rest_position[t[1]],
+                                            m.rest_position[t[2]], kK, share, f, w))
+      continue;
+    const TriangleLayer tl = triangle_layer(layer, t);
+    s.add(f.data(), kK * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+  }
+  EXPECT_NEAR(scale, s.scale(kToolRadius), 1e-12);
+}
+
+// One substep from rest with the sphere pressed in: every CPU kernel and
+// precision applies the reference's layered forces (recovered from the
+// points' motion) and reports minus their sum; the same after a cut
+// through the contact, whose new faces the layer's punch radii follow.
+TEST(HertzLayer, CpuBackendsApplyTheReferencesLayeredForcesBeforeAndAfterACut) {
+  const Model whole = box();
+  const Model cut = rebuild_model(whole, testing::split_across_plane_x(whole, 0.5 * kSize));
+  BackendTool tool{true, ToolMode::Push, kToolRadius, kK, ToolContact::Surface};
+  tool.hertz_layer = true;
+  const double dt = 1e-4;
+  for (const Model* m : {&whole, &cut}) {
+    const ContactLayer layer = contact_layer(*m);
+    testing::Contact want;
+    want.force.assign(m->npoint(), Vec3::Zero());
+    want.reaction = reference_surface_forces(*m, m->rest_position, kCenter, kToolRadius, kK, want.force, &layer);
+    for (const Precision precision : {Precision::Double, Precision::Float})
+      for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Auto}) {
+        auto backend = make_cpu_backend(*m, tool, {precision, 1, kernel});
+        SCOPED_TRACE(backend->device() + (m == &cut ? ", after the cut" : ""));
+        const double tolerance = precision == Precision::Double ? 1e-8 : 1e-4;  // float: 24-bit positions
+        const Reaction got = backend->tick(testing::one_step_at(dt, kCenter));
+        const testing::Applied applied = testing::applied_in_one_step(*m, *backend, dt, want.force);
+        ASSERT_GT(applied.peak, 0.01);
+        EXPECT_LT(applied.worst, tolerance * applied.peak);
+        EXPECT_LT((got.force - want.reaction.force).norm(), tolerance * want.reaction.force.norm());
+        EXPECT_NE(backend->plan().passes.end(),
+                  std::find_if(backend->plan().passes.begin(), backend->plan().passes.end(), [](const PassInfo& p) {
+                    return p.detail.find("Hertz layer") != std::string::npos;
+                  }));
+      }
+  }
+}
+
+}  // namespace
+}  // namespace organsim
