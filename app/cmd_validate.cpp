@@ -33,6 +33,7 @@ struct ValidateArgs {
   double young_modulus = 10e3;
   std::string volume_formulation;
   std::string contact = "surface";
+  std::string hertz_layer;  // "on", "off"; empty: on with surface contact
   double line_load_reference = 0;  // m; 0: the line-load case is left out
 };
 
@@ -68,6 +69,11 @@ void validate_command(const ValidateArgs& args) {
     options.contact = ToolContact::Points;
   else if (args.contact != "surface")
     throw Error(ErrorKind::Usage, "--contact: expected 'surface' or 'points', got '" + args.contact + "'");
+  if (args.hertz_layer == "on" && options.contact != ToolContact::Surface)
+    throw Error(ErrorKind::Usage, "--hertz-layer on: the layer is the surface contact's (--contact surface)");
+  if (!args.hertz_layer.empty() && args.hertz_layer != "on" && args.hertz_layer != "off")
+    throw Error(ErrorKind::Usage, "--hertz-layer: expected 'on' or 'off', got '" + args.hertz_layer + "'");
+  options.hertz_layer = options.contact == ToolContact::Surface && args.hertz_layer != "off";
   if (args.line_load_reference < 0 || !std::isfinite(args.line_load_reference))
     throw Error(ErrorKind::Usage, "--line-load-reference: expected a cell size in m (> 0), got " +
                                       fmt(args.line_load_reference));
@@ -94,6 +100,7 @@ void validate_command(const ValidateArgs& args) {
   j["indenter_radius"] = options.indenter_radius;
   j["probe_radius"] = options.probe_radius;
   j["contact"] = args.contact;
+  j["hertz_layer"] = options.hertz_layer;
   if (options.line_load_reference)
     j["line_load"] = {{"block", {options.line_load_block.x(), options.line_load_block.y(), options.line_load_block.z()}},
                       {"depths", options.line_load_depths},
@@ -162,6 +169,9 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
   cmd->add_option("--contact", args->contact,
                   "The indenters' contact, as a scenario's tool.contact: 'surface' (the boundary triangles, "
                   "default) or 'points'");
+  cmd->add_option("--hertz-layer", args->hertz_layer,
+                  "The spheres' surface contact in series with the sub-cell Hertz layer, as a scenario's "
+                  "tool.hertz_layer: 'on' (default with surface contact) or 'off'");
   cmd->add_option("--line-load-reference", args->line_load_reference,
                   "Adds the line-load case (a capsule R 5 mm across a block, pressed 1, 2, 4 mm) compared with "
                   "itself on a mesh of this cell size, m (0.0025: converged; minutes per material)");

@@ -78,7 +78,8 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
       add("cantilever guided", guided.points, guided.stiffness, guided.timoshenko, true);
       std::vector<double> depths;
       for (double r : depth_ratios) depths.push_back(r * options.indenter_radius);
-      const IndentationResult hz = sphere_indentation(slab_mesh, m, options.indenter_radius, depths, options.contact);
+      const IndentationResult hz = sphere_indentation(slab_mesh, m, options.indenter_radius, depths, options.contact,
+                                                        options.hertz_layer);
       for (size_t i = 0; i < depths.size(); ++i) {
         char test[48];
         std::snprintf(test, sizeof test, "hertz d/R=%.2g", depth_ratios[i]);
@@ -86,7 +87,8 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
       }
       // A probe smaller than a cell (an instrument's tip), at d/R = 0.2.
       const IndentationResult probe =
-          sphere_indentation(slab_mesh, m, options.probe_radius, {0.2 * options.probe_radius}, options.contact);
+          sphere_indentation(slab_mesh, m, options.probe_radius, {0.2 * options.probe_radius}, options.contact,
+                             options.hertz_layer);
       add("hertz probe d/R=0.2", probe.points, probe.force[0], probe.hertz[0], true);
       if (options.line_load_reference) {
         const LineLoadResult line = capsule_line_load(line_mesh, m, options.line_load_radius, options.line_load_depths);

@@ -58,9 +58,11 @@ struct IndentationResult {
   std::vector<int32_t> contacts;  // points (or with surface contact, triangles) touching at each depth
   int32_t points = 0;
 };
+// `hertz_layer`: the surface contact in series with the sub-cell Hertz
+// layer (a scenario's tool.hertz_layer; force_law::hertz_layer_offset).
 IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
                                      const std::vector<double>& depths,
-                                     ToolContact contact = ToolContact::Surface);
+                                     ToolContact contact = ToolContact::Surface, bool hertz_layer = false);
 
 // A line load: a rigid frictionless capsule of `radius` lying along y across
 // the middle of the block's top face (bottom face clamped), its axis 2R
