@@ -1,5 +1,5 @@
 #pragma once
-// What the sub-cell Hertz layer (force_law::hertz_layer_force) needs of a
+// What the sub-cell Hertz layer (force_law::HertzLayer) needs of a
 // Model, per point, computed once per Model version (cuts change the
 // surface): how wide a contact the cells resolve there and how stiff the
 // material is.

@@ -22,31 +22,51 @@ double hertz_layer_offset(double force, double e_star, double radius, double pun
   return a * a / radius - force / (2 * e_star * punch_radius);
 }
 
-double hertz_layer_force(double linear_force, double stiffness, double e_star, double radius, double punch_radius) {
-  if (!(linear_force > 0)) return 0;
-  // Beyond a_h the offset is constant: F = F_lin - K a_h^2 / (3 R).
-  const double beyond = linear_force - stiffness * punch_radius * punch_radius / (3 * radius);
-  if (beyond >= hertz_force_at(punch_radius, e_star, radius)) return beyond;
-  // Below: h(a) = F(a) + K delta(F(a)) - F_lin rises strictly with the Hertz
-  // radius a on [0, a_h] (h' = a (4 E* a / R + 2 K (1 - a / a_h) / R) > 0),
-  // h(0) < 0 <= h(a_h): Newton's steps kept inside the bracket, else bisection.
-  const auto h = [&](double a) {
-    const double f = hertz_force_at(a, e_star, radius);
-    return f + stiffness * (a * a / radius - f / (2 * e_star * punch_radius)) - linear_force;
-  };
-  double lo = 0, hi = punch_radius, a = punch_radius;
+double HertzLayer::force_along(double delta) const {
+  double g = 0;
+  for (const Touch& t : touches_) g += t.c * std::max(0.0, t.m - t.k * t.c * delta);
+  return g;
+}
+
+double HertzLayer::stiffness_along(double delta) const {
+  double k = 0;
+  for (const Touch& t : touches_)
+    if (t.m - t.k * t.c * delta > 0) k += t.k * t.c * t.c;
+  return k;
+}
+
+void HertzLayer::solve(double radius) {
+  delta_ = 0;
+  double sum[3] = {0, 0, 0};
+  for (const Touch& t : touches_)
+    for (int i = 0; i < 3; ++i) sum[i] += t.f[i];
+  const double linear = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+  if (!(linear > 0) || !(weight_ > 0)) return;
+  for (Touch& t : touches_) t.c = t.m > 0 ? (t.f[0] * sum[0] + t.f[1] * sum[1] + t.f[2] * sum[2]) / (t.m * linear) : 0;
+  const double e_star = this->e_star(), a_h = punch_radius();
+  // Beyond a_h the offset is constant.
+  const double beyond = a_h * a_h / (3 * radius);
+  if (force_along(beyond) >= hertz_force_at(a_h, e_star, radius)) {
+    delta_ = beyond;
+    return;
+  }
+  // Below: h(a) = F(a) - G(delta(a)) rises strictly with the Hertz radius a
+  // on [0, a_h] (F' = 4 E* a^2 / R, delta' = 2 a (1 - a / a_h) / R >= 0, G
+  // falling), h(0) = -|F_lin| < 0 < h(a_h).
+  const auto delta_at = [&](double a) { return a * a / radius - hertz_force_at(a, e_star, radius) / (2 * e_star * a_h); };
+  double lo = 0, hi = a_h, a = a_h;
   for (int iteration = 0; iteration < 100; ++iteration) {
-    const double value = h(a);
+    const double d = delta_at(a), value = hertz_force_at(a, e_star, radius) - force_along(d);
     if (value == 0) break;
     (value < 0 ? lo : hi) = a;
-    const double slope = a * (4 * e_star * a / radius + 2 * stiffness * (1 - a / punch_radius) / radius);
+    const double slope = 4 * e_star * a * a / radius + stiffness_along(d) * 2 * a * (1 - a / a_h) / radius;
     double next = slope > 0 ? a - value / slope : lo;
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    const bool settled = std::abs(next - a) <= 1e-13 * punch_radius;
+    const bool settled = std::abs(next - a) <= 1e-13 * a_h;
     a = next;
     if (settled) break;
   }
-  return hertz_force_at(a, e_star, radius);
+  delta_ = delta_at(a);
 }
 
 }  // namespace organsim::force_law

@@ -15,7 +15,9 @@
 // from E and nu, rest lengths and volumes) is the Model's business
 // (core/model); how elements are gathered and summed is each backend's.
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace organsim::force_law {
 
@@ -433,46 +435,59 @@ inline constexpr double kHertzLayerPunchFactor = 0.8;
 // delta(F), m; 0 for F <= 0.
 double hertz_layer_offset(double force, double e_star, double radius, double punch_radius);
 
-// The contact force F (N) of the surface contact in series with the layer:
-// the root of F + K delta(F) = F_lin in [0, F_lin], where F_lin is the
-// surface contact's force with the layer off and K (N/m) its penalties'
-// stiffness along that force (how F_lin falls as the sphere moves back:
-// the sum of each touching triangle's k_t (n_t . n)^2). A backend scales
-// every touching triangle's penalty by F / F_lin, within the substep: the
-// law needs no state and no estimate of the tissue's stiffness.
-double hertz_layer_force(double linear_force, double stiffness, double e_star, double radius, double punch_radius);
-
-// What hertz_layer_force needs of a sphere's touching triangles, summed in
-// the order a backend visits them: F_lin (the penalties' sum), the matrix
-// sum k_t n_t n_t^T that gives K along F_lin, and a_h and E* as the
-// triangles' values weighted by their penalty's magnitude (so they move
-// continuously as the sphere slides from one triangle to the next).
-struct HertzLayerSum {
-  double force[3] = {0, 0, 0};
-  double stiffness[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-  double weight = 0, punch = 0, e_star = 0;
-
-  // One triangle's penalty f_t (its k_t, its punch radius and E*).
+// The layer over a sphere's touching triangles, in series with their
+// penalties. Moving the sphere back by delta along n (the direction of
+// their sum F_lin) lowers triangle t's penalty m_t = |f_t| by k_t c_t delta,
+// c_t = n_t . n, and never below zero; the force along n is then
+//   G(delta) = sum_t c_t max(0, m_t - k_t c_t delta),
+// continuous and falling in delta, so F = G(delta(F)) has one root in
+// [0, |F_lin|]. solve() finds it (Newton's steps on the Hertz radius, kept
+// in a bracket: there F and delta are polynomials), and each penalty is
+// then multiplied by factor(i) = max(0, m_t - k_t c_t delta) / m_t: the
+// contact with the sphere moved back by delta, without state and without an
+// estimate of the tissue's stiffness. A triangle that enters the contact
+// at zero depth adds nothing. a_h (times kHertzLayerPunchFactor) and E* are
+// the triangles' values weighted by m_t, so they move continuously as the
+// sphere slides from one triangle to the next.
+class HertzLayer {
+ public:
+  void clear() {
+    touches_.clear();
+    weight_ = punch_ = e_star_ = delta_ = 0;
+  }
+  // Triangle penalty f_t with its stiffness k_t, punch radius and E*, in the
+  // order the backend visits them.
   template <class Real>
   void add(const Real f[3], double k_t, double punch_radius, double triangle_e_star) {
-    const double m = std::sqrt(double(f[0]) * f[0] + double(f[1]) * f[1] + double(f[2]) * f[2]);
-    if (!(m > 0)) return;
-    for (int i = 0; i < 3; ++i) {
-      force[i] += f[i];
-      for (int j = 0; j < 3; ++j) stiffness[i][j] += k_t * (f[i] / m) * (f[j] / m);
-    }
-    weight += m, punch += m * punch_radius, e_star += m * triangle_e_star;
+    Touch t;
+    for (int i = 0; i < 3; ++i) t.f[i] = f[i];
+    t.m = std::sqrt(t.f[0] * t.f[0] + t.f[1] * t.f[1] + t.f[2] * t.f[2]);
+    t.k = k_t;
+    touches_.push_back(t);
+    weight_ += t.m, punch_ += t.m * punch_radius, e_star_ += t.m * triangle_e_star;
   }
-  // F / F_lin for a sphere of radius R: what every touching triangle's
-  // penalty is multiplied by (1 with nothing touching).
-  double scale(double radius) const {
-    const double F = std::sqrt(force[0] * force[0] + force[1] * force[1] + force[2] * force[2]);
-    if (!(F > 0) || !(weight > 0)) return 1;
-    double K = 0;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) K += force[i] / F * stiffness[i][j] * force[j] / F;
-    return hertz_layer_force(F, K, e_star / weight, radius, kHertzLayerPunchFactor * punch / weight) / F;
+  // Finds delta for a sphere of radius R.
+  void solve(double radius);
+  // The i-th added penalty's factor (1 before solve or with nothing touching).
+  double factor(size_t i) const {
+    const Touch& t = touches_[i];
+    return t.m > 0 ? std::max(0.0, t.m - t.k * t.c * delta_) / t.m : 0.0;
   }
+  double offset() const { return delta_; }  // m
+  bool touching() const { return weight_ > 0; }
+  double punch_radius() const { return kHertzLayerPunchFactor * punch_ / weight_; }  // a_h, m
+  double e_star() const { return e_star_ / weight_; }                               // Pa
+  void reserve(size_t n) { touches_.reserve(n); }
+
+ private:
+  struct Touch {
+    double f[3];
+    double m = 0, k = 0, c = 1;
+  };
+  double force_along(double delta) const;     // G(delta)
+  double stiffness_along(double delta) const;  // -G'(delta): sum over active t of k_t c_t^2
+  std::vector<Touch> touches_;
+  double weight_ = 0, punch_ = 0, e_star_ = 0, delta_ = 0;
 };
 
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o

@@ -10,8 +10,8 @@ namespace organsim {
 // "" without the layer.
 inline std::string hertz_layer_plan(const BackendTool& tool) {
   if (!tool.hertz_layer) return "";
-  return ", then every penalty scaled to put the contact in series with the sub-cell Hertz layer (one root per "
-         "substep, force_law::hertz_layer_force)";
+  return ", then every penalty lowered as by the sphere moved back through the sub-cell Hertz layer (one root "
+         "per substep, force_law::HertzLayer)";
 }
 
 // "" without friction.

@@ -79,7 +79,7 @@ Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x
     int jaw;
   };
   std::vector<Touch> touches;
-  force_law::HertzLayerSum sum;
+  force_law::HertzLayer hertz;
   const Vec3 seg_a[2] = {tool.a, tool.a2}, seg_b[2] = {tool.b, tool.b2};
   for (const Tri& t : model.surface) {
     double share[3];
@@ -91,19 +91,20 @@ Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x
         continue;
       if (layer) {
         const TriangleLayer tl = triangle_layer(*layer, t);
-        sum.add(touch.f.data(), stiffness * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+        hertz.add(touch.f.data(), stiffness * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
       }
       touches.push_back(touch);
     }
   }
-  const double scale = layer ? sum.scale(tool.radius) : 1.0;
+  if (layer) hertz.solve(tool.radius);
   Reaction reaction;
   std::vector<Vec3> received(x.size(), Vec3::Zero());
   std::vector<uint8_t> touched(x.size(), 0);
   const Vec3 axis = tool.rotation * kJawAxis, closing[2] = {-axis, axis};
-  for (const Touch& touch : touches) {
+  for (size_t k = 0; k < touches.size(); ++k) {
+    const Touch& touch = touches[k];
     const Tri& t = *touch.t;
-    const Vec3 f = scale * touch.f;
+    const Vec3 f = layer ? Vec3(hertz.factor(k) * touch.f) : touch.f;
     const Vec3 q = touch.w[0] * x[t[0]] + touch.w[1] * x[t[1]] + touch.w[2] * x[t[2]];
     for (int i = 0; i < 3; ++i) {
       received[t[i]] += touch.w[i] * f;

@@ -36,7 +36,7 @@ Reaction reference_push_forces(const std::vector<Vec3>& x, const ToolPlacement& 
 // s_i / (surface triangles of i). Adds into force and returns the reaction
 // (F = -sum f_t, T = sum (q_t - c) x (-f_t)); contacts counts the points that
 // received a force. With `layer`, the contact in series with the sub-cell
-// Hertz layer: every penalty scaled by force_law::HertzLayerSum's scale.
+// Hertz layer: each penalty times its force_law::HertzLayer factor.
 Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x, const Vec3& center,
                                   double radius, double stiffness, std::vector<Vec3>& force,
                                   const ContactLayer* layer = nullptr);

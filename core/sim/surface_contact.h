@@ -37,7 +37,7 @@ class SurfaceContact {
   // change the surface); `scale` is the backend's Model::tool_k_scale,
   // `lanes` the length of the per-point slot array the kernels read
   // (padding included, -1 there); `hertz_layer` puts a sphere's contact in
-  // series with the sub-cell Hertz layer (force_law::hertz_layer_force).
+  // series with the sub-cell Hertz layer (force_law::HertzLayer).
   void pack(const Model& model, const std::vector<Real>& scale, size_t lanes, bool hertz_layer = false) {
     local_of_point_.assign(model.npoint(), -1);
     points_.clear();
@@ -60,6 +60,9 @@ class SurfaceContact {
       const ContactLayer layer = contact_layer(model);
       layer_.reserve(ntri);
       for (const Tri& t : model.surface) layer_.push_back(triangle_layer(layer, t));
+      // So that the step never grows them: at most every triangle touches.
+      pending_.reserve(ntri);
+      hertz_.reserve(ntri);
     }
     for (auto* v : {&x_, &y_, &z_}) v->assign(points_.size(), 0);
     slot_.assign(lanes, -1);
@@ -132,7 +135,25 @@ class SurfaceContact {
 #pragma omp barrier
       box_tests(i * ntri / n, (i + 1) * ntri / n, lo, hi, r2);
     }
-    force_law::HertzLayerSum layer;
+    // Each touching triangle's penalty w_j f to its corners; with the Hertz
+    // layer, once the layer is solved over all of them (pending_).
+    const auto spread = [&](const int32_t corner[3], const Real w[3], const V3& f) {
+      for (int j = 0; j < 3; ++j) {
+        const int32_t p = points_[corner[j]];
+        if (slot_[p] < 0) {
+          slot_[p] = static_cast<int32_t>(touched_.size());
+          touched_.push_back(p);
+          force_.insert(force_.end(), 3, Real(0));
+        }
+        Real* fp = &force_[3 * static_cast<size_t>(slot_[p])];
+        for (int axis = 0; axis < 3; ++axis) fp[axis] += w[j] * f[axis];
+      }
+    };
+    const bool layered = !layer_.empty();
+    if (layered) {
+      hertz_.clear();
+      pending_.clear();
+    }
     for (int32_t word = 0; word < ntri; word += 8) {
       uint64_t any;
       std::memcpy(&any, near + word, sizeof any);
@@ -142,31 +163,25 @@ class SurfaceContact {
         const int32_t corner[3] = {ta[i], tb[i], tc[i]};
         const Real share[3] = {share_[corner[0]], share_[corner[1]], share_[corner[2]]};
         for (int jaw = 0; jaw < jaws; ++jaw) {
-          V3 f;
-          Real w[3];
+          Pending t{{corner[0], corner[1], corner[2]}, {0, 0, 0}, V3::Zero()};
           if (!force_law::capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], radius, at(corner[0]), at(corner[1]),
-                                                   at(corner[2]), k, share, f, w))
+                                                   at(corner[2]), k, share, t.f, t.w))
             continue;
-          if (jaws == 2) grip_ += f.dot(closing[jaw]);
-          if (!layer_.empty())
-            layer.add(f.data(), double(k * force_law::triangle_penalty_scale(share)), layer_[i].punch_radius,
-                      layer_[i].e_star);
-          for (int j = 0; j < 3; ++j) {
-            const int32_t p = points_[corner[j]];
-            if (slot_[p] < 0) {
-              slot_[p] = static_cast<int32_t>(touched_.size());
-              touched_.push_back(p);
-              force_.insert(force_.end(), 3, Real(0));
-            }
-            Real* fp = &force_[3 * static_cast<size_t>(slot_[p])];
-            for (int axis = 0; axis < 3; ++axis) fp[axis] += w[j] * f[axis];
+          if (jaws == 2) grip_ += t.f.dot(closing[jaw]);
+          if (!layered) {
+            spread(t.corner, t.w, t.f);
+            continue;
           }
+          hertz_.add(t.f.data(), double(k * force_law::triangle_penalty_scale(share)), layer_[i].punch_radius,
+                     layer_[i].e_star);
+          pending_.push_back(t);
         }
       }
     }
-    if (!layer_.empty() && !touched_.empty()) {
-      const Real scale = static_cast<Real>(layer.scale(placed.radius));
-      for (Real& f : force_) f *= scale;
+    if (layered) {
+      hertz_.solve(placed.radius);
+      for (size_t i = 0; i < pending_.size(); ++i)
+        spread(pending_[i].corner, pending_[i].w, V3(static_cast<Real>(hertz_.factor(i)) * pending_[i].f));
     }
     if (friction.on()) add_friction(placed, k, friction);
   }
@@ -269,6 +284,14 @@ class SurfaceContact {
   std::vector<uint8_t> near_;            // per triangle: its box comes within the radius of the segment's box (8-byte words)
   std::vector<Real> share_;              // s_p / n_p per surface point (force_law::sphere_triangle_penalty)
   std::vector<TriangleLayer> layer_;     // per triangle with the Hertz layer on, else empty
+  // With the layer: this substep's touching penalties, spread once it is solved.
+  struct Pending {
+    int32_t corner[3];
+    Real w[3];
+    V3 f;
+  };
+  std::vector<Pending> pending_;
+  force_law::HertzLayer hertz_;
   std::vector<Real> x_, y_, z_;          // surface points' positions this substep
   std::vector<int32_t> slot_;            // per lane
   std::vector<Real> force_;              // per touched point, 3 each

@@ -60,7 +60,7 @@ struct BackendTool {
   Vec3 end_a{0, 0, 0}, end_b{0, 0, 0};  // capsule, grasper: the segment's ends in the tool frame, m
   Friction friction{};                  // surface contact only
   // A sphere's surface contact in series with the sub-cell Hertz layer
-  // (force_law::hertz_layer_force): Hertz's force where the contact is
+  // (force_law::HertzLayer): Hertz's force where the contact is
   // narrower than the cells.
   bool hertz_layer = false;
   int32_t jaws() const { return shape == ToolShape::Grasper ? 2 : 1; }

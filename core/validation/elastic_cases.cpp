@@ -396,7 +396,7 @@ struct ClampedBlock {
 // (force_law::hertz_layer_offset): the tissue sees the sphere moved back by
 // delta(F) along the push, so the force is the root of F = F_s(d - delta(F))
 // with F_s the layer-less static contact at a depth. a_h and E* are those of
-// the triangles touching in the last solve (force_law::HertzLayerSum, as the
+// the triangles touching in the last solve (force_law::HertzLayer, as the
 // backends weigh them). The root is bracketed by 0 and F_s(d) (delta >= 0)
 // and found by regula falsi (Illinois) to 1e-4 of itself, far below the
 // percent-level errors validated.
@@ -404,14 +404,14 @@ std::pair<double, int32_t> layered_indentation(const ClampedBlock& b, const Cont
                                                double radius) {
   const Model& m = b.model;
   int32_t touching = 0;
-  force_law::HertzLayerSum sum;
+  force_law::HertzLayer sum;
   auto push_at = [&](double back) {
     const Vec3 c = centre + Vec3(0, 0, back);
     const SurfaceContact s = surface_contact(m, *b.solver, b.supports, {c, c, radius}, b.k_contact);
     touching = s.touching;
     // Moved back off the surface: no force, and a_h and E* stay those of the last contact.
     if (s.displacement.empty()) return 0.0;
-    sum = {};
+    sum.clear();
     for (const Tri& t : m.surface) {
       Vec3 x[3];
       double share[3], w[3];
@@ -427,13 +427,12 @@ std::pair<double, int32_t> layered_indentation(const ClampedBlock& b, const Cont
     return -s.force.z();
   };
   auto offset = [&](double force) {
-    if (!(sum.weight > 0)) return 0.0;
-    return force_law::hertz_layer_offset(force, sum.e_star / sum.weight, radius,
-                                         force_law::kHertzLayerPunchFactor * sum.punch / sum.weight);
+    if (!sum.touching()) return 0.0;
+    return force_law::hertz_layer_offset(force, sum.e_star(), radius, sum.punch_radius());
   };
   // g(F) = F_s(d - delta(F)) - F: positive at 0, at most 0 at F_s(d).
   double lo = 0, hi = push_at(0);
-  if (!(hi > 0) || !(sum.weight > 0)) return {hi, touching};
+  if (!(hi > 0) || !sum.touching()) return {hi, touching};
   double g_lo = hi, g_hi = push_at(offset(hi)) - hi;
   for (int iteration = 0; iteration < 40 && hi - lo > 1e-4 * hi; ++iteration) {
     const double F = g_hi < 0 ? hi - g_hi * (hi - lo) / (g_hi - g_lo) : hi;

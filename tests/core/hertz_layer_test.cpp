@@ -1,5 +1,5 @@
 // The sub-cell Hertz layer of a sphere's surface contact
-// (force_law::hertz_layer_offset, hertz_layer_force): the law itself, the
+// (force_law::hertz_layer_offset, HertzLayer): the law itself, the
 // reference's and the CPU backends' use of it, before and after a cut.
 #include <gtest/gtest.h>
 
@@ -49,30 +49,75 @@ TEST(HertzLayer, OffsetIsHertzLessAPunchUpToTheCellsRadiusAndConstantBeyond) {
   }
 }
 
-// hertz_layer_force is the root of F + K delta(F) = F_lin in [0, F_lin],
-// for penalties from a thousandth to a thousand times the punch's own
-// stiffness 2 E* a_h and forces on both sides of a_h; a very stiff penalty
-// leaves the layer alone to carry the depth: F = delta^-1(F_lin / K).
-TEST(HertzLayer, ForceIsTheRootOfTheContactInSeriesWithTheLayer) {
+// HertzLayer::solve finds the offset delta with F(delta) = G(delta): the
+// layer's force (the Hertz force at the radius whose delta it is) equals
+// the penalties' force along their sum with the sphere moved back by delta,
+// each penalty lowered by k_t c_t delta and never below zero. Random sets of
+// 1 to 6 penalties, with stiffnesses from a thousandth to a thousand times
+// the punch's own 2 E* a_h and forces on both sides of a_h; one penalty
+// under a very stiff spring leaves the layer alone to carry the depth.
+double layer_force(const force_law::HertzLayer& layer) {
+  const double d = layer.offset(), a_h = layer.punch_radius(), e = layer.e_star();
+  if (d >= a_h * a_h / (3 * kRadius) * (1 - 1e-12)) return -1;  // beyond a_h: F is G itself
+  // delta(a) = a^2 / R - 2 a^3 / (3 R a_h) rises on [0, a_h]: invert by bisection.
+  double lo = 0, hi = a_h;
+  for (int i = 0; i < 200; ++i) {
+    const double a = 0.5 * (lo + hi);
+    (a * a / kRadius - 2 * a * a * a / (3 * kRadius * a_h) < d ? lo : hi) = a;
+  }
+  const double a = 0.5 * (lo + hi);
+  return 4 * e * a * a * a / (3 * kRadius);
+}
+
+TEST(HertzLayer, ItsForceEqualsThePenaltiesWithTheSphereMovedBackByItsOffset) {
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> decades(-3, 3);
-  int below = 0, beyond = 0;
-  for (int i = 0; i < 2000; ++i) {
-    const double K = 2 * kEStar * kPunch * std::pow(10.0, decades(rng));
-    const double F_lin = hertz_force(kPunch) * std::pow(10.0, decades(rng));
-    const double F = force_law::hertz_layer_force(F_lin, K, kEStar, kRadius, kPunch);
-    ASSERT_GE(F, 0);
-    ASSERT_LE(F, F_lin);
-    const double residual = F + K * force_law::hertz_layer_offset(F, kEStar, kRadius, kPunch) - F_lin;
-    EXPECT_LT(std::abs(residual), 1e-9 * F_lin) << "F_lin " << F_lin << " K " << K;
-    (F < hertz_force(kPunch) ? below : beyond)++;
+  std::uniform_real_distribution<double> decades(-3, 3), unit(-1, 1);
+  int below = 0, beyond = 0, dropped = 0;
+  force_law::HertzLayer layer;
+  for (int trial = 0; trial < 2000; ++trial) {
+    layer.clear();
+    const int n = 1 + trial % 6;
+    std::vector<Vec3> f;
+    std::vector<double> k;
+    for (int i = 0; i < n; ++i) {
+      // Normals within about 45 degrees of -z, forces spread over decades.
+      const Vec3 dir = Vec3(0.5 * unit(rng), 0.5 * unit(rng), -1).normalized();
+      f.push_back(hertz_force(kPunch) * std::pow(10.0, decades(rng)) / n * dir);
+      k.push_back(2 * kEStar * kPunch * std::pow(10.0, decades(rng)));
+      layer.add(f.back().data(), k.back(), kPunch / force_law::kHertzLayerPunchFactor, kEStar);
+    }
+    layer.solve(kRadius);
+    Vec3 sum = Vec3::Zero(), scaled = Vec3::Zero();
+    for (int i = 0; i < n; ++i) sum += f[i];
+    const Vec3 along = sum.normalized();
+    for (int i = 0; i < n; ++i) {
+      const double c = f[i].normalized().dot(along);
+      const double want = std::max(0.0, f[i].norm() - k[i] * c * layer.offset()) / f[i].norm();
+      EXPECT_NEAR(layer.factor(i), want, 1e-12);
+      ASSERT_GE(layer.factor(i), 0);
+      ASSERT_LE(layer.factor(i), 1 + 1e-12);
+      dropped += layer.factor(i) == 0;
+      scaled += layer.factor(i) * f[i];
+    }
+    const double F = layer_force(layer);
+    if (F < 0) {
+      ++beyond;
+      continue;
+    }
+    ++below;
+    EXPECT_NEAR(F, scaled.dot(along), 1e-9 * sum.norm()) << "trial " << trial;
   }
   EXPECT_GT(below, 100);
   EXPECT_GT(beyond, 100);
-  const double depth = 0.3 * kPunch * kPunch / kRadius, K = 1e9;  // a quarter of the way to a_h
-  const double F = force_law::hertz_layer_force(K * depth, K, kEStar, kRadius, kPunch);
-  EXPECT_NEAR(force_law::hertz_layer_offset(F, kEStar, kRadius, kPunch), depth, 1e-6 * depth);
-  EXPECT_EQ(force_law::hertz_layer_force(0, K, kEStar, kRadius, kPunch), 0);
+  EXPECT_GT(dropped, 10);  // penalties lifted off entirely: the clamp at zero was exercised
+  // One penalty behind a very stiff spring, a quarter of the way to a_h:
+  // the sphere moves back by almost all of the depth.
+  layer.clear();
+  const double depth = 0.3 * kPunch * kPunch / kRadius, K = 1e9;
+  const double f[3] = {0, 0, K * depth};
+  layer.add(f, K, kPunch / force_law::kHertzLayerPunchFactor, kEStar);
+  layer.solve(kRadius);
+  EXPECT_NEAR(layer.offset(), depth, 1e-6 * depth);
 }
 
 // A sphere on a jittered box of 1 cm cells, resting 1.5 mm deep.
@@ -80,29 +125,25 @@ Model box() { return testing::contact_box(4); }
 const Vec3 kCenter(0.52 * kSize, 0.47 * kSize, kSize + 0.01 - 0.0015);
 constexpr double kToolRadius = 0.01;
 
-// The reference scales every touching triangle's penalty by F / F_lin:
-// the reaction is still minus what the tissue receives, each point's force
-// is its layer-less force times that one factor, and the factor is
-// hertz_layer_force's for the triangles' K, a_h and E*.
-TEST(HertzLayer, TheReferenceScalesEveryPenaltyByOneFactor) {
+// The reference lowers every touching triangle's penalty by its layer
+// factor: the reaction is still minus what the tissue receives, the total
+// falls, and each triangle's share comes from the same HertzLayer, solved
+// here independently of the reference over the same penalties.
+TEST(HertzLayer, TheReferenceAppliesTheLayersFactorToEveryPenalty) {
   const Model m = box();
   const ContactLayer layer = contact_layer(m);
   std::vector<Vec3> plain(m.npoint(), Vec3::Zero()), layered(m.npoint(), Vec3::Zero());
   const Reaction without = reference_surface_forces(m, m.rest_position, kCenter, kToolRadius, kK, plain);
   const Reaction with = reference_surface_forces(m, m.rest_position, kCenter, kToolRadius, kK, layered, &layer);
   ASSERT_GT(without.force.norm(), 0.1 * kK * 0.0015);
-  const double scale = with.force.norm() / without.force.norm();
-  EXPECT_GT(scale, 0.05);
-  EXPECT_LT(scale, 0.95);
+  EXPECT_GT(with.force.norm(), 0.05 * without.force.norm());
+  EXPECT_LT(with.force.norm(), 0.95 * without.force.norm());
   Vec3 sum = Vec3::Zero();
-  for (int32_t p = 0; p < m.npoint(); ++p) {
-    sum += layered[p];
-    EXPECT_LT((layered[p] - scale * plain[p]).norm(), 1e-12 * without.force.norm()) << "point " << p;
-  }
+  for (int32_t p = 0; p < m.npoint(); ++p) sum += layered[p];
   EXPECT_LT((with.force + sum).norm(), 1e-12 * sum.norm());
   EXPECT_EQ(with.contacts, without.contacts);
-  // The factor from the law, summed here independently of the reference.
-  force_law::HertzLayerSum s;
+  force_law::HertzLayer h;
+  std::vector<std::pair<const Tri*, Vec3>> touches;
   for (const Tri& t : m.surface) {
     double share[3], w[3];
     for (int i = 0; i < 3; ++i) share[i] = m.tool_scale(t[i]) / m.surface_count(t[i]);
@@ -111,9 +152,13 @@ TEST(HertzLayer, TheReferenceScalesEveryPenaltyByOneFactor) {
                                             m.rest_position[t[2]], kK, share, f, w))
       continue;
     const TriangleLayer tl = triangle_layer(layer, t);
-    s.add(f.data(), kK * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+    h.add(f.data(), kK * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+    touches.push_back({&t, f});
   }
-  EXPECT_NEAR(scale, s.scale(kToolRadius), 1e-12);
+  h.solve(kToolRadius);
+  Vec3 want = Vec3::Zero();
+  for (size_t i = 0; i < touches.size(); ++i) want -= h.factor(i) * touches[i].second;
+  EXPECT_LT((with.force - want).norm(), 1e-12 * want.norm());
 }
 
 // One substep from rest with the sphere pressed in: every CPU kernel and

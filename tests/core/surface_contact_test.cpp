@@ -147,9 +147,10 @@ TEST(SurfaceContact, StiffnessPerPointStaysWithinTheBoundDtCritCounts) {
 // smooth (tick-to-tick change of |F| below 5 % of its mean) with surface
 // contact; with the penalty on the points it jumps as points enter and
 // leave the sphere, which is what the test must be able to see.
-double largest_tick_change_sliding(ToolContact contact, double& mean) {
+double largest_tick_change_sliding(ToolContact contact, double& mean, bool hertz_layer = false) {
   const Model m = box(4);  // 1 cm cells under a 6 mm sphere
-  const BackendTool tool{true, ToolMode::Push, 0.006, kK, contact};
+  BackendTool tool{true, ToolMode::Push, 0.006, kK, contact};
+  tool.hertz_layer = hertz_layer;
   auto backend = make_cpu_backend(m, tool, testing::one_thread());
   TickRequest r;
   r.dt = 1e-4;
@@ -183,6 +184,18 @@ TEST(SurfaceContact, SlidingAtConstantDepthGivesASmoothForce) {
   EXPECT_GT(points, 0.05 * mean_points) << "point contact should jump here; the test would see nothing";
   std::cout << "sliding: largest tick-to-tick change " << surface / mean << " of the mean with surface contact, "
             << points / mean_points << " with point contact\n";
+}
+
+// The same with the sub-cell Hertz layer: triangles entering the contact at
+// zero depth must not change the layer's force by more than their own
+// penalty (a layer whose stiffness took each newcomer's k_t whole, though
+// its penalty cannot fall below zero, dropped the force by 15 % in a tick).
+TEST(SurfaceContact, SlidingAtConstantDepthGivesASmoothForceWithTheHertzLayer) {
+  double mean = 0;
+  const double layered = largest_tick_change_sliding(ToolContact::Surface, mean, true);
+  ASSERT_GT(mean, 0.005 * kK * 0.0015);
+  EXPECT_LT(layered, 0.05 * mean);
+  std::cout << "sliding with the Hertz layer: largest tick-to-tick change " << layered / mean << " of the mean\n";
 }
 
 // The surface contact's positions and box tests are split over the step's
