@@ -107,6 +107,19 @@ bool sphere_triangle_penalty(vec3 center, float radius, vec3 x0, vec3 x1, vec3 x
   return true;
 }
 
+// The sub-cell Hertz layer (force_law::hertz_layer_offset_at,
+// hertz_layer_factor; solved per substep by hertz_layer.comp): the offset
+// at Hertz radius a <= a_h, and a touching penalty's factor with the sphere
+// moved back by delta.
+float hertz_layer_offset_at(float a, float radius, float punch_radius) {
+  return a * a / radius - 2.0 * a * a * a / (3.0 * radius * punch_radius);
+}
+float hertz_layer_factor(float m, float k, float c, float delta) {
+  if (!(m > 0.0)) return 0.0;
+  const float lowered = m - k * c * delta;
+  return lowered > 0.0 ? lowered / m : 0.0;
+}
+
 // The capsule tool (force_law.h's capsule section): the segment a-b swept by R.
 
 // The point of the segment a-b closest to p; exactly a when a == b.

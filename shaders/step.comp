@@ -8,7 +8,8 @@
 // shear element of nu < 1/4; with SMOOTHED_SHEAR s its node-smoothed share s,
 // stresses from shear_smoothing.comp), HAS_GRAVITY, TOOL_PUSH, TOOL_PULL,
 // TOOL_SURFACE (the push tool against the surface triangles: each surface
-// point sums w_p f over its triangles, each recomputed by its three corners),
+// point sums w_p f over its triangles, each recomputed by its three corners;
+// with HERTZ_LAYER each f times its factor from hertz_layer.comp's solve),
 // and RECORD_FORCE (tests: also store each point's total force).
 // THREADS_PER_POINT T (default 1): T invocations share a point's gathers, slot
 // j going to invocation j mod T, and invocation 0 adds the T partial sums in a
@@ -69,6 +70,9 @@ layout(std430, binding = ORGANSIM_GL_B_SURFACE_TRIS) readonly buffer SurfaceTris
 #endif
 #ifdef FRICTION
 layout(std430, binding = ORGANSIM_GL_B_ANCHOR) buffer Anchors { vec4 anchors[]; };  // each point's own
+#endif
+#ifdef HERTZ_LAYER
+layout(std430, binding = ORGANSIM_GL_B_LAYER_OUT) readonly buffer LayerOut { vec4 layer; };  // {n, delta}, hertz_layer.comp
 #endif
 #if defined(TOOL_PUSH) || defined(TOOL_PULL) || defined(TOOL_SURFACE)
 layout(std430, binding = ORGANSIM_GL_B_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
@@ -263,8 +267,13 @@ void main() {
       if (!(dot(gap, gap) < r2)) continue;
       for (int jaw = 0; jaw < jaws; ++jaw) {
         vec3 ft, w;
-        if (capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], u_tool_radius, a, b, c, u_tool_k,
-                                    vec3(mass[t.x].w, mass[t.y].w, mass[t.z].w), ft, w)) {
+        const vec3 share = vec3(mass[t.x].w, mass[t.y].w, mass[t.z].w);
+        if (capsule_triangle_penalty(seg_a[jaw], seg_b[jaw], u_tool_radius, a, b, c, u_tool_k, share, ft, w)) {
+#ifdef HERTZ_LAYER
+          // The penalty with the sphere moved back by the layer's offset.
+          const float m = length(ft);
+          ft *= hertz_layer_factor(m, u_tool_k * min(min(share.x, share.y), share.z), dot(ft, layer.xyz) / m, layer.w);
+#endif
           fc += w[t.w] * ft;
           touching = true;
 #ifdef GRASPER

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/gl/gl_model_pack.h"
+#include "core/physics/force_law.h"
 #include "core/sim/contact_plan.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
@@ -47,10 +48,6 @@ std::string float_literal(double value) {
 
 GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBackendOptions& options)
     : model_(&model), tool_(tool), options_(options) {
-  if (tool.hertz_layer)
-    throw Error(ErrorKind::Usage,
-                "GL backend: the tool's \"hertz_layer\" (sub-cell Hertz contact) runs on the CPU backend only "
-                "(--backend cpu)");
   gl::EglContextOptions context_options;
   context_options.debug = options.debug;
   context_ = std::make_unique<gl::EglContext>(context_options);
@@ -72,6 +69,8 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (plan_.tool == ToolTerm::Surface) defines.push_back("TOOL_SURFACE");
   if (plan_.tool == ToolTerm::Surface && tool.shape == ToolShape::Grasper) defines.push_back("GRASPER");
   if (plan_.tool == ToolTerm::Surface && tool.friction.on()) defines.push_back("FRICTION");
+  const bool layered = plan_.tool == ToolTerm::Surface && tool.hertz_layer;
+  if (layered) defines.push_back("HERTZ_LAYER");
   if (options.record_forces) defines.push_back("RECORD_FORCE");
   if (options.threads_per_point < 0 || options.threads_per_point > 16) {
     // 16 x 64 = 1024 invocations, the largest workgroup every GL 4.5 driver must run.
@@ -86,6 +85,17 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   if (nodal) nodal_pressure_ = gl::ComputeProgram("nodal_pressure.comp", {split});
   carry_ = gl::ComputeProgram("carry_state.comp", {});
   if (smoothed) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
+  if (layered) {
+    hertz_layer_ = gl::ComputeProgram("hertz_layer.comp", {});
+    glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_TOOL_RADIUS, static_cast<float>(tool.radius));
+    glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
+    glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_LAYER_FACTOR,
+                       static_cast<float>(force_law::kHertzLayerPunchFactor));
+    // The solve's result, read by step.comp: one vec4, the same for every Model version.
+    const float none[4] = {0, 0, 1, 0};
+    layer_out_ = create_buffer("Hertz layer {n, delta}", sizeof none, none, 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_LAYER_OUT, layer_out_);
+  }
 
   // Buffers that do not depend on the model's size: the readback rings.
   const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
@@ -115,7 +125,7 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   slots_.assign(kSlots, Slot{});
 
   // x_t = rest, d_t = 0.
-  const gl::PackedModel packed = gl::pack_model(model);
+  const gl::PackedModel packed = gl::pack_model(model, layered);
   const std::vector<float> zero(packed.rest.size(), 0.0f);
   install(create_tables(packed, plan_), packed, packed.rest.data(), zero.data());
   // One empty carry now: a driver may compile a program at its first
@@ -172,6 +182,12 @@ GlBackend::Tables GlBackend::create_tables(const gl::PackedModel& packed, const 
     t.surface_tris =
         make("surface triangle entries {corners, which}", entries.size() * sizeof(int32_t), entries.data(), 0);
   }
+  if (!packed.layer_tris.empty()) {
+    t.layer_ntri = static_cast<int32_t>(packed.layer_tris.size());
+    t.layer_tris = make("Hertz layer triangles {corners, a_h, E*}", packed.layer_tris.size() * sizeof(gl::LayerTri),
+                        packed.layer_tris.data(), 0);
+    t.layer_touch = make("Hertz layer penalties {f_t, k_t}", packed.layer_tris.size() * 4 * sizeof(float), nullptr, 0);
+  }
   if (tool_.present) {
     t.partials =
         make("reaction partials per workgroup", static_cast<size_t>(packed.nchunk) * 8 * sizeof(float), nullptr, 0);
@@ -196,6 +212,8 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const floa
   shear_params_ = tables.shear_params, nodal_params_ = tables.nodal_params, pressure_ = tables.pressure;
   shear_stress_ = tables.shear_stress, surface_range_ = tables.surface_range, surface_tris_ = tables.surface_tris;
   partials_ = tables.partials, force_ = tables.force;
+  layer_tris_ = tables.layer_tris, layer_touch_ = tables.layer_touch;
+  if (hertz_layer_.id()) glProgramUniform1i(hertz_layer_.id(), ORGANSIM_GL_U_LAYER_TRIS, tables.layer_ntri);
   buffer_sizes_.insert(buffer_sizes_.end(), tables.sizes.begin(), tables.sizes.end());
   suture_entries_ = packed.suture_entries;
   suture_rest_.assign(suture_entries_.size(), -1.0f);
@@ -242,6 +260,8 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const floa
   if (anchors_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_ANCHOR, anchors_);
   if (partials_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_PARTIALS, partials_);
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
+  if (layer_tris_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_LAYER_TRIS, layer_tris_);
+  if (layer_touch_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_LAYER_TOUCH, layer_touch_);
 }
 
 void GlBackend::delete_model_buffers() {
@@ -249,7 +269,7 @@ void GlBackend::delete_model_buffers() {
   reaction_x_map_ = nullptr;
   if (reaction_x_) glDeleteBuffers(1, &reaction_x_);
   reaction_x_ = 0;
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &anchors_, &partials_, &force_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &anchors_, &partials_, &force_, &layer_tris_, &layer_touch_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -258,7 +278,7 @@ void GlBackend::delete_model_buffers() {
 std::vector<GLuint> GlBackend::Tables::buffers() const {
   std::vector<GLuint> out;
   for (GLuint b : {mass, chunks, springs, tets, rest, shear_params, nodal_params, pressure, shear_stress, surface_range,
-                   surface_tris, partials, force})
+                   surface_tris, partials, force, layer_tris, layer_touch})
     if (b) out.push_back(b);
   return out;
 }
@@ -269,7 +289,10 @@ std::vector<GLuint> GlBackend::Tables::buffers() const {
 // (so it must not outlive the backend that made it).
 struct GlBackend::Prepared final : PreparedModel {
   Prepared(const Model& next, const BackendTool& tool, const GlBackend& owner)
-      : PreparedModel(next), packed(gl::pack_model(next)), plan(make_step_plan(next, tool)), owner(&owner) {}
+      : PreparedModel(next),
+        packed(gl::pack_model(next, tool.hertz_layer)),
+        plan(make_step_plan(next, tool)),
+        owner(&owner) {}
   ~Prepared() override {
     if (tables) owner->discard(tables->buffers());
   }
@@ -406,7 +429,7 @@ GlBackend::~GlBackend() {
   if (status_map_) glUnmapNamedBuffer(status_);
   delete_retired_ring();
   delete_model_buffers();
-  for (GLuint b : {reaction_, status_}) {
+  for (GLuint b : {reaction_, status_, layer_out_}) {
     if (b) glDeleteBuffers(1, &b);
   }
   step_ = gl::ComputeProgram();
@@ -465,6 +488,10 @@ Plan GlBackend::plan() const {
         detail = std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
                  " surface triangles, each surface point recomputing its own triangles (broad phase: the " +
                  shape_name(tool_.shape) + " against each triangle's box), w_p f summed in triangle order" +
+                 (hertz_layer_.id() ? ", each f lowered by the sub-cell Hertz layer's offset, which "
+                                      "hertz_layer.comp solves in one workgroup per substep before the step "
+                                      "(then a storage barrier; only while the tool acts)"
+                                    : "") +
                  friction_plan(tool_) + in_step;
         break;
       case Pass::ToolContact:
@@ -489,8 +516,10 @@ Plan GlBackend::plan() const {
                                        "(latency 1 tick, no wait unless the device is a full tick behind)"});
   for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
   // The step, plus one dispatch per per-point pass before it (nodal volume
-  // term or smoothed shear element, never both); + 1 reduce per tick with a tool.
-  plan.dispatches_per_step = 1 + (plan_.has(Pass::NodalPressure) ? 1 : 0) + (plan_.has(Pass::ShearSmoothing) ? 1 : 0);
+  // term or smoothed shear element, never both) and the Hertz layer's solve
+  // while the tool acts; + 1 reduce per tick with a tool.
+  plan.dispatches_per_step = 1 + (plan_.has(Pass::NodalPressure) ? 1 : 0) + (plan_.has(Pass::ShearSmoothing) ? 1 : 0) +
+                             (hertz_layer_.id() ? 1 : 0);
   plan.syncs_per_step = 0;
   return plan;
 }
@@ -595,6 +624,17 @@ Reaction GlBackend::tick(const TickRequest& request) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_CUR, d_[cur_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_X_NEXT, x_[1 - cur_]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[1 - cur_]);
+    if (hertz_layer_.id() && tool_acts) {
+      // The layer's offset for this substep's positions, before the step reads it.
+      const Vec3 c = request.tool_at(tool_, s).origin;
+      glUseProgram(hertz_layer_.id());
+      glProgramUniform3f(hertz_layer_.id(), ORGANSIM_GL_U_TOOL_A, static_cast<float>(c.x()), static_cast<float>(c.y()),
+                         static_cast<float>(c.z()));
+      glDispatchCompute(1, 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      glUseProgram(program);
+      ++dispatches_;
+    }
     // Every nodal pressure or smoothed stress before any force that reads it.
     for (const gl::ComputeProgram* pass : {&nodal_pressure_, &shear_smoothing_}) {
       if (!pass->id()) continue;

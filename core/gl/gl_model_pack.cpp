@@ -2,13 +2,14 @@
 
 #include <string>
 
+#include "core/model/contact_layer.h"
 #include "core/model/shear_element.h"
 #include "core/util/error.h"
 #include "shaders/bindings.glsl.h"
 
 namespace organsim::gl {
 
-PackedModel pack_model(const Model& model) {
+PackedModel pack_model(const Model& model, bool hertz_layer) {
   const auto& L = model.layout;
   constexpr int32_t C = ORGANSIM_GL_CHUNK;
   if (L.chunk_size != C) {
@@ -46,6 +47,14 @@ PackedModel pack_model(const Model& model) {
       const Tri& t = model.surface[model.surface_tri[e]];
       const int32_t corner = t[0] == i ? 0 : t[1] == i ? 1 : 2;
       p.surface_entries.insert(p.surface_entries.end(), {t[0], t[1], t[2], corner});
+    }
+  }
+  if (hertz_layer) {
+    const ContactLayer layer = contact_layer(model);
+    for (const Tri& t : model.surface) {
+      const TriangleLayer tl = triangle_layer(layer, t);
+      p.layer_tris.push_back({{t[0], t[1], t[2], 0}, static_cast<float>(tl.punch_radius),
+                              static_cast<float>(tl.e_star), {0, 0}});
     }
   }
 

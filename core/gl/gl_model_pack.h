@@ -38,6 +38,16 @@ struct ShearEntry {
 };
 static_assert(sizeof(ShearEntry) == 48);
 
+// One surface triangle for the Hertz layer's solve (hertz_layer.comp's
+// `LayerTri`): its corners and core/model/contact_layer.h's values.
+struct LayerTri {
+  int32_t corners[4];    // the fourth unused
+  float punch_radius;    // m, before force_law::kHertzLayerPunchFactor
+  float e_star;          // Pa
+  float unused[2];
+};
+static_assert(sizeof(LayerTri) == 32);
+
 struct PackedModel {
   int32_t npoint = 0, nchunk = 0, npad = 0;  // npad = nchunk * C
   std::vector<float> rest;        // vec4 rest positions, m, w = 1 (npad x 4); padding copies the last point
@@ -57,6 +67,8 @@ struct PackedModel {
   // per entry ivec4 {corner ids, which corner the point is}.
   std::vector<int32_t> surface_range;
   std::vector<int32_t> surface_entries;
+  // The Hertz layer's triangles (Model::surface order); empty unless asked.
+  std::vector<LayerTri> layer_tris;
 };
 
 // Padding entries point at the lane's own point with zero parameters: a
@@ -64,7 +76,7 @@ struct PackedModel {
 // every lane of a chunk runs the same number of slots (uniform control
 // flow). A suture's entry has k < 0 (it pulls only) and its rest length when
 // tied. Throws Error(Backend) when the layout's chunk size is not the
-// kernel's workgroup size.
-PackedModel pack_model(const Model& model);
+// kernel's workgroup size. `hertz_layer` also packs layer_tris.
+PackedModel pack_model(const Model& model, bool hertz_layer = false);
 
 }  // namespace organsim::gl

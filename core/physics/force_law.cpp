@@ -24,7 +24,7 @@ double hertz_layer_offset(double force, double e_star, double radius, double pun
 
 double HertzLayer::force_along(double delta) const {
   double g = 0;
-  for (const Touch& t : touches_) g += t.c * std::max(0.0, t.m - t.k * t.c * delta);
+  for (const Touch& t : touches_) g += t.c * t.m * hertz_layer_factor(t.m, t.k, t.c, delta);
   return g;
 }
 
@@ -53,7 +53,7 @@ void HertzLayer::solve(double radius) {
   // Below: h(a) = F(a) - G(delta(a)) rises strictly with the Hertz radius a
   // on [0, a_h] (F' = 4 E* a^2 / R, delta' = 2 a (1 - a / a_h) / R >= 0, G
   // falling), h(0) = -|F_lin| < 0 < h(a_h).
-  const auto delta_at = [&](double a) { return a * a / radius - hertz_force_at(a, e_star, radius) / (2 * e_star * a_h); };
+  const auto delta_at = [&](double a) { return hertz_layer_offset_at(a, radius, a_h); };
   double lo = 0, hi = a_h, a = a_h;
   for (int iteration = 0; iteration < 100; ++iteration) {
     const double d = delta_at(a), value = hertz_force_at(a, e_star, radius) - force_along(d);

@@ -15,7 +15,6 @@
 // from E and nu, rest lengths and volumes) is the Model's business
 // (core/model); how elements are gathered and summed is each backend's.
 
-#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -435,6 +434,23 @@ inline constexpr double kHertzLayerPunchFactor = 0.8;
 // delta(F), m; 0 for F <= 0.
 double hertz_layer_offset(double force, double e_star, double radius, double punch_radius);
 
+// delta in terms of the Hertz radius a <= a_h (F = 4 E* a^3 / (3 R)):
+// a^2 / R - 2 a^3 / (3 R a_h), E* cancelling; what the solves iterate on.
+template <class Real>
+inline Real hertz_layer_offset_at(Real a, Real radius, Real punch_radius) {
+  return a * a / radius - Real(2) * a * a * a / (Real(3) * radius * punch_radius);
+}
+
+// A touching penalty of size m (N), stiffness k (N/m) and direction cosine c
+// with the contact's total, with the sphere moved back by delta (m): its
+// factor max(0, m - k c delta) / m (0 for m = 0).
+template <class Real>
+inline Real hertz_layer_factor(Real m, Real k, Real c, Real delta) {
+  if (!(m > Real(0))) return Real(0);
+  const Real lowered = m - k * c * delta;
+  return lowered > Real(0) ? lowered / m : Real(0);
+}
+
 // The layer over a sphere's touching triangles, in series with their
 // penalties. Moving the sphere back by delta along n (the direction of
 // their sum F_lin) lowers triangle t's penalty m_t = |f_t| by k_t c_t delta,
@@ -469,10 +485,7 @@ class HertzLayer {
   // Finds delta for a sphere of radius R.
   void solve(double radius);
   // The i-th added penalty's factor (1 before solve or with nothing touching).
-  double factor(size_t i) const {
-    const Touch& t = touches_[i];
-    return t.m > 0 ? std::max(0.0, t.m - t.k * t.c * delta_) / t.m : 0.0;
-  }
+  double factor(size_t i) const { return hertz_layer_factor(touches_[i].m, touches_[i].k, touches_[i].c, delta_); }
   double offset() const { return delta_; }  // m
   bool touching() const { return weight_ > 0; }
   double punch_radius() const { return kHertzLayerPunchFactor * punch_ / weight_; }  // a_h, m

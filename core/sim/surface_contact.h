@@ -5,8 +5,8 @@
 // sphere's when its segment has zero length), giving each touched point the
 // sum of w_p(t) f(t) over its touching triangles t, in ascending t and jaw
 // by jaw (the order step.comp gathers them in), each f(t) times its
-// force_law::HertzLayer factor with a sphere's sub-cell Hertz layer (CPU
-// only), then, with friction, its anchor_friction force. The kernels then add these forces in their
+// force_law::HertzLayer factor with a sphere's sub-cell Hertz layer, then,
+// with friction, its anchor_friction force. The kernels then add these forces in their
 // tool pass (add_tool_force with ToolTerm::Surface), which also sums the
 // reaction, so the reaction is minus exactly what the tissue receives.
 //
