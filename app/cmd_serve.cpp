@@ -64,9 +64,6 @@ void serve_command(const ServeArgs& args) {
   if (s.tool->spec.friction.on())
     throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve's local stiffness has no friction term: "
                                                      "remove tool.friction");
-  if (s.tool->spec.hertz_layer)
-    throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve's local stiffness has no Hertz layer term: "
-                                                     "remove tool.hertz_layer");
   s.time.duration = args.duration;
   if (s.time.ticks() > 100'000'000) throw Error(ErrorKind::Usage, "--duration: more than 1e8 ticks");
   ClientFrame frame;

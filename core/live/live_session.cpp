@@ -238,7 +238,8 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
     backend.reaction_positions(stiffness_positions_);
-    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_ends_.front().second);
+    stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_ends_.front().second,
+                                       o_.tool.hertz_layer ? &contact_layer_ : nullptr);
   }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
@@ -253,9 +254,15 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   if (recent_ends_.size() == latency + 1) maybe_surface(backend, recent_ends_.front().first, now);
 }
 
-void LiveSession::on_start(const Model& model, Backend& /*backend*/) { find_surface(model); }
+void LiveSession::on_start(const Model& model, Backend& /*backend*/) {
+  find_surface(model);
+  if (o_.tool.hertz_layer) contact_layer_ = contact_layer(model);
+}
 
-void LiveSession::on_topology_changed(const Model& next, Backend& /*backend*/) { find_surface(next); }
+void LiveSession::on_topology_changed(const Model& next, Backend& /*backend*/) {
+  find_surface(next);
+  if (o_.tool.hertz_layer) contact_layer_ = contact_layer(next);
+}
 
 void LiveSession::find_surface(const Model& model) {
   surface_points_.clear();

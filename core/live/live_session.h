@@ -26,6 +26,7 @@
 #include "core/live/client_frame.h"
 #include "core/live/live_link.h"
 #include "core/live/refusal_log.h"
+#include "core/model/contact_layer.h"
 #include "core/run/tool_driver.h"
 #include "core/scenario/events.h"
 #include "core/scenario/tool_spec.h"
@@ -173,6 +174,7 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   std::vector<Tri> surface_triangles_;
   std::vector<Vec3> positions_, surface_client_;
   std::vector<Vec3> stiffness_positions_;  // the tissue at the end of the reaction's tick (in contact)
+  ContactLayer contact_layer_;             // the Model version's, with tool.hertz_layer (the reply's stiffness)
   // Time and tool centre at the ends of the last ticks, newest last: the
   // reaction a tick returns is reaction_latency_ticks() older (GL: 1).
   std::vector<std::pair<double, Vec3>> recent_ends_;

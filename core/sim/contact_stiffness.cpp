@@ -1,5 +1,7 @@
 #include "core/sim/contact_stiffness.h"
 
+#include <stdexcept>
+
 #include "core/physics/force_law.h"
 
 namespace organsim {
@@ -68,6 +70,48 @@ Mat3 reference_surface_stiffness(const Model& model, const std::vector<Vec3>& x,
   return k;
 }
 
+Mat3 layered_surface_stiffness(const Model& model, const std::vector<Vec3>& x, const Vec3& center, double radius,
+                               double stiffness, const ContactLayer& layer) {
+  // The triangles that can touch while the centre moves by h: all the
+  // differences see the same set, and a reply costs a few of them, not a
+  // pass over the surface per difference.
+  constexpr double h = 1e-7;  // m: truncation and rounding both far below 1e-6 of k
+  const double reach = radius + 2 * h;
+  std::vector<const Tri*> near;
+  for (const Tri& t : model.surface) {
+    const Vec3 lo = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]), hi = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]);
+    if ((center.cwiseMax(lo).cwiseMin(hi) - center).squaredNorm() < reach * reach) near.push_back(&t);
+  }
+  force_law::HertzLayer hertz;
+  std::vector<Vec3> penalty;
+  // The layered reaction, as reference_surface_forces gives it, over `near`.
+  const auto reaction = [&](const Vec3& c) {
+    hertz.clear();
+    penalty.clear();
+    for (const Tri* t : near) {
+      double share[3], w[3];
+      for (int i = 0; i < 3; ++i) share[i] = model.tool_scale((*t)[i]) / model.surface_count((*t)[i]);
+      Vec3 f;
+      if (!force_law::sphere_triangle_penalty(c, radius, x[(*t)[0]], x[(*t)[1]], x[(*t)[2]], stiffness, share, f, w))
+        continue;
+      const TriangleLayer tl = triangle_layer(layer, *t);
+      hertz.add(f.data(), stiffness * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+      penalty.push_back(f);
+    }
+    hertz.solve(radius);
+    Vec3 F = Vec3::Zero();
+    for (size_t i = 0; i < penalty.size(); ++i) F -= hertz.factor(i) * penalty[i];
+    return F;
+  };
+  Mat3 k;
+  for (int j = 0; j < 3; ++j) {
+    Vec3 step = Vec3::Zero();
+    step[j] = h;
+    k.col(j) = (reaction(center + step) - reaction(center - step)) / (2 * h);
+  }
+  return k;
+}
+
 Mat3 attachment_stiffness(const Model& model, const Attachment& held, double stiffness) {
   double k = 0;
   for (int32_t p : held.points) k += stiffness * model.tool_scale(p);
@@ -75,8 +119,12 @@ Mat3 attachment_stiffness(const Model& model, const Attachment& held, double sti
 }
 
 Mat3 tool_contact_stiffness(const Model& model, const std::vector<Vec3>& x, const BackendTool& tool,
-                            const Vec3& center) {
+                            const Vec3& center, const ContactLayer* layer) {
   if (!tool.present || tool.mode != ToolMode::Push) return Mat3::Zero();
+  if (tool.hertz_layer) {
+    if (!layer) throw std::logic_error("tool_contact_stiffness: the Hertz layer's per-point data is missing");
+    return layered_surface_stiffness(model, x, center, tool.radius, tool.contact_stiffness, *layer);
+  }
   if (tool.contact == ToolContact::Surface)
     return reference_surface_stiffness(model, x, center, tool.radius, tool.contact_stiffness);
   return reference_push_stiffness(x, center, tool.radius, tool.contact_stiffness, model.tool_k_scale);

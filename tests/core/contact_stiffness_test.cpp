@@ -8,7 +8,9 @@
 // 1e-6 k leaves room and is far below the smallest entries compared (~k/10).
 #include <gtest/gtest.h>
 
+#include <iostream>
 #include <random>
+#include <stdexcept>
 
 #include "core/physics/force_law.h"
 #include "core/sim/contact_stiffness.h"
@@ -122,6 +124,37 @@ TEST(ContactStiffness, SurfaceContactStiffnessIsTheCentralDifferenceOfTheReactio
   EXPECT_LT(k(2, 2), -0.1 * kK) << "pressing deeper pushes back harder";
   BackendTool tool{true, ToolMode::Push, kR, kK, ToolContact::Surface};
   EXPECT_EQ(tool_contact_stiffness(p.model, p.x, tool, p.center), k);
+}
+
+// With the sub-cell Hertz layer the reply's K is that of the layered
+// reaction (reference_surface_forces with the layer, over the whole
+// surface; here with h ten times the function's, so the two differences do
+// not coincide), softer along the push than the layer-less contact's.
+// Tolerance: the layer's terms are smooth while the touching set holds;
+// 1e-5 k covers the differences' truncation at h = 1e-6 m, and a K that
+// left the layer out is off by 40 % of k_zz.
+TEST(ContactStiffness, WithTheHertzLayerItIsTheCentralDifferenceOfTheLayeredReaction) {
+  const Pressed p = pressed_box();
+  const ContactLayer layer = contact_layer(p.model);
+  const auto reaction = [&](const Vec3& c) {
+    std::vector<Vec3> force(p.x.size(), Vec3::Zero());
+    return reference_surface_forces(p.model, p.x, c, kR, kK, force, &layer).force;
+  };
+  BackendTool tool{true, ToolMode::Push, kR, kK, ToolContact::Surface};
+  tool.hertz_layer = true;
+  const Mat3 k = tool_contact_stiffness(p.model, p.x, tool, p.center, &layer);
+  Mat3 fd;
+  for (int j = 0; j < 3; ++j) {
+    Vec3 step = Vec3::Zero();
+    step[j] = 1e-6;
+    fd.col(j) = (reaction(p.center + step) - reaction(p.center - step)) / 2e-6;
+  }
+  expect_close(k, fd, 1e-5 * kK);
+  const Mat3 rigid = reference_surface_stiffness(p.model, p.x, p.center, kR, kK);
+  std::cout << "k_zz with the Hertz layer " << k(2, 2) << " N/m, without " << rigid(2, 2) << " N/m\n";
+  EXPECT_LT(k(2, 2), 0) << "pressing deeper still pushes back harder";
+  EXPECT_GT(k(2, 2), 0.9 * rigid(2, 2)) << "but softer than without the layer";
+  EXPECT_THROW(tool_contact_stiffness(p.model, p.x, tool, p.center), std::logic_error);
 }
 
 TEST(ContactStiffness, PointContactStiffnessIsTheCentralDifferenceOfTheReactionWithTheTissueHeld) {

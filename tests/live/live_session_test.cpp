@@ -18,6 +18,7 @@
 #include "core/live/session_scenario.h"
 #include "core/mesh/tet_mesh.h"
 #include "core/run/run.h"
+#include "core/model/contact_layer.h"
 #include "core/sim/contact_stiffness.h"
 #include "core/sim/cpu_backend.h"
 
@@ -109,6 +110,7 @@ struct Served {
 // The contact stiffness at each tick's end, from the backend's positions as the session sees them.
 struct StiffnessProbe : RunObserver {
   BackendTool tool;
+  const ContactLayer* layer = nullptr;  // with tool.hertz_layer
   std::vector<Eigen::Matrix3d> k;
   std::vector<double> t;
   std::vector<std::vector<Vec3>> x;
@@ -116,7 +118,7 @@ struct StiffnessProbe : RunObserver {
     x.emplace_back();
     backend.positions(x.back());
     t.push_back(info.t);
-    k.push_back(tool_contact_stiffness(model, x.back(), tool, info.tool_center));
+    k.push_back(tool_contact_stiffness(model, x.back(), tool, info.tool_center, layer));
   }
 };
 
@@ -237,6 +239,39 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
   EXPECT_EQ(served.live["poses_superseded"], 1);
   EXPECT_EQ(served.live["ticks"], 80);
 
+  expect_same_samples(replay(s, model, served).samples, f);
+}
+
+// With the sub-cell Hertz layer the reply carries the layered contact's
+// stiffness (softer along the push than the contact without it), and the
+// session replays bit for bit.
+TEST(LiveSession, WithTheHertzLayerTheReplyCarriesTheLayeredStiffnessAndReplays) {
+  Scenario s = cube();
+  s.tool->spec.hertz_layer = true;
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  for (int64_t k = 3; k < 70; k += 2) link.script[k] = {pose_mm("Tool", 20.3, 19.7, 51 - 0.1 * k)};
+  const ContactLayer layer = contact_layer(model);
+  StiffnessProbe probe, plain;
+  probe.tool = backend_tool(s);
+  probe.layer = &layer;
+  plain.tool = backend_tool(s);
+  plain.tool.hertz_layer = false;
+  ASSERT_TRUE(probe.tool.hertz_layer);
+  const Served served = serve(s, model, link, &probe);
+  const ForceSamples& f = served.result.samples;
+  ASSERT_EQ(link.stiffness.size(), f.size());
+  int in_contact = 0;
+  for (size_t k = 0; k < f.size(); ++k) {
+    ASSERT_EQ(link.stiffness[k], probe.k[k]) << "tick " << k;
+    if (f.contacts[k] == 0) continue;
+    ++in_contact;
+    const Eigen::Matrix3d without =
+        tool_contact_stiffness(model, probe.x[k], plain.tool, f.tool_position[k]);
+    EXPECT_LT(link.stiffness[k](2, 2), 0) << "tick " << k;
+    EXPECT_GT(link.stiffness[k](2, 2), 0.95 * without(2, 2)) << "tick " << k;
+  }
+  EXPECT_GT(in_contact, 10);
   expect_same_samples(replay(s, model, served).samples, f);
 }
 
