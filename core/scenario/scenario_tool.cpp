@@ -161,8 +161,9 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
   if (s.shape == ToolShape::Grasper && s.contact != ToolContact::Surface)
     throw r.at("contact").error("a grasper's jaws touch the surface (\"contact\": \"surface\")");
   if (const nlohmann::json* f = r.get("friction")) s.friction = parse_friction(*f, r.at("friction"), s);
-  // The layer is a sphere's Hertz law: a capsule's line contact or a
-  // grasper's jaws would need their own.
+  // The layer is a sphere's Hertz law, on by default wherever it applies: a
+  // capsule's line contact or a grasper's jaws would need their own.
+  s.hertz_layer = s.shape == ToolShape::Sphere && s.mode == ToolMode::Push && s.contact == ToolContact::Surface;
   if (auto v = r.boolean("hertz_layer")) {
     if (*v && (s.shape != ToolShape::Sphere || s.mode != ToolMode::Push || s.contact != ToolContact::Surface))
       throw r.at("hertz_layer").error(

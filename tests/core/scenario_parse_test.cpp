@@ -315,12 +315,22 @@ TEST(ScenarioParse, ToolContactIsReadAndChecked) {
   EXPECT_EQ(error_of(j), "scene.json: tool.contact: only used with \"mode\": \"push\"");
 }
 
-// tool.hertz_layer: off unless asked, carried to the backend, and refused
-// where it has no law (points, a capsule, a pulling tool).
+// tool.hertz_layer: on by default for a pushing sphere on the surface (and
+// only there), carried to the backend, may be turned off, and refused where
+// it has no law (points, a capsule, a pulling tool).
 TEST(ScenarioParse, HertzLayerIsReadAndRefusedWhereItHasNoLaw) {
   json j = minimal();
   j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}]})");
+  EXPECT_TRUE(parse(j).tool->spec.backend_tool().hertz_layer);
+  j["tool"]["hertz_layer"] = false;
   EXPECT_FALSE(parse(j).tool->spec.backend_tool().hertz_layer);
+  j["tool"].erase("hertz_layer");
+  j["tool"]["contact"] = "points";
+  EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
+  j["tool"]["contact"] = "surface";
+  j["tool"]["mode"] = "pull";
+  EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
+  j["tool"]["mode"] = "push";
   j["tool"]["hertz_layer"] = true;
   EXPECT_TRUE(parse(j).tool->spec.backend_tool().hertz_layer);
   j["tool"]["hertz_layer"] = "yes";
