@@ -327,7 +327,7 @@ TEST(ScenarioParse, HertzLayerIsReadAndRefusedWhereItHasNoLaw) {
   j["tool"].erase("hertz_layer");
   j["tool"]["contact"] = "points";
   EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
-  j["tool"]["contact"] = "surface";
+  j["tool"].erase("contact");
   j["tool"]["mode"] = "pull";
   EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
   j["tool"]["mode"] = "push";
