@@ -101,14 +101,18 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
       ASSERT_EQ(r.values[static_cast<size_t>(c + 3)], samples["torque"][i][c].get<double>()) << i;
     }
     // Then the contact stiffness dF/dc row by row (N/m): zero out of contact,
-    // its zz entry (the press direction) negative in contact.
+    // its zz entry (the press direction) never positive in contact. The
+    // reaction is of the tick's last substep and the stiffness of the
+    // positions at its end, so a grazing contact that ends within that
+    // substep has a reaction and a zero stiffness (seen once on a loaded
+    // machine, where late ticks change which poses apply when).
     ASSERT_EQ(r.length, 15u);
     const double kzz = r.values[14];
     if (samples["contacts"][i] == 0) {
       for (size_t v = 6; v < 15; ++v) ASSERT_EQ(r.values[v], 0) << i;
     } else {
-      ASSERT_LT(kzz, 0) << i;
-      ++replies_in_contact;
+      ASSERT_LE(kzz, 0) << i;
+      replies_in_contact += kzz < 0;
     }
   }
   EXPECT_GT(replies_in_contact, 100);
