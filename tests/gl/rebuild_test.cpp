@@ -21,6 +21,16 @@ namespace {
 constexpr double kDt = 1e-4;
 constexpr int kSubsteps = 10;
 
+// A tick with the tool held at `at` (tool_to moved by the caller for a path).
+TickRequest tool_held_at(const Vec3& at) {
+  TickRequest r;
+  r.dt = kDt;
+  r.substeps = kSubsteps;
+  r.tool_active = true;
+  r.tool_from = r.tool_to = at;
+  return r;
+}
+
 void run(Backend& backend, int ticks) {
   TickRequest r;
   r.dt = kDt;
@@ -103,11 +113,7 @@ TEST(GlRebuild, TheHertzLayerFollowsTheCpuReferenceAcrossACut) {
   tool.hertz_layer = true;
   auto cpu = make_cpu_backend(model, tool, {Precision::Double, 1});
   GlBackend gl(model, tool, {});
-  TickRequest r;
-  r.dt = kDt;
-  r.substeps = kSubsteps;
-  r.tool_active = true;
-  r.tool_from = r.tool_to = Vec3(0.05, 0.05, 0.058);
+  TickRequest r = tool_held_at(Vec3(0.05, 0.05, 0.058));
   std::vector<Vec3> cpu_force, gl_force;
   const auto press = [&](int ticks) {
     for (int i = 0; i < ticks; ++i) {
@@ -152,11 +158,7 @@ TEST(GlRebuild, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
     GlBackend gl(model, tool, {});
     std::future<std::unique_ptr<PreparedModel>> prepared;
     if (early) prepared = std::async(std::launch::async, [&] { return gl.prepare(cut); });
-    TickRequest r;
-    r.dt = kDt;
-    r.substeps = kSubsteps;
-    r.tool_active = true;
-    r.tool_from = r.tool_to = Vec3(0.05, 0.05, 0.065);
+    TickRequest r = tool_held_at(Vec3(0.05, 0.05, 0.065));
     for (int i = 0; i < 20; ++i) reactions[early].push_back(gl.tick(r));
     if (early) {
       gl.adopt(prepared.get());
@@ -289,11 +291,7 @@ TEST(GlRebuild, ReactionPositionsAreThoseOfTheReactionsTickAcrossAnAdopt) {
   GlBackendOptions keep;
   keep.keep_reaction_positions = true;
   GlBackend gl(model, tool, keep);
-  TickRequest r;
-  r.dt = kDt;
-  r.substeps = kSubsteps;
-  r.tool_active = true;
-  r.tool_from = r.tool_to = Vec3(0.05, 0.05, 0.045);
+  TickRequest r = tool_held_at(Vec3(0.05, 0.05, 0.045));
   std::vector<Vec3> before, kept;
   gl.tick(r);
   for (int i = 1; i < 12; ++i) {
