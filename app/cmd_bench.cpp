@@ -95,6 +95,7 @@ BackendTool bench_tool(const BenchArgs& args) {
   if (args.tool == "none") return tool;
   tool = {true, ToolMode::Push, kBenchToolRadius, 500.0,
           args.tool == "points" ? ToolContact::Points : ToolContact::Surface};
+  tool.hertz_layer = tool.contact == ToolContact::Surface;  // as a scenario's sphere on the surface
   return tool;
 }
 
