@@ -294,7 +294,11 @@ Scenario parse_scenario(const nlohmann::json& j, const std::filesystem::path& ba
   if (const auto* f = r.get("fixed")) s.fixed = parse_fixed(*f, r.at("fixed"));
   if (auto g = r.vec3("gravity")) s.gravity = *g;
   if (const auto* t = r.get("time")) s.time = parse_time(*t, r.at("time"));
-  if (const auto* t = r.get("tool")) s.tool = parse_tool(*t, r.at("tool"));
+  if (const auto* t = r.get("tool")) {
+    bool elastic = !s.material.spring_stiffness;
+    for (const LabelMaterial& m : s.materials) elastic = elastic && !m.material.spring_stiffness;
+    s.tool = parse_tool(*t, r.at("tool"), elastic);
+  }
   if (const auto* b = r.get("backend")) s.backend = parse_backend(*b, r.at("backend"));
   if (const auto* o = r.get("outputs")) s.outputs = parse_outputs(*o, r.at("outputs"));
   if (const auto* e = r.get("events")) s.events = parse_events(*e, r.at("events"));

@@ -5,7 +5,9 @@
 
 namespace organsim::scenario_detail {
 
-ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at);
+// `elastic`: every material gives E (none a spring_stiffness), which the
+// sub-cell Hertz layer needs.
+ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at, bool elastic = true);
 OutputsDef parse_outputs(const nlohmann::json& j, const JsonPath& at);
 EventsDef parse_events(const nlohmann::json& j, const JsonPath& at);
 

@@ -95,7 +95,7 @@ Friction parse_friction(const nlohmann::json& j, const JsonPath& at, const ToolS
 }
 }  // namespace
 
-ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
+ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at, bool elastic) {
   ObjectReader r(j, at);
   ToolDef tool;
   ToolSpec& s = tool.spec;
@@ -162,13 +162,18 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at) {
     throw r.at("contact").error("a grasper's jaws touch the surface (\"contact\": \"surface\")");
   if (const nlohmann::json* f = r.get("friction")) s.friction = parse_friction(*f, r.at("friction"), s);
   // The layer is a sphere's Hertz law, on by default wherever it applies: a
-  // capsule's line contact or a grasper's jaws would need their own.
-  s.hertz_layer = s.shape == ToolShape::Sphere && s.mode == ToolMode::Push && s.contact == ToolContact::Surface;
+  // capsule's line contact or a grasper's jaws would need their own, and a
+  // material of spring constants has no E for it.
+  const bool sphere = s.shape == ToolShape::Sphere && s.mode == ToolMode::Push && s.contact == ToolContact::Surface;
+  s.hertz_layer = sphere && elastic;
   if (auto v = r.boolean("hertz_layer")) {
-    if (*v && (s.shape != ToolShape::Sphere || s.mode != ToolMode::Push || s.contact != ToolContact::Surface))
+    if (*v && !sphere)
       throw r.at("hertz_layer").error(
           "the sub-cell Hertz layer is a sphere's surface contact (\"shape\": \"sphere\", \"mode\": \"push\", "
           "\"contact\": \"surface\")");
+    if (*v && !elastic)
+      throw r.at("hertz_layer").error(
+          "the sub-cell Hertz layer needs the material's young_modulus (a spring_stiffness gives none)");
     s.hertz_layer = *v;
   }
   // Without friction a grasper's jaws only squeeze: it could hold nothing.

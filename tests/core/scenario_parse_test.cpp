@@ -348,6 +348,20 @@ TEST(ScenarioParse, HertzLayerIsReadAndRefusedWhereItHasNoLaw) {
   EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
 }
 
+// A material of spring constants has no E: the layer is off by default
+// there and refused when asked for.
+TEST(ScenarioParse, HertzLayerNeedsAMaterialWithAYoungsModulus) {
+  json j = minimal();
+  j["material"] = json::parse(R"({"spring_stiffness": 50})");
+  j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}]})");
+  EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
+  j["tool"]["hertz_layer"] = true;
+  EXPECT_EQ(error_of(j), "scene.json: tool.hertz_layer: the sub-cell Hertz layer needs the material's young_modulus "
+                         "(a spring_stiffness gives none)");
+  j["material"] = json::parse(R"({"young_modulus": 5000})");
+  EXPECT_TRUE(parse(j).tool->spec.hertz_layer);
+}
+
 // The capsule's fields and the keyframes' orientation: read, and every
 // mistake refused with the path and what was expected.
 TEST(ScenarioParse, CapsuleAndOrientationAreReadAndChecked) {
