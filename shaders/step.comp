@@ -72,7 +72,7 @@ layout(std430, binding = ORGANSIM_GL_B_SURFACE_TRIS) readonly buffer SurfaceTris
 layout(std430, binding = ORGANSIM_GL_B_ANCHOR) buffer Anchors { vec4 anchors[]; };  // each point's own
 #endif
 #ifdef HERTZ_LAYER
-layout(std430, binding = ORGANSIM_GL_B_LAYER_OUT) readonly buffer LayerOut { vec4 layer; };  // {n, delta}, hertz_layer.comp
+layout(std430, binding = ORGANSIM_GL_B_LAYER_OUT) readonly buffer LayerOut { vec4 layer_result; };  // {n, delta}, hertz_layer.comp
 #endif
 #if defined(TOOL_PUSH) || defined(TOOL_PULL) || defined(TOOL_SURFACE)
 layout(std430, binding = ORGANSIM_GL_B_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
@@ -272,7 +272,8 @@ void main() {
 #ifdef HERTZ_LAYER
           // The penalty with the sphere moved back by the layer's offset.
           const float m = length(ft);
-          ft *= hertz_layer_factor(m, u_tool_k * min(min(share.x, share.y), share.z), dot(ft, layer.xyz) / m, layer.w);
+          const float k_t = u_tool_k * min(min(share.x, share.y), share.z);
+          ft *= hertz_layer_factor(m, k_t, dot(ft, layer_result.xyz) / m, layer_result.w);
 #endif
           fc += w[t.w] * ft;
           touching = true;
