@@ -10,8 +10,13 @@
 #define ORGANSIM_GL_CHUNK 64
 // Workgroup size of the reaction reduction (one workgroup sums all partials).
 #define ORGANSIM_GL_REDUCE_SIZE 64
-// Workgroup size of the Hertz layer's solve (one workgroup per substep).
+// Workgroup size of the Hertz layer's passes: its touch pass takes one
+// triangle per invocation, and its solve (one workgroup per substep) one
+// entry of each block of this many triangles in contact.
 #define ORGANSIM_GL_LAYER_SIZE 256
+// Most blocks of LAYER_SIZE triangles the solve can list (shared memory):
+// 524,288 surface triangles.
+#define ORGANSIM_GL_LAYER_MAX_BLOCKS 2048
 // Slots of the persistently mapped reaction ring read back one tick late.
 #define ORGANSIM_GL_READBACK_SLOTS 4
 
@@ -41,8 +46,9 @@
 #define ORGANSIM_GL_B_ANCHOR 20   // vec4 {friction anchor in the tool frame (m), anchored 0/1} (npad); FRICTION
 #define ORGANSIM_GL_B_CARRY 21    // int: the old point each appended lane copies (carry_state.comp, an adopt)
 #define ORGANSIM_GL_B_LAYER_TRIS 22   // {ivec4 corners, vec4 {punch radius (before the factor), E*, 0, 0}} per surface triangle; HERTZ_LAYER
-#define ORGANSIM_GL_B_LAYER_TOUCH 23  // vec4 {f_t (N), k_t (N/m)} per surface triangle, k_t 0 when it does not touch (hertz_layer.comp)
+#define ORGANSIM_GL_B_LAYER_TOUCH 23  // vec4 {f_t (N), k_t (N/m)} per surface triangle, k_t 0 when it does not touch (hertz_layer_touch.comp)
 #define ORGANSIM_GL_B_LAYER_OUT 24    // vec4 {n, delta (m)}: the contact's direction and the layer's offset this substep
+#define ORGANSIM_GL_B_LAYER_BLOCKS 25 // uint per block of LAYER_SIZE layer triangles: how many touch (hertz_layer_touch.comp)
 
 // Uniform locations (layout(location = N) uniform ...).
 #define ORGANSIM_GL_U_DT 0            // float dt, s
@@ -65,7 +71,7 @@
 #define ORGANSIM_GL_U_JAW_AXIS 19     // vec3 the grasper's jaw axis in the world (its first jaw closes along -it); GRASPER
 #define ORGANSIM_GL_U_CARRY_FIRST 20  // int: the first appended lane (carry_state.comp)
 #define ORGANSIM_GL_U_CARRY_COUNT 21  // int: appended lanes to fill (carry_state.comp)
-#define ORGANSIM_GL_U_LAYER_TRIS 22   // int: surface triangles (hertz_layer.comp)
+#define ORGANSIM_GL_U_LAYER_TRIS 22   // int: surface triangles (hertz_layer_touch.comp, hertz_layer.comp)
 #define ORGANSIM_GL_U_LAYER_FACTOR 23 // float: force_law::kHertzLayerPunchFactor (hertz_layer.comp)
 
 #endif

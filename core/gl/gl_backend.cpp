@@ -86,9 +86,11 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
   carry_ = gl::ComputeProgram("carry_state.comp", {});
   if (smoothed) shear_smoothing_ = gl::ComputeProgram("shear_smoothing.comp", {split});
   if (layered) {
+    hertz_layer_touch_ = gl::ComputeProgram("hertz_layer_touch.comp", {});
     hertz_layer_ = gl::ComputeProgram("hertz_layer.comp", {});
-    glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_TOOL_RADIUS, static_cast<float>(tool.radius));
-    glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
+    for (GLuint program : {hertz_layer_touch_.id(), hertz_layer_.id()})
+      glProgramUniform1f(program, ORGANSIM_GL_U_TOOL_RADIUS, static_cast<float>(tool.radius));
+    glProgramUniform1f(hertz_layer_touch_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
     glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_LAYER_FACTOR,
                        static_cast<float>(force_law::kHertzLayerPunchFactor));
     // The solve's result, read by step.comp: one vec4, the same for every Model version.
@@ -187,6 +189,8 @@ GlBackend::Tables GlBackend::create_tables(const gl::PackedModel& packed, const 
     t.layer_tris = make("Hertz layer triangles {corners, a_h, E*}", packed.layer_tris.size() * sizeof(gl::LayerTri),
                         packed.layer_tris.data(), 0);
     t.layer_touch = make("Hertz layer penalties {f_t, k_t}", packed.layer_tris.size() * 4 * sizeof(float), nullptr, 0);
+    t.layer_blocks = make("Hertz layer triangles touching per block", gl::layer_blocks(packed) * sizeof(uint32_t),
+                          nullptr, 0);
   }
   if (tool_.present) {
     t.partials =
@@ -212,8 +216,10 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const floa
   shear_params_ = tables.shear_params, nodal_params_ = tables.nodal_params, pressure_ = tables.pressure;
   shear_stress_ = tables.shear_stress, surface_range_ = tables.surface_range, surface_tris_ = tables.surface_tris;
   partials_ = tables.partials, force_ = tables.force;
-  layer_tris_ = tables.layer_tris, layer_touch_ = tables.layer_touch;
-  if (hertz_layer_.id()) glProgramUniform1i(hertz_layer_.id(), ORGANSIM_GL_U_LAYER_TRIS, tables.layer_ntri);
+  layer_tris_ = tables.layer_tris, layer_touch_ = tables.layer_touch, layer_blocks_ = tables.layer_blocks;
+  layer_nblock_ = gl::layer_blocks(packed);
+  for (GLuint program : {hertz_layer_touch_.id(), hertz_layer_.id()})
+    if (program) glProgramUniform1i(program, ORGANSIM_GL_U_LAYER_TRIS, tables.layer_ntri);
   buffer_sizes_.insert(buffer_sizes_.end(), tables.sizes.begin(), tables.sizes.end());
   suture_entries_ = packed.suture_entries;
   suture_rest_.assign(suture_entries_.size(), -1.0f);
@@ -262,6 +268,7 @@ void GlBackend::install(Tables tables, const gl::PackedModel& packed, const floa
   if (force_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_FORCE, force_);
   if (layer_tris_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_LAYER_TRIS, layer_tris_);
   if (layer_touch_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_LAYER_TOUCH, layer_touch_);
+  if (layer_blocks_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_LAYER_BLOCKS, layer_blocks_);
 }
 
 void GlBackend::delete_model_buffers() {
@@ -269,7 +276,7 @@ void GlBackend::delete_model_buffers() {
   reaction_x_map_ = nullptr;
   if (reaction_x_) glDeleteBuffers(1, &reaction_x_);
   reaction_x_ = 0;
-  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &anchors_, &partials_, &force_, &layer_tris_, &layer_touch_}) {
+  for (GLuint* b : {&x_[0], &x_[1], &d_[0], &d_[1], &mass_, &chunks_, &springs_, &tets_, &nodal_params_, &pressure_, &rest_, &shear_params_, &shear_stress_, &attach_, &surface_range_, &surface_tris_, &anchors_, &partials_, &force_, &layer_tris_, &layer_touch_, &layer_blocks_}) {
     if (*b) glDeleteBuffers(1, b);
     *b = 0;
   }
@@ -278,7 +285,7 @@ void GlBackend::delete_model_buffers() {
 std::vector<GLuint> GlBackend::Tables::buffers() const {
   std::vector<GLuint> out;
   for (GLuint b : {mass, chunks, springs, tets, rest, shear_params, nodal_params, pressure, shear_stress, surface_range,
-                   surface_tris, partials, force, layer_tris, layer_touch})
+                   surface_tris, partials, force, layer_tris, layer_touch, layer_blocks})
     if (b) out.push_back(b);
   return out;
 }
@@ -488,9 +495,12 @@ Plan GlBackend::plan() const {
         detail = std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
                  " surface triangles, each surface point recomputing its own triangles (broad phase: the " +
                  shape_name(tool_.shape) + " against each triangle's box), w_p f summed in triangle order" +
-                 (hertz_layer_.id() ? ", each f lowered by the sub-cell Hertz layer's offset, which "
-                                      "hertz_layer.comp solves in one workgroup per substep before the step "
-                                      "(then a storage barrier; only while the tool acts)"
+                 (hertz_layer_.id() ? ", each f lowered by the sub-cell Hertz layer's offset: before the step, "
+                                      "hertz_layer_touch.comp's penalties (one invocation per triangle, " +
+                                          std::to_string(layer_nblock_) +
+                                          " workgroups), then hertz_layer.comp's solve over the blocks in contact "
+                                          "(one workgroup), each followed by a storage barrier; only while the tool "
+                                          "acts"
                                     : "") +
                  friction_plan(tool_) + in_step;
         break;
@@ -516,10 +526,10 @@ Plan GlBackend::plan() const {
                                        "(latency 1 tick, no wait unless the device is a full tick behind)"});
   for (const auto& [what, bytes] : buffer_sizes_) plan.buffers.push_back({what, bytes});
   // The step, plus one dispatch per per-point pass before it (nodal volume
-  // term or smoothed shear element, never both) and the Hertz layer's solve
+  // term or smoothed shear element, never both) and the Hertz layer's two
   // while the tool acts; + 1 reduce per tick with a tool.
   plan.dispatches_per_step = 1 + (plan_.has(Pass::NodalPressure) ? 1 : 0) + (plan_.has(Pass::ShearSmoothing) ? 1 : 0) +
-                             (hertz_layer_.id() ? 1 : 0);
+                             (hertz_layer_.id() ? 2 : 0);
   plan.syncs_per_step = 0;
   return plan;
 }
@@ -627,13 +637,16 @@ Reaction GlBackend::tick(const TickRequest& request) {
     if (hertz_layer_.id() && tool_acts) {
       // The layer's offset for this substep's positions, before the step reads it.
       const Vec3 c = request.tool_at(tool_, s).origin;
+      glUseProgram(hertz_layer_touch_.id());
+      glProgramUniform3f(hertz_layer_touch_.id(), ORGANSIM_GL_U_TOOL_A, static_cast<float>(c.x()),
+                         static_cast<float>(c.y()), static_cast<float>(c.z()));
+      glDispatchCompute(static_cast<GLuint>(layer_nblock_), 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       glUseProgram(hertz_layer_.id());
-      glProgramUniform3f(hertz_layer_.id(), ORGANSIM_GL_U_TOOL_A, static_cast<float>(c.x()), static_cast<float>(c.y()),
-                         static_cast<float>(c.z()));
       glDispatchCompute(1, 1, 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       glUseProgram(program);
-      ++dispatches_;
+      dispatches_ += 2;
     }
     // Every nodal pressure or smoothed stress before any force that reads it.
     for (const gl::ComputeProgram* pass : {&nodal_pressure_, &shear_smoothing_}) {

@@ -96,7 +96,7 @@ class GlBackend final : public Backend {
   struct Tables {
     GLuint mass = 0, chunks = 0, springs = 0, tets = 0, rest = 0, shear_params = 0, nodal_params = 0, pressure = 0,
            shear_stress = 0, surface_range = 0, surface_tris = 0, partials = 0, force = 0, layer_tris = 0,
-           layer_touch = 0;
+           layer_touch = 0, layer_blocks = 0;
     int32_t layer_ntri = 0;  // triangles in layer_tris
     std::vector<std::pair<const char*, size_t>> sizes;  // for plan().buffers
     std::vector<GLuint> buffers() const;                // the non-zero ids
@@ -124,20 +124,20 @@ class GlBackend final : public Backend {
   mutable std::unique_ptr<gl::EglContext> upload_context_;
   mutable std::mutex upload_mutex_;  // upload_context_ and discarded_
   mutable std::vector<GLuint> discarded_;
-  int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0;
+  int32_t npoint_ = 0, npad_ = 0, nchunk_ = 0, layer_nblock_ = 0;
   StepPlan plan_;  // the passes of the current version's step (the shader variants follow it)
   int32_t threads_per_point_ = 1;
 
   // nodal_pressure_ with the nodal volume term only, shear_smoothing_ with the
   // smoothed shear element only (id 0 otherwise).
-  gl::ComputeProgram step_, reduce_, nodal_pressure_, shear_smoothing_, carry_, hertz_layer_;
+  gl::ComputeProgram step_, reduce_, nodal_pressure_, shear_smoothing_, carry_, hertz_layer_touch_, hertz_layer_;
   // Ping-pong pairs: x_[cur_], d_[cur_] hold x_t and d_t = x_t - x_{t-1};
   // the step writes x_[1 - cur_], d_[1 - cur_].
   std::array<GLuint, 2> x_{}, d_{};
   int cur_ = 0;
   GLuint mass_ = 0, chunks_ = 0, springs_ = 0, tets_ = 0, nodal_params_ = 0, pressure_ = 0, rest_ = 0, shear_params_ = 0,
          shear_stress_ = 0, attach_ = 0, surface_range_ = 0, surface_tris_ = 0, anchors_ = 0, partials_ = 0, reaction_ = 0, force_ = 0, status_ = 0,
-         layer_tris_ = 0, layer_touch_ = 0, layer_out_ = 0;
+         layer_tris_ = 0, layer_touch_ = 0, layer_blocks_ = 0, layer_out_ = 0;
   const float* reaction_map_ = nullptr;   // persistently mapped ring (READBACK_SLOTS x 8 floats)
   const uint32_t* status_map_ = nullptr;  // persistently mapped ring (READBACK_SLOTS uints)
   // keep_reaction_positions: x at the end of each tick, persistently

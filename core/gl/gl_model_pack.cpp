@@ -1,6 +1,11 @@
 #include "core/gl/gl_model_pack.h"
 
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <numeric>
 #include <string>
+#include <vector>
 
 #include "core/model/contact_layer.h"
 #include "core/model/shear_element.h"
@@ -8,6 +13,44 @@
 #include "shaders/bindings.glsl.h"
 
 namespace organsim::gl {
+namespace {
+
+// Spreads the low 10 bits of v to every third bit.
+uint32_t spread_bits(uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
+// The surface triangles sorted by the Morton code of their rest centroids
+// (10 bits per axis over the rest bounding box), ties in Model::surface order.
+std::vector<int32_t> morton_order(const Model& model) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
+  for (const Vec3& x : model.rest_position) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  const Vec3 scale = (hi - lo).cwiseMax(Vec3::Constant(1e-12)).cwiseInverse() * 1023.0;
+  std::vector<uint32_t> code(model.surface.size());
+  for (size_t i = 0; i < model.surface.size(); ++i) {
+    const Tri& t = model.surface[i];
+    const Vec3 c = (model.rest_position[t[0]] + model.rest_position[t[1]] + model.rest_position[t[2]]) / 3.0;
+    const Vec3 q = ((c - lo).cwiseProduct(scale)).cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Constant(1023.0));
+    code[i] = spread_bits(static_cast<uint32_t>(q.x())) | (spread_bits(static_cast<uint32_t>(q.y())) << 1) |
+              (spread_bits(static_cast<uint32_t>(q.z())) << 2);
+  }
+  std::vector<int32_t> order(model.surface.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return code[a] < code[b]; });
+  return order;
+}
+
+}  // namespace
+
+int32_t layer_blocks(const PackedModel& packed) {
+  const auto n = static_cast<int32_t>(packed.layer_tris.size());
+  return (n + ORGANSIM_GL_LAYER_SIZE - 1) / ORGANSIM_GL_LAYER_SIZE;
+}
 
 PackedModel pack_model(const Model& model, bool hertz_layer) {
   const auto& L = model.layout;
@@ -51,10 +94,17 @@ PackedModel pack_model(const Model& model, bool hertz_layer) {
   }
   if (hertz_layer) {
     const ContactLayer layer = contact_layer(model);
-    for (const Tri& t : model.surface) {
+    for (const int32_t i : morton_order(model)) {
+      const Tri& t = model.surface[i];
       const TriangleLayer tl = triangle_layer(layer, t);
       p.layer_tris.push_back({{t[0], t[1], t[2], 0}, static_cast<float>(tl.punch_radius),
                               static_cast<float>(tl.e_star), {0, 0}});
+    }
+    if (layer_blocks(p) > ORGANSIM_GL_LAYER_MAX_BLOCKS) {
+      throw Error(ErrorKind::Backend, "GL backend: the Hertz layer's solve lists at most " +
+                                          std::to_string(ORGANSIM_GL_LAYER_MAX_BLOCKS * ORGANSIM_GL_LAYER_SIZE) +
+                                          " surface triangles, the model has " + std::to_string(model.nsurface()) +
+                                          " (run it with \"hertz_layer\": false or on the CPU backend)");
     }
   }
 

@@ -67,7 +67,9 @@ struct PackedModel {
   // per entry ivec4 {corner ids, which corner the point is}.
   std::vector<int32_t> surface_range;
   std::vector<int32_t> surface_entries;
-  // The Hertz layer's triangles (Model::surface order); empty unless asked.
+  // The Hertz layer's triangles in Morton order of their rest centroids, so
+  // that a tool's contact falls in few blocks of ORGANSIM_GL_LAYER_SIZE
+  // (hertz_layer.comp reads only those); empty unless asked.
   std::vector<LayerTri> layer_tris;
 };
 
@@ -76,7 +78,11 @@ struct PackedModel {
 // every lane of a chunk runs the same number of slots (uniform control
 // flow). A suture's entry has k < 0 (it pulls only) and its rest length when
 // tied. Throws Error(Backend) when the layout's chunk size is not the
-// kernel's workgroup size. `hertz_layer` also packs layer_tris.
+// kernel's workgroup size. `hertz_layer` also packs layer_tris (Error(Backend)
+// beyond ORGANSIM_GL_LAYER_MAX_BLOCKS blocks of them).
 PackedModel pack_model(const Model& model, bool hertz_layer = false);
+
+// Blocks of ORGANSIM_GL_LAYER_SIZE layer triangles (the touch pass's workgroups).
+int32_t layer_blocks(const PackedModel& packed);
 
 }  // namespace organsim::gl

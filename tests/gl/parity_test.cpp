@@ -19,8 +19,11 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <set>
 
 #include "core/gl/gl_backend.h"
+#include "core/gl/gl_model_pack.h"
+#include "shaders/bindings.glsl.h"
 #include "core/sim/cpu_backend.h"
 #include "gl_test_scenes.h"
 
@@ -308,8 +311,9 @@ TEST(GlParity, LeanSceneMatchesTheDoubleReference) {
 }
 
 // A 1 cm sphere pressed 3 mm into 1.25 cm cells with the sub-cell Hertz
-// layer: hertz_layer.comp's solve (one workgroup per substep, float) and
-// step.comp's factors follow the double reference's HertzLayer over the
+// layer: hertz_layer_touch.comp's penalties, hertz_layer.comp's solve over
+// the blocks in contact (one workgroup per substep, float) and step.comp's
+// factors follow the double reference's HertzLayer over the
 // trajectory, with 1 and 8 invocations per point; the layer acted (the peak
 // is well below the same press without it).
 TEST(GlParity, PushWithTheHertzLayerMatchesTheDoubleReference) {
@@ -330,9 +334,36 @@ TEST(GlParity, PushWithTheHertzLayerMatchesTheDoubleReference) {
     EXPECT_LT(c.peak_force, 0.9 * plain_peak);
     EXPECT_LT(c.position, 1e-5);
     EXPECT_LT(c.force, 1e-4);
-    // The layer's solve before every substep's step, while the tool acts.
-    EXPECT_EQ(c.dispatches, kTicks * (2 * kSubsteps + 1) + 3);
+    // A step per substep (GL's extra tick has one) and a reduce per tick,
+    // plus the layer's two passes before every step, while the tool acts.
+    const int64_t steps = kTicks * kSubsteps + 1;
+    EXPECT_EQ(c.dispatches, steps + (kTicks + 1) + 2 * steps);
   }
+}
+
+// A 2 cm sphere pressed 3 mm into the middle of a finer box's top face: its
+// contact falls in several of the layer's blocks of ORGANSIM_GL_LAYER_SIZE
+// triangles (checked on the packed table), and the solve over all of them
+// follows the double reference with the same tolerances.
+TEST(GlParity, TheHertzLayerSolvesAContactAcrossSeveralBlocks) {
+  const Model model = gl_test::box_model(16, 16, 2, true, 2e4, Vec3(0, 0, -9.81));
+  BackendTool tool{true, ToolMode::Push, 0.02, 200.0};
+  tool.hertz_layer = true;
+  const Vec3 start(0.051, 0.049, 0.071), end(0.051, 0.049, 0.067);
+  const gl::PackedModel packed = gl::pack_model(model, true);
+  std::set<size_t> blocks;
+  for (size_t i = 0; i < packed.layer_tris.size(); ++i) {
+    const int32_t* corner = packed.layer_tris[i].corners;
+    for (int k = 0; k < 3; ++k)
+      if ((model.rest_position[corner[k]] - end).norm() < tool.radius) blocks.insert(i / ORGANSIM_GL_LAYER_SIZE);
+  }
+  ASSERT_GE(blocks.size(), 2u);
+  const Comparison c = compare(model, tool, [&](int n) { return tool_request(n, start, end); });
+  std::cout << "Hertz layer across " << blocks.size() << " blocks: position " << c.position << " of diagonal, force "
+            << c.force << " of peak " << c.peak_force << " N, " << c.max_contacts << " contacts\n";
+  ASSERT_GT(c.max_contacts, 10);
+  EXPECT_LT(c.position, 1e-5);
+  EXPECT_LT(c.force, 1e-4);
 }
 
 }  // namespace
