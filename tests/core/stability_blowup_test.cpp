@@ -12,6 +12,7 @@
 #include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/util/error.h"
+#include "tests/core/forwarding_backend.h"
 #include "tests/core/stability_test_util.h"
 
 namespace organsim {
@@ -190,16 +191,11 @@ TEST(StabilityBlowup, GeometryPassIsSpreadOverTheIntervalAndStillFindsAStretched
 // tick returns the reaction of the tick before (latency 1), and
 // reaction_positions() are that tick's end positions, kept without waiting.
 // Counts what a monitor reads.
-class LaggingBackend final : public Backend {
+class LaggingBackend final : public test::ForwardingBackend {
  public:
-  explicit LaggingBackend(std::unique_ptr<Backend> inner) : inner_(std::move(inner)) {}
+  using ForwardingBackend::ForwardingBackend;
   mutable int positions_reads = 0, reaction_reads = 0;
 
-  std::string name() const override { return inner_->name(); }
-  std::string device() const override { return inner_->device(); }
-  std::string precision() const override { return inner_->precision(); }
-  Plan plan() const override { return inner_->plan(); }
-  const StepPlan& step_plan() const override { return inner_->step_plan(); }
   int32_t reaction_latency_ticks() const override { return 1; }
   Reaction tick(const TickRequest& request) override {
     inner_->positions(before_);  // the end of the tick before: the one this tick's reaction is of
@@ -209,8 +205,6 @@ class LaggingBackend final : public Backend {
     started_ = true;
     return out;
   }
-  void attach(const Attachment& a) override { inner_->attach(a); }
-  void release() override { inner_->release(); }
   void positions(std::vector<Vec3>& out) const override {
     ++positions_reads;
     inner_->positions(out);
@@ -220,13 +214,8 @@ class LaggingBackend final : public Backend {
     ++reaction_reads;
     out = before_;
   }
-  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override { inner_->set_state(x, x_prev); }
-  std::unique_ptr<PreparedModel> prepare(const Model& next) const override { return inner_->prepare(next); }
-  void adopt(std::unique_ptr<PreparedModel> prepared) override { inner_->adopt(std::move(prepared)); }
-  double time() const override { return inner_->time(); }
 
  private:
-  std::unique_ptr<Backend> inner_;
   std::vector<Vec3> before_;
   Reaction last_;
   bool started_ = false;

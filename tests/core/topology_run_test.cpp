@@ -2,6 +2,9 @@
 // through drops its lower part in free fall, threaded and single-threaded
 // runs stay bit-identical across cuts, and meta.events lists each change.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -11,6 +14,7 @@
 #include "core/stability/critical_step.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "tests/core/forwarding_backend.h"
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
@@ -201,6 +205,38 @@ TEST(TopologyRun, ACutOffTheTicksPathStepsTheOldModelUntilItsAppliedTick) {
   EXPECT_NE(b.ticks.x[30], a.ticks.x[30]);
   for (size_t k = 0; k < 60; ++k) ASSERT_EQ(b.ticks.x[k], b2.ticks.x[k]) << "tick " << k;
   EXPECT_EQ(b.result.meta.extra["final_points"], a.result.meta.extra["final_points"]);
+}
+
+// The nice value of the calling thread (Linux keeps one per thread).
+int this_threads_nice() { return getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid))); }
+
+// Records the nice value of the thread that prepares a change's tables.
+class NiceOfPrepare final : public test::ForwardingBackend {
+ public:
+  using ForwardingBackend::ForwardingBackend;
+  mutable int nice = -100;
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
+    nice = this_threads_nice();
+    return inner_->prepare(next);
+  }
+};
+
+// The worker that makes a change off the tick's path runs at the lowest
+// priority (nice 19), so that on a machine whose cores the run loop and a
+// live client share it takes idle time, not the ticks'; the loop's own
+// thread keeps its priority.
+TEST(TopologyRun, TheWorkerOffTheTicksPathYieldsToTheRunLoop) {
+  Scenario later = hanging_block();
+  later.events.cuts[0].applied_at = 0.025;
+  const Model model = block_model(later);
+  NiceOfPrepare backend(make_cpu_backend(model, backend_tool(later), {Precision::Double, 1}));
+  RunOptions options;
+  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "topology_off_path_nice";
+  const int loop_nice = this_threads_nice();
+  const RunResult result = run_scenario(later, model, backend, options);
+  ASSERT_EQ(result.meta.extra["events"][0]["applied_t"], 25 * later.time.tick());
+  EXPECT_EQ(backend.nice, 19);
+  EXPECT_EQ(this_threads_nice(), loop_nice);
 }
 
 TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {
