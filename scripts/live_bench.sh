@@ -5,7 +5,8 @@
 # poses at 1 kHz on localhost, pressing the tool into the liver over the first
 # half and holding it there. Prints ticks served, late ticks, reply latency
 # (receipt of a pose to the force reply of its tick: median, p99, max) and
-# the real-time factor from the force log's meta, with the CPU and the load.
+# the real-time factor from the force log's meta, with the CPU and the load,
+# and the CPU time of the reply's stiffness on each tick in contact.
 # ORGANSIM_LIVE_BENCH_SCENARIO=FILE serves another scenario of examples/liver.off
 # (e.g. the same one meshed finer, for a GPU); the client's path is the same.
 # With ORGANSIM_LIVE_BENCH_CUT=S the client's tool points down into the liver
@@ -61,6 +62,8 @@ print(f"cpu:      {cpu}, {os.cpu_count()} hardware threads, load average {os.get
 print(f"model:    {meta['points']} points on {meta['backend']} ({meta['precision']}), dt {meta['dt']} s x {meta['substeps']}")
 print(f"served:   {live['ticks']} ticks, {live['late_ticks']} late, real-time factor {live['real_time_factor']:.3f}")
 print(f"latency:  median {lat['median_ms']:.3f} ms, p99 {lat['p99_ms']:.3f} ms, max {lat['max_ms']:.3f} ms over {lat['count']} poses")
+st = live["reply_stiffness"]
+print(f"stiffness: median {st['median_ms']:.3f} ms, p99 {st['p99_ms']:.3f} ms, max {st['max_ms']:.3f} ms of CPU before each of {st['count']} replies in contact")
 peak = max((sum(c * c for c in f) ** 0.5 for f in json.load(open(sys.argv[1]))["samples"]["force"]), default=0)
 slow = ", ".join(f"tick {s['tick']} {s['ms']:.1f} ms" for s in live.get("slowest_ticks", []))
 print(f"slowest:  {slow} (wall time from the reply before)")

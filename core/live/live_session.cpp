@@ -237,9 +237,11 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   }
   Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
+    const LiveClock::time_point begin = LiveClock::now();
     backend.reaction_positions(stiffness_positions_);
     stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_ends_.front().second,
                                        o_.tool.hertz_layer ? &contact_layer_ : nullptr);
+    stiffness_seconds_.push_back(seconds(LiveClock::now() - begin));
   }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
@@ -326,6 +328,7 @@ void LiveSession::note_tick_wall(int64_t tick, double seconds) {
 
 void LiveSession::add_meta(nlohmann::json& extra) const {
   std::vector<double> all(latencies_.begin(), latencies_.end());
+  std::vector<double> stiffness(stiffness_seconds_.begin(), stiffness_seconds_.end());
   nlohmann::json poses = nlohmann::json::array();
   for (const AppliedPose& a : applied_) {
     poses.push_back({{"tick", a.tick},
@@ -343,6 +346,7 @@ void LiveSession::add_meta(nlohmann::json& extra) const {
       {"late_ticks", late_},
       {"slowest_ticks", slowest},
       {"latency", latency_json(summarise_latency(all))},
+      {"reply_stiffness", latency_json(summarise_latency(stiffness))},
       {"real_time_factor", wall_seconds_ > 0 ? end_time_ / wall_seconds_ : 0.0},
       {"wall_seconds", wall_seconds_},
       {"device", device_},

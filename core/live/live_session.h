@@ -162,6 +162,9 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   int64_t ticks_ = 0;
   int64_t late_ = 0;
   std::deque<double> latencies_;  // s, one per tick that applied a pose
+  // s, one per tick in contact: the reply's stiffness (the reaction's
+  // positions and the pass over the surface), CPU work before each reply.
+  std::deque<double> stiffness_seconds_;
   std::string stopped_by_;
 
   LiveClock::time_point last_status_{};

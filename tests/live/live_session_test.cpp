@@ -223,6 +223,9 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
     }
   }
   EXPECT_GT(in_contact, 20);
+  // The stiffness's CPU time is kept for every tick in contact.
+  EXPECT_EQ(served.live["reply_stiffness"]["count"], in_contact);
+  EXPECT_GT(served.live["reply_stiffness"]["max_ms"].get<double>(), 0.0);
   EXPECT_EQ(link.replies.size(), 80u);
   Vec3 held = s.tool->spec.position_at(0);
   for (int64_t k = 0; k < 80; ++k) {
