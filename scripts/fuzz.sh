@@ -23,6 +23,11 @@ while [ $# -gt 0 ]; do
 done
 
 export CCACHE_BASEDIR=$root
+# The fuzz build carries debug info (-g), which makes ccache hash the build
+# folder too: every fresh clone (CI's) would rebuild it all. Its objects may
+# name another clone's folder in their debug info; sanitizer reports still
+# name the right files and lines.
+export CCACHE_NOHASHDIR=1
 CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DORGANSIM_FUZZ=ON -DORGANSIM_BUILD_TESTS=OFF -DORGANSIM_WERROR=OFF >/dev/null
 cmake --build "$build" --target organsim_fuzz -j "${ORGANSIM_JOBS:-2}"
