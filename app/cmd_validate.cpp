@@ -170,7 +170,7 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
                   "The indenters' contact, as a scenario's tool.contact: 'surface' (the boundary triangles, "
                   "default) or 'points'");
   cmd->add_option("--hertz-layer", args->hertz_layer,
-                  "The spheres' surface contact in series with the sub-cell Hertz layer, as a scenario's "
+                  "The spheres' and the capsule's surface contact in series with the sub-cell layer, as a scenario's "
                   "tool.hertz_layer: 'on' (default with surface contact) or 'off'");
   cmd->add_option("--line-load-reference", args->line_load_reference,
                   "Adds the line-load case (a capsule R 5 mm across a block, pressed 1, 2, 4 mm) compared with "

@@ -52,7 +52,7 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
     for (const auto& nu : options.poisson_ratios) {
       if (progress) progress(done, total, material_name(nu) + ", line-load reference");
       line_load_reference.push_back(capsule_line_load(reference, suite_material(options, nu), options.line_load_radius,
-                                                      options.line_load_depths));
+                                                      options.line_load_depths, options.hertz_layer));
     }
   }
   for (double h : options.cell_sizes) {
@@ -91,7 +91,8 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
                              options.hertz_layer);
       add("hertz probe d/R=0.2", probe.points, probe.force[0], probe.hertz[0], true);
       if (options.line_load_reference) {
-        const LineLoadResult line = capsule_line_load(line_mesh, m, options.line_load_radius, options.line_load_depths);
+        const LineLoadResult line = capsule_line_load(line_mesh, m, options.line_load_radius, options.line_load_depths,
+                                                     options.hertz_layer);
         const LineLoadResult& reference = line_load_reference[material];
         for (size_t i = 0; i < options.line_load_depths.size(); ++i) {
           char test[48];

@@ -28,7 +28,7 @@ struct SuiteOptions {
   double indenter_radius = 0.02; // m
   double probe_radius = 0.005;   // m: the small probe, pressed to d/R = 0.2
   ToolContact contact = ToolContact::Surface;  // the indenters' contact, as a scenario's tool.contact
-  bool hertz_layer = true;  // the spheres' surface contact in series with the sub-cell Hertz layer (tool.hertz_layer)
+  bool hertz_layer = true;  // surface contact in series with the sub-cell layer (tool.hertz_layer): a sphere's Hertz layer, the capsule's line layer
   // The line-load case (a capsule across a block, capsule_line_load) is
   // compared with itself on a mesh of this cell size (m); unset leaves the
   // case out, since a converged reference (2.5 mm) takes minutes per material.

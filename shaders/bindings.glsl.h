@@ -73,5 +73,6 @@
 #define ORGANSIM_GL_U_CARRY_COUNT 21  // int: appended lanes to fill (carry_state.comp)
 #define ORGANSIM_GL_U_LAYER_TRIS 22   // int: surface triangles (hertz_layer_touch.comp, hertz_layer.comp)
 #define ORGANSIM_GL_U_LAYER_FACTOR 23 // float: force_law::kHertzLayerPunchFactor (hertz_layer.comp)
+#define ORGANSIM_GL_U_LAYER_LINE_FACTOR 24  // float: force_law::kLineLayerHalfWidthFactor (hertz_layer.comp)
 
 #endif

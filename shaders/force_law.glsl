@@ -114,10 +114,26 @@ bool sphere_triangle_penalty(vec3 center, float radius, vec3 x0, vec3 x1, vec3 x
 float hertz_layer_offset_at(float a, float radius, float punch_radius) {
   return a * a / radius - 2.0 * a * a * a / (3.0 * radius * punch_radius);
 }
+// delta(F) (force_law::hertz_layer_offset).
+float hertz_layer_offset(float force, float e_star, float radius, float punch_radius) {
+  if (!(force > 0.0)) return 0.0;
+  const float a = pow(3.0 * force * radius / (4.0 * e_star), 1.0 / 3.0);
+  if (a >= punch_radius) return punch_radius * punch_radius / (3.0 * radius);
+  return a * a / radius - force / (2.0 * e_star * punch_radius);
+}
 float hertz_layer_factor(float m, float k, float c, float delta) {
   if (!(m > 0.0)) return 0.0;
   const float lowered = m - k * c * delta;
   return lowered > 0.0 ? lowered / m : 0.0;
+}
+
+// The sub-cell line layer (force_law::line_layer_offset): a capsule's shaft
+// pressed by P N/m, the strip punch's half-width c.
+float line_layer_offset(float force_per_length, float e_star, float radius, float half_width) {
+  if (!(force_per_length > 0.0)) return 0.0;
+  const float b = sqrt(4.0 * force_per_length * radius / (3.14159265358979 * e_star));
+  if (b >= half_width) return half_width * half_width / (4.0 * radius);
+  return b * b / (2.0 * radius) * (log(half_width / b) + 0.5);
 }
 
 // The capsule tool (force_law.h's capsule section): the segment a-b swept by R.
@@ -128,6 +144,15 @@ vec3 segment_closest_point(vec3 p, vec3 a, vec3 b) {
   const float len2 = dot(ab, ab);
   if (!(len2 > 0.0)) return a;
   return a + clamp(dot(ab, p - a) / len2, 0.0, 1.0) * ab;
+}
+
+// Where along the segment a-b its point closest to p lies, m
+// (force_law::segment_axial_position; 0 when a == b).
+float segment_axial_position(vec3 p, vec3 a, vec3 b) {
+  const vec3 ab = b - a;
+  const float len2 = dot(ab, ab);
+  if (!(len2 > 0.0)) return 0.0;
+  return clamp(dot(ab, p - a) / len2, 0.0, 1.0) * sqrt(len2);
 }
 
 // The closest points of the segments p1-q1 and p2-q2 as parameters (s, t)

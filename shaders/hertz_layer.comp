@@ -1,14 +1,18 @@
 // The sub-cell Hertz layer's solve for one substep, after
 // hertz_layer_touch.comp and before the step (force_law::HertzLayer is its
 // CPU twin; docs/physics.md derives it). One workgroup. It reads the
-// penalties {f_t, k_t} of the blocks of ORGANSIM_GL_LAYER_SIZE triangles
-// that the touch pass found in contact (a few of them: the triangles are
-// packed in spatial order), invocation i taking entry i of each block.
-// Shared-memory trees sum F_lin and the m-weighted a_h and E* in a fixed
-// order (deterministic). Then Newton's steps on the Hertz radius a, kept in
-// a bracket, the same on every invocation: each step sums G(delta(a)) =
-// sum_t c_t m_t hertz_layer_factor(...) and its slope over the touches the
-// same way. layer_out = {n, delta} for step.comp, which multiplies each
+// penalties {f_t, k_t} and places s_t along the axis of the blocks of
+// ORGANSIM_GL_LAYER_SIZE triangles that the touch pass found in contact (a
+// few of them: the triangles are packed in spatial order), invocation i
+// taking entry i of each block. Shared-memory trees sum F_lin and the
+// m-weighted a_h, E*, s and then (s - mean)^2 in a fixed order
+// (deterministic). With no
+// spread along the axis (a sphere, a capsule on its end): Newton's steps on
+// the Hertz radius a, kept in a bracket; otherwise the blend of the sphere's
+// and the line's law (force_law::HertzLayer) and regula falsi (Illinois) on
+// the force. Either is the same on every invocation: each step sums
+// G(delta) = sum_t c_t m_t hertz_layer_factor(...) (and its slope) over the
+// touches the same way. layer_out = {n, delta} for step.comp, which multiplies each
 // penalty by its hertz_layer_factor. The loops' conditions come from shared
 // values, so every invocation takes the same path (uniform control flow for
 // the barriers).
@@ -28,6 +32,7 @@ layout(std430, binding = ORGANSIM_GL_B_LAYER_OUT) writeonly buffer Out { vec4 la
 layout(location = ORGANSIM_GL_U_TOOL_RADIUS) uniform float u_radius;
 layout(location = ORGANSIM_GL_U_LAYER_TRIS) uniform int u_ntri;
 layout(location = ORGANSIM_GL_U_LAYER_FACTOR) uniform float u_punch_factor;
+layout(location = ORGANSIM_GL_U_LAYER_LINE_FACTOR) uniform float u_line_factor;
 
 shared vec4 s_a[ORGANSIM_GL_LAYER_SIZE];
 shared vec4 s_b[ORGANSIM_GL_LAYER_SIZE];
@@ -79,7 +84,7 @@ uint exclusive_scan(uint lane, uint v, out uint total) {
 // This lane's penalty in the i-th block in contact: {f_t, k_t}, and its triangle.
 vec4 touch_at(uint lane, uint i, out int t) {
   t = int(s_blocks[i] * ORGANSIM_GL_LAYER_SIZE + lane);
-  return t < u_ntri ? touch[t] : vec4(0.0);
+  return t < u_ntri ? touch[2 * t] : vec4(0.0);
 }
 
 // {G(delta), its slope sum k_t c_t^2 over the penalties still pressing} over
@@ -117,16 +122,30 @@ void main() {
   barrier();
 
   vec4 sum = vec4(0.0);       // {F_lin, sum m}
-  vec4 weighted = vec4(0.0);  // {sum m a_h, sum m E*, 0, 0}
+  vec4 weighted = vec4(0.0);  // {sum m a_h, sum m E*, sum m s, 0}
   for (uint i = 0; i < nblocks; ++i) {
     int t;
     const vec4 e = touch_at(lane, i, t);
     const float m = length(e.xyz);
     if (!(m > 0.0)) continue;
     sum += vec4(e.xyz, m);
-    weighted.xy += m * tris[t].data.xy;
+    weighted.xyz += m * vec3(tris[t].data.xy, touch[2 * t + 1].x);
   }
   reduce(lane, sum, weighted);
+  // The spread about the mean in a second pass: sum m s^2 - (sum m s)^2 / sum m
+  // would cancel to float noise where every place is the same (a sphere, a
+  // capsule on its end).
+  const float mean = sum.w > 0.0 ? weighted.z / sum.w : 0.0;
+  vec4 spread = vec4(0.0), unused = vec4(0.0);
+  for (uint i = 0; i < nblocks; ++i) {
+    int t;
+    const vec4 e = touch_at(lane, i, t);
+    const float m = length(e.xyz);
+    if (!(m > 0.0)) continue;
+    const float d = touch[2 * t + 1].x - mean;
+    spread.x += m * d * d;
+  }
+  reduce(lane, spread, unused);
   const float linear = length(sum.xyz);
   if (!(linear > 0.0) || !(sum.w > 0.0)) {
     if (lane == 0) layer_out = vec4(0.0, 0.0, 1.0, 0.0);
@@ -134,24 +153,51 @@ void main() {
   }
   const vec3 n = sum.xyz / linear;
   const float a_h = u_punch_factor * weighted.x / sum.w, e_star = weighted.y / sum.w;
-  // Beyond a_h the offset is constant (force_law::HertzLayer::solve).
-  float delta = a_h * a_h / (3.0 * u_radius);
-  if (along(lane, nblocks, n, delta).x < hertz_force_at(a_h, e_star)) {
-    float lo = 0.0, hi = a_h, a = a_h;
-    for (int iteration = 0; iteration < 40; ++iteration) {
-      const float d = hertz_layer_offset_at(a, u_radius, a_h);
-      const vec2 g = along(lane, nblocks, n, d);
-      const float value = hertz_force_at(a, e_star) - g.x;
-      if (value == 0.0) break;
-      if (value < 0.0) lo = a; else hi = a;
-      const float slope = 4.0 * e_star * a * a / u_radius + g.y * 2.0 * a * (1.0 - a / a_h) / u_radius;
-      float next = slope > 0.0 ? a - value / slope : lo;
-      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-      const bool settled = abs(next - a) <= 1e-6 * a_h;
-      a = next;
-      if (settled) break;
+  const float variance = spread.x / sum.w;
+  const float contact_length = variance > 0.0 ? sqrt(12.0 * variance) : 0.0;
+  const float beta = contact_length > 0.0 ? min(1.0, contact_length / (2.0 * a_h)) : 0.0;
+  float delta;
+  if (beta > 0.0) {
+    // The blend (force_law::HertzLayer::offset_for); h(F) = F - G(delta(F))
+    // rises with F from -|F_lin| at 0 to >= 0 at |F_lin|.
+    const float c_line = u_line_factor * weighted.x / sum.w;
+    float lo = 0.0, hi = linear, h_lo = -linear, force = linear;
+    delta = (1.0 - beta) * hertz_layer_offset(linear, e_star, u_radius, a_h) +
+            beta * line_layer_offset(linear / contact_length, e_star, u_radius, c_line);
+    float h_hi = linear - along(lane, nblocks, n, delta).x;
+    for (int iteration = 0; iteration < 60 && h_hi > 0.0 && hi - lo > 1e-6 * hi; ++iteration) {
+      force = hi - h_hi * (hi - lo) / (h_hi - h_lo);
+      if (!(force > lo && force < hi)) force = 0.5 * (lo + hi);
+      delta = (1.0 - beta) * hertz_layer_offset(force, e_star, u_radius, a_h) +
+              beta * line_layer_offset(force / contact_length, e_star, u_radius, c_line);
+      const float h = force - along(lane, nblocks, n, delta).x;
+      if (h == 0.0) break;
+      if (h < 0.0) {
+        lo = force, h_lo = h, h_hi /= 2.0;
+      } else {
+        hi = force, h_hi = h, h_lo /= 2.0;
+      }
     }
-    delta = hertz_layer_offset_at(a, u_radius, a_h);
+  } else {
+    // Beyond a_h the offset is constant (force_law::HertzLayer::solve).
+    delta = a_h * a_h / (3.0 * u_radius);
+    if (along(lane, nblocks, n, delta).x < hertz_force_at(a_h, e_star)) {
+      float lo = 0.0, hi = a_h, a = a_h;
+      for (int iteration = 0; iteration < 40; ++iteration) {
+        const float d = hertz_layer_offset_at(a, u_radius, a_h);
+        const vec2 g = along(lane, nblocks, n, d);
+        const float value = hertz_force_at(a, e_star) - g.x;
+        if (value == 0.0) break;
+        if (value < 0.0) lo = a; else hi = a;
+        const float slope = 4.0 * e_star * a * a / u_radius + g.y * 2.0 * a * (1.0 - a / a_h) / u_radius;
+        float next = slope > 0.0 ? a - value / slope : lo;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        const bool settled = abs(next - a) <= 1e-6 * a_h;
+        a = next;
+        if (settled) break;
+      }
+      delta = hertz_layer_offset_at(a, u_radius, a_h);
+    }
   }
   if (lane == 0) layer_out = vec4(n, delta);
 }

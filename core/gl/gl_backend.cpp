@@ -93,6 +93,8 @@ GlBackend::GlBackend(const Model& model, const BackendTool& tool, const GlBacken
     glProgramUniform1f(hertz_layer_touch_.id(), ORGANSIM_GL_U_TOOL_K, static_cast<float>(tool.contact_stiffness));
     glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_LAYER_FACTOR,
                        static_cast<float>(force_law::kHertzLayerPunchFactor));
+    glProgramUniform1f(hertz_layer_.id(), ORGANSIM_GL_U_LAYER_LINE_FACTOR,
+                       static_cast<float>(force_law::kLineLayerHalfWidthFactor));
     // The solve's result, read by step.comp: one vec4, the same for every Model version.
     const float none[4] = {0, 0, 1, 0};
     layer_out_ = create_buffer("Hertz layer {n, delta}", sizeof none, none, 0);
@@ -188,7 +190,8 @@ GlBackend::Tables GlBackend::create_tables(const gl::PackedModel& packed, const 
     t.layer_ntri = static_cast<int32_t>(packed.layer_tris.size());
     t.layer_tris = make("Hertz layer triangles {corners, a_h, E*}", packed.layer_tris.size() * sizeof(gl::LayerTri),
                         packed.layer_tris.data(), 0);
-    t.layer_touch = make("Hertz layer penalties {f_t, k_t}", packed.layer_tris.size() * 4 * sizeof(float), nullptr, 0);
+    t.layer_touch =
+        make("Hertz layer penalties {f_t, k_t}, {s_t, 0, 0, 0}", packed.layer_tris.size() * 8 * sizeof(float), nullptr, 0);
     t.layer_blocks = make("Hertz layer triangles touching per block", gl::layer_blocks(packed) * sizeof(uint32_t),
                           nullptr, 0);
   }
@@ -495,7 +498,7 @@ Plan GlBackend::plan() const {
         detail = std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
                  " surface triangles, each surface point recomputing its own triangles (broad phase: the " +
                  shape_name(tool_.shape) + " against each triangle's box), w_p f summed in triangle order" +
-                 (hertz_layer_.id() ? ", each f lowered by the sub-cell Hertz layer's offset: before the step, "
+                 (hertz_layer_.id() ? ", each f lowered by the sub-cell layer's offset: before the step, "
                                       "hertz_layer_touch.comp's penalties (one invocation per triangle, " +
                                           std::to_string(layer_nblock_) +
                                           " workgroups), then hertz_layer.comp's solve over the blocks in contact "
@@ -636,10 +639,11 @@ Reaction GlBackend::tick(const TickRequest& request) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, ORGANSIM_GL_B_D_NEXT, d_[1 - cur_]);
     if (hertz_layer_.id() && tool_acts) {
       // The layer's offset for this substep's positions, before the step reads it.
-      const Vec3 c = request.tool_at(tool_, s).origin;
+      const ToolPlacement placed = request.tool_at(tool_, s);
       glUseProgram(hertz_layer_touch_.id());
-      glProgramUniform3f(hertz_layer_touch_.id(), ORGANSIM_GL_U_TOOL_A, static_cast<float>(c.x()),
-                         static_cast<float>(c.y()), static_cast<float>(c.z()));
+      const Eigen::Vector3f a = placed.a.cast<float>(), b = placed.b.cast<float>();
+      glProgramUniform3f(hertz_layer_touch_.id(), ORGANSIM_GL_U_TOOL_A, a.x(), a.y(), a.z());
+      glProgramUniform3f(hertz_layer_touch_.id(), ORGANSIM_GL_U_TOOL_B, b.x(), b.y(), b.z());
       glDispatchCompute(static_cast<GLuint>(layer_nblock_), 1, 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       glUseProgram(hertz_layer_.id());

@@ -1,6 +1,8 @@
 #include "core/physics/force_law.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace organsim::force_law {
 
@@ -22,6 +24,32 @@ double hertz_layer_offset(double force, double e_star, double radius, double pun
   return a * a / radius - force / (2 * e_star * punch_radius);
 }
 
+double line_layer_offset(double force_per_length, double e_star, double radius, double half_width) {
+  if (!(force_per_length > 0)) return 0;
+  const double b = std::sqrt(4 * force_per_length * radius / (std::numbers::pi * e_star));
+  if (b >= half_width) return half_width * half_width / (4 * radius);
+  return b * b / (2 * radius) * (std::log(half_width / b) + 0.5);
+}
+
+double HertzLayer::contact_length() const {
+  if (!(weight_ > 0)) return 0;
+  const double variance = along2_ / weight_;
+  return variance > 0 ? std::sqrt(12 * variance) : 0;
+}
+
+double HertzLayer::line_share() const {
+  const double length = contact_length();
+  return length > 0 ? std::min(1.0, length / (2 * punch_radius())) : 0;
+}
+
+double HertzLayer::offset_for(double force, double radius) const {
+  if (!touching()) return 0;
+  const double beta = line_share();
+  const double sphere = beta < 1 ? hertz_layer_offset(force, e_star(), radius, punch_radius()) : 0;
+  const double line = beta > 0 ? line_layer_offset(force / contact_length(), e_star(), radius, line_half_width()) : 0;
+  return (1 - beta) * sphere + beta * line;
+}
+
 double HertzLayer::force_along(double delta) const {
   double g = 0;
   for (const Touch& t : touches_) g += t.c * t.m * hertz_layer_factor(t.m, t.k, t.c, delta);
@@ -36,6 +64,37 @@ double HertzLayer::stiffness_along(double delta) const {
 }
 
 void HertzLayer::solve(double radius) {
+  if (line_share() == 0) return solve_sphere(radius);
+  delta_ = 0;
+  double sum[3] = {0, 0, 0};
+  for (const Touch& t : touches_)
+    for (int i = 0; i < 3; ++i) sum[i] += t.f[i];
+  const double linear = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+  if (!(linear > 0)) return;
+  for (Touch& t : touches_) t.c = t.m > 0 ? (t.f[0] * sum[0] + t.f[1] * sum[1] + t.f[2] * sum[2]) / (t.m * linear) : 0;
+  // h(F) = F - G(delta(F)) rises strictly with F (delta rises, G falls),
+  // h(0) = -|F_lin| < 0 <= h(|F_lin|) (G <= G(0) = |F_lin|): regula falsi
+  // (Illinois) on the force, to 1e-12 of itself (most penalties may be
+  // lifted off, the root far below |F_lin|). delta's slope is
+  // unbounded at F = 0 (like F^(2/3) or P ln P), which Newton's steps on F
+  // would not survive.
+  double lo = 0, hi = linear, h_lo = -linear, h_hi = linear - force_along(offset_for(linear, radius));
+  double force = h_hi <= 0 ? linear : lo;
+  for (int iteration = 0; iteration < 200 && h_hi > 0 && hi - lo > 1e-12 * hi; ++iteration) {
+    force = hi - h_hi * (hi - lo) / (h_hi - h_lo);
+    if (!(force > lo && force < hi)) force = 0.5 * (lo + hi);
+    const double h = force - force_along(offset_for(force, radius));
+    if (h == 0) break;
+    if (h < 0) {
+      lo = force, h_lo = h, h_hi /= 2;
+    } else {
+      hi = force, h_hi = h, h_lo /= 2;
+    }
+  }
+  delta_ = offset_for(force, radius);
+}
+
+void HertzLayer::solve_sphere(double radius) {
   delta_ = 0;
   double sum[3] = {0, 0, 0};
   for (const Touch& t : touches_)

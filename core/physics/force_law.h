@@ -311,6 +311,20 @@ inline V3 segment_closest_point(const V3& p, const V3& a, const V3& b) {
   return a + s * ab;
 }
 
+// Where along the segment a-b its point closest to p lies: |b - a| s with s
+// as in segment_closest_point, m (0 when a == b): a touch's place along a
+// capsule's axis for the layer (HertzLayer::add).
+template <class V3>
+inline typename V3::Scalar segment_axial_position(const V3& p, const V3& a, const V3& b) {
+  using Real = typename V3::Scalar;
+  const V3 ab = b - a;
+  const Real len2 = ab.dot(ab);
+  if (!(len2 > Real(0))) return Real(0);
+  Real s = ab.dot(V3(p - a)) / len2;
+  s = s < Real(0) ? Real(0) : s > Real(1) ? Real(1) : s;
+  return s * std::sqrt(len2);
+}
+
 // The closest points of the segments p1-q1 and p2-q2 as parameters s, t in
 // [0, 1] (Ericson, Real-Time Collision Detection 5.1.9; parallel segments
 // take s = 0, a degenerate segment its first end).
@@ -451,45 +465,91 @@ inline Real hertz_layer_factor(Real m, Real k, Real c, Real delta) {
   return lowered > Real(0) ? lowered / m : Real(0);
 }
 
-// The layer over a sphere's touching triangles, in series with their
-// penalties. Moving the sphere back by delta along n (the direction of
-// their sum F_lin) lowers triangle t's penalty m_t = |f_t| by k_t c_t delta,
+// --- Sub-cell line layer (a capsule's shaft lying on the surface) --------------
+// The same idea in two dimensions, for a capsule whose shaft touches the
+// surface along a length L: a cylinder (radius R) pressed by P = F / L per
+// metre has Hertz's contact half-width b = sqrt(4 P R / (pi E*)), and the
+// cells, which cannot resolve a strip narrower than themselves, press like
+// a flat strip punch of half-width c. In 2D a half-plane's indentation
+// grows with the logarithm of the body's size, but the cylinder's less the
+// punch's under the same P does not (both against the same far point; the
+// log terms cancel):
+//   delta(P) = (b^2 / (2 R)) (ln(c / b) + 1/2)   while b < c,
+//   delta(P) = c^2 / (4 R)                       beyond,
+// continuous with a zero slope where b reaches c, and rising with P below.
+// c = kLineLayerHalfWidthFactor x the touched triangles' punch radius
+// sqrt(vertex-ring area / pi); the factor is fitted to one validation row
+// (docs/validation.md: the line load at 8 mm cells, d 2 mm, nu 0.45) and
+// validated on the others.
+inline constexpr double kLineLayerHalfWidthFactor = 0.5;
+
+// delta(P), m; 0 for P <= 0. P in N/m.
+double line_layer_offset(double force_per_length, double e_star, double radius, double half_width);
+
+// The layer over a tool's touching triangles, in series with their
+// penalties. Moving the tool back by delta along n (the direction of their
+// sum F_lin) lowers triangle t's penalty m_t = |f_t| by k_t c_t delta,
 // c_t = n_t . n, and never below zero; the force along n is then
 //   G(delta) = sum_t c_t max(0, m_t - k_t c_t delta),
 // continuous and falling in delta, so F = G(delta(F)) has one root in
-// [0, |F_lin|]. solve() finds it (Newton's steps on the Hertz radius, kept
-// in a bracket: there F and delta are polynomials), and each penalty is
-// then multiplied by factor(i) = max(0, m_t - k_t c_t delta) / m_t: the
-// contact with the sphere moved back by delta, without state and without an
-// estimate of the tissue's stiffness. A triangle that enters the contact
-// at zero depth adds nothing. a_h (times kHertzLayerPunchFactor) and E* are
-// the triangles' values weighted by m_t, so they move continuously as the
-// sphere slides from one triangle to the next.
+// [0, |F_lin|]. solve() finds it, and each penalty is then multiplied by
+// factor(i) = max(0, m_t - k_t c_t delta) / m_t: the contact with the tool
+// moved back by delta, without state and without an estimate of the
+// tissue's stiffness. A triangle that enters the contact at zero depth adds
+// nothing. a_h (times kHertzLayerPunchFactor), c and E* are the triangles'
+// values weighted by m_t, so they move continuously as the tool slides from
+// one triangle to the next.
+//
+// delta(F) is the sphere's law (hertz_layer_offset) for a contact at a
+// point and the line law (line_layer_offset, P = F / L) for a capsule's
+// shaft lying along the surface:
+//   delta(F) = (1 - beta) delta_sphere(F) + beta delta_line(F / L),
+//   beta = min(1, L / (2 a_h)),
+// L = sqrt(12 var_m(s)) with s_t each touch's place along the tool's axis
+// (the parameter of the segment's point closest to it, in m; 0 for a
+// sphere): the length of a uniform line load with the same spread. A
+// sphere or a capsule pressed on its rounded end has L = 0 (the sphere's
+// law, solved as before); a shaft along the surface longer than the
+// cells' punch diameter has the line law alone; in between (a tilted
+// capsule) the two blend, continuously in the tool's pose.
 class HertzLayer {
  public:
   void clear() {
     touches_.clear();
-    weight_ = punch_ = e_star_ = delta_ = 0;
+    weight_ = punch_ = e_star_ = along_ = along2_ = delta_ = 0;
   }
   // Triangle penalty f_t with its stiffness k_t, punch radius and E*, in the
-  // order the backend visits them.
+  // order the backend visits them; `along` is its place along the tool's
+  // axis (m; 0 for a sphere).
   template <class Real>
-  void add(const Real f[3], double k_t, double punch_radius, double triangle_e_star) {
+  void add(const Real f[3], double k_t, double punch_radius, double triangle_e_star, double along = 0) {
     Touch t;
     for (int i = 0; i < 3; ++i) t.f[i] = f[i];
     t.m = std::sqrt(t.f[0] * t.f[0] + t.f[1] * t.f[1] + t.f[2] * t.f[2]);
     t.k = k_t;
     touches_.push_back(t);
     weight_ += t.m, punch_ += t.m * punch_radius, e_star_ += t.m * triangle_e_star;
+    // The weighted mean and spread of `along` by West's update (no
+    // cancellation: equal places give a spread of exactly 0).
+    if (weight_ > 0) {
+      const double change = along - along_;
+      along_ += t.m / weight_ * change;
+      along2_ += t.m * change * (along - along_);
+    }
   }
-  // Finds delta for a sphere of radius R.
+  // Finds delta for a tool of radius R.
   void solve(double radius);
   // The i-th added penalty's factor (1 before solve or with nothing touching).
   double factor(size_t i) const { return hertz_layer_factor(touches_[i].m, touches_[i].k, touches_[i].c, delta_); }
   double offset() const { return delta_; }  // m
   bool touching() const { return weight_ > 0; }
-  double punch_radius() const { return kHertzLayerPunchFactor * punch_ / weight_; }  // a_h, m
-  double e_star() const { return e_star_ / weight_; }                               // Pa
+  double punch_radius() const { return kHertzLayerPunchFactor * punch_ / weight_; }     // a_h, m
+  double line_half_width() const { return kLineLayerHalfWidthFactor * punch_ / weight_; }  // c, m
+  double e_star() const { return e_star_ / weight_; }                                  // Pa
+  double contact_length() const;                                                        // L, m
+  double line_share() const;                                                            // beta
+  // delta(F) for a tool of radius R over the touches added, m.
+  double offset_for(double force, double radius) const;
   void reserve(size_t n) { touches_.reserve(n); }
 
  private:
@@ -499,8 +559,10 @@ class HertzLayer {
   };
   double force_along(double delta) const;     // G(delta)
   double stiffness_along(double delta) const;  // -G'(delta): sum over active t of k_t c_t^2
+  void solve_sphere(double radius);            // beta = 0: Newton's steps on the Hertz radius
   std::vector<Touch> touches_;
   double weight_ = 0, punch_ = 0, e_star_ = 0, delta_ = 0;
+  double along_ = 0, along2_ = 0;  // the m-weighted mean of the places along the axis, and sum m (s - mean)^2
 };
 
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o

@@ -161,19 +161,19 @@ ToolDef parse_tool(const nlohmann::json& j, const JsonPath& at, bool elastic) {
   if (s.shape == ToolShape::Grasper && s.contact != ToolContact::Surface)
     throw r.at("contact").error("a grasper's jaws touch the surface (\"contact\": \"surface\")");
   if (const nlohmann::json* f = r.get("friction")) s.friction = parse_friction(*f, r.at("friction"), s);
-  // The layer is a sphere's Hertz law, on by default wherever it applies: a
-  // capsule's line contact or a grasper's jaws would need their own, and a
+  // The layer (a sphere's Hertz law, a capsule's line law) is on by default
+  // wherever it applies: a grasper's jaws grip rather than indent, and a
   // material of spring constants has no E for it.
-  const bool sphere = s.shape == ToolShape::Sphere && s.mode == ToolMode::Push && s.contact == ToolContact::Surface;
-  s.hertz_layer = sphere && elastic;
+  const bool pushing = s.shape != ToolShape::Grasper && s.mode == ToolMode::Push && s.contact == ToolContact::Surface;
+  s.hertz_layer = pushing && elastic;
   if (auto v = r.boolean("hertz_layer")) {
-    if (*v && !sphere)
+    if (*v && !pushing)
       throw r.at("hertz_layer").error(
-          "the sub-cell Hertz layer is a sphere's surface contact (\"shape\": \"sphere\", \"mode\": \"push\", "
-          "\"contact\": \"surface\")");
+          "the sub-cell layer is a pushing sphere's or capsule's surface contact (\"shape\": \"sphere\" or "
+          "\"capsule\", \"mode\": \"push\", \"contact\": \"surface\")");
     if (*v && !elastic)
       throw r.at("hertz_layer").error(
-          "the sub-cell Hertz layer needs the material's young_modulus (a spring_stiffness gives none)");
+          "the sub-cell layer needs the material's young_modulus (a spring_stiffness gives none)");
     s.hertz_layer = *v;
   }
   // Without friction a grasper's jaws only squeeze: it could hold nothing.

@@ -26,7 +26,7 @@ struct ToolSpec {
   double radius = 0.01;                 // sphere or capsule radius, m
   Vec3 end_a{0, 0, 0}, end_b{0, 0, 0};  // capsule, grasper: its segment's ends in the tool frame, m
   Friction friction{};                  // surface contact: Coulomb friction, off by default
-  bool hertz_layer = false;             // a sphere's surface contact: in series with the sub-cell Hertz layer
+  bool hertz_layer = false;             // a sphere's or capsule's surface contact: in series with the sub-cell layer
   double contact_stiffness = 200.0;     // push: penalty N/m per m of penetration; pull: attachment springs N/m
   ToolMode mode = ToolMode::Push;
   ToolContact contact = ToolContact::Surface;  // push: penalty on the surface triangles or on the points

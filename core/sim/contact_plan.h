@@ -10,8 +10,10 @@ namespace organsim {
 // "" without the layer.
 inline std::string hertz_layer_plan(const BackendTool& tool) {
   if (!tool.hertz_layer) return "";
-  return ", then every penalty lowered as by the sphere moved back through the sub-cell Hertz layer (one root "
-         "per substep, force_law::HertzLayer)";
+  return std::string(", then every penalty lowered as by the ") + shape_name(tool.shape) +
+         " moved back through the sub-cell layer (" +
+         (tool.shape == ToolShape::Sphere ? "Hertz's" : "Hertz's at its ends, the line's along its shaft") +
+         " law; one root per substep, force_law::HertzLayer)";
 }
 
 // "" without friction.

@@ -91,7 +91,9 @@ Reaction reference_surface_forces(const Model& model, const std::vector<Vec3>& x
         continue;
       if (layer) {
         const TriangleLayer tl = triangle_layer(*layer, t);
-        hertz.add(touch.f.data(), stiffness * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+        const Vec3 q = touch.w[0] * x[t[0]] + touch.w[1] * x[t[1]] + touch.w[2] * x[t[2]];
+        hertz.add(touch.f.data(), stiffness * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star,
+                  force_law::segment_axial_position(q, seg_a[jaw], seg_b[jaw]));
       }
       touches.push_back(touch);
     }

@@ -5,7 +5,8 @@
 // sphere's when its segment has zero length), giving each touched point the
 // sum of w_p(t) f(t) over its touching triangles t, in ascending t and jaw
 // by jaw (the order step.comp gathers them in), each f(t) times its
-// force_law::HertzLayer factor with a sphere's sub-cell Hertz layer, then,
+// force_law::HertzLayer factor with the sub-cell layer (a sphere's or a
+// capsule's), then,
 // with friction, its anchor_friction force. The kernels then add these forces in their
 // tool pass (add_tool_force with ToolTerm::Surface), which also sums the
 // reaction, so the reaction is minus exactly what the tissue receives.
@@ -37,8 +38,8 @@ class SurfaceContact {
   // Triangles and shares from `model` (a rebuild calls it again: cuts
   // change the surface); `scale` is the backend's Model::tool_k_scale,
   // `lanes` the length of the per-point slot array the kernels read
-  // (padding included, -1 there); `hertz_layer` puts a sphere's contact in
-  // series with the sub-cell Hertz layer (force_law::HertzLayer).
+  // (padding included, -1 there); `hertz_layer` puts a sphere's or a
+  // capsule's contact in series with the sub-cell layer (force_law::HertzLayer).
   void pack(const Model& model, const std::vector<Real>& scale, size_t lanes, bool hertz_layer = false) {
     local_of_point_.assign(model.npoint(), -1);
     points_.clear();
@@ -173,8 +174,9 @@ class SurfaceContact {
             spread(t.corner, t.w, t.f);
             continue;
           }
+          const V3 q = t.w[0] * at(corner[0]) + t.w[1] * at(corner[1]) + t.w[2] * at(corner[2]);
           hertz_.add(t.f.data(), double(k * force_law::triangle_penalty_scale(share)), layer_[i].punch_radius,
-                     layer_[i].e_star);
+                     layer_[i].e_star, double(force_law::segment_axial_position(q, seg_a[jaw], seg_b[jaw])));
           pending_.push_back(t);
         }
       }

@@ -59,9 +59,9 @@ struct BackendTool {
   ToolShape shape = ToolShape::Sphere;
   Vec3 end_a{0, 0, 0}, end_b{0, 0, 0};  // capsule, grasper: the segment's ends in the tool frame, m
   Friction friction{};                  // surface contact only
-  // A sphere's surface contact in series with the sub-cell Hertz layer
-  // (force_law::HertzLayer): Hertz's force where the contact is
-  // narrower than the cells.
+  // A sphere's or capsule's surface contact in series with the sub-cell
+  // layer (force_law::HertzLayer): Hertz's force, or a line load's along a
+  // capsule's shaft, where the contact is narrower than the cells.
   bool hertz_layer = false;
   int32_t jaws() const { return shape == ToolShape::Grasper ? 2 : 1; }
   // The contact stiffness a point can feel, as a multiple of its penalty

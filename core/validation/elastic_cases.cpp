@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <tuple>
 
@@ -392,59 +393,78 @@ struct ClampedBlock {
   std::unique_ptr<const StaticSolver> solver;  // refers to model
 };
 
-// The sphere's surface contact in series with the sub-cell Hertz layer
-// (force_law::hertz_layer_offset): the tissue sees the sphere moved back by
-// delta(F) along the push, so the force is the root of F = F_s(d - delta(F))
-// with F_s the layer-less static contact at a depth. a_h and E* are those of
-// the triangles touching in the last solve (force_law::HertzLayer, as the
-// backends weigh them). The root is bracketed by 0 and F_s(d) (delta >= 0)
-// and found by regula falsi (Illinois) to 1e-4 of itself, far below the
-// percent-level errors validated.
-std::pair<double, int32_t> layered_indentation(const ClampedBlock& b, const ContactLayer& layer, const Vec3& centre,
-                                               double radius) {
+// A tool's surface contact in series with the sub-cell layer
+// (force_law::HertzLayer::offset_for: a sphere's Hertz layer, a capsule's
+// line layer): the tissue sees the tool moved back by delta(F) along the
+// push (+z), so the force is the root of F = F_s(d - delta(F)) with F_s the
+// layer-less static contact's `push` at a depth. a_h, c, E* and the contact
+// length are those of the triangles touching in the last solve, weighed as
+// the backends weigh them. The root is bracketed by 0 and F_s(d) (delta >=
+// 0) and found by regula falsi (Illinois) to 1e-4 of itself, far below the
+// percent-level errors validated. Returns F and the last solve's state.
+struct LayeredContact {
+  double force = 0;
+  SurfaceContact last;
+};
+LayeredContact layered_contact(const ClampedBlock& b, const ContactLayer& layer, const RigidTool& tool,
+                               const std::function<double(const SurfaceContact&)>& push) {
   const Model& m = b.model;
-  int32_t touching = 0;
   force_law::HertzLayer sum;
+  LayeredContact result;
   auto push_at = [&](double back) {
-    const Vec3 c = centre + Vec3(0, 0, back);
-    const SurfaceContact s = surface_contact(m, *b.solver, b.supports, {c, c, radius}, b.k_contact);
-    touching = s.touching;
-    // Moved back off the surface: no force, and a_h and E* stay those of the last contact.
-    if (s.displacement.empty()) return 0.0;
+    const RigidTool moved{tool.a + Vec3(0, 0, back), tool.b + Vec3(0, 0, back), tool.radius};
+    result.last = surface_contact(m, *b.solver, b.supports, moved, b.k_contact);
+    // Moved back off the surface: no force, and the layer's values stay those of the last contact.
+    if (result.last.displacement.empty()) return 0.0;
     sum.clear();
     for (const Tri& t : m.surface) {
       Vec3 x[3];
       double share[3], w[3];
       for (int i = 0; i < 3; ++i) {
-        x[i] = m.rest_position[t[i]] + s.displacement[t[i]];
+        x[i] = m.rest_position[t[i]] + result.last.displacement[t[i]];
         share[i] = m.tool_scale(t[i]) / m.surface_count(t[i]);
       }
       Vec3 f;
-      if (!force_law::sphere_triangle_penalty(c, radius, x[0], x[1], x[2], b.k_contact, share, f, w)) continue;
+      if (!force_law::capsule_triangle_penalty(moved.a, moved.b, moved.radius, x[0], x[1], x[2], b.k_contact, share,
+                                               f, w))
+        continue;
       const TriangleLayer tl = triangle_layer(layer, t);
-      sum.add(f.data(), b.k_contact * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
+      const Vec3 q = w[0] * x[0] + w[1] * x[1] + w[2] * x[2];
+      sum.add(f.data(), b.k_contact * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star,
+              force_law::segment_axial_position(q, moved.a, moved.b));
     }
-    return -s.force.z();
+    return push(result.last);
   };
-  auto offset = [&](double force) {
-    if (!sum.touching()) return 0.0;
-    return force_law::hertz_layer_offset(force, sum.e_star(), radius, sum.punch_radius());
-  };
+  auto offset = [&](double force) { return sum.offset_for(force, tool.radius); };
   // g(F) = F_s(d - delta(F)) - F: positive at 0, at most 0 at F_s(d).
   double lo = 0, hi = push_at(0);
-  if (!(hi > 0) || !sum.touching()) return {hi, touching};
+  result.force = hi;
+  if (!(hi > 0) || !sum.touching()) return result;
   double g_lo = hi, g_hi = push_at(offset(hi)) - hi;
   for (int iteration = 0; iteration < 40 && hi - lo > 1e-4 * hi; ++iteration) {
     const double F = g_hi < 0 ? hi - g_hi * (hi - lo) / (g_hi - g_lo) : hi;
     const double g = push_at(offset(F)) - F;
-    if (g == 0) return {F, touching};
+    if (g == 0) {
+      result.force = F;
+      return result;
+    }
     if (g > 0) {
       lo = F, g_lo = g, g_hi /= 2;
     } else {
       hi = F, g_hi = g, g_lo /= 2;
     }
   }
-  return {0.5 * (lo + hi), touching};
+  result.force = 0.5 * (lo + hi);
+  return result;
+}
+
+// The force through the clamped base, K u there (0 without contact).
+Vec3 base_reaction(const ClampedBlock& b, const SurfaceContact& c) {
+  Vec3 force = Vec3::Zero();
+  if (c.displacement.empty()) return force;
+  const std::vector<Vec3> elastic = b.solver->elastic_force(c.displacement);
+  for (int32_t p : b.bottom) force -= elastic[p];
+  return force;
 }
 
 }  // namespace
@@ -463,7 +483,10 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
     double force = 0;
     int32_t touching = 0;
     if (contact == ToolContact::Surface && hertz_layer) {
-      std::tie(force, touching) = layered_indentation(b, layer, centre, radius);
+      const LayeredContact c = layered_contact(b, layer, {centre, centre, radius},
+                                               [](const SurfaceContact& s) { return -s.force.z(); });
+      force = c.force;
+      touching = c.last.touching;
     } else if (contact == ToolContact::Surface) {
       const SurfaceContact c = surface_contact(b.model, *b.solver, b.supports, {centre, centre, radius}, b.k_contact);
       force = -c.force.z();
@@ -480,12 +503,13 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
 }
 
 LineLoadResult capsule_line_load(const TetMesh& block, const Material& material, double radius,
-                                 const std::vector<double>& depths) {
+                                 const std::vector<double>& depths, bool line_layer) {
   for (double depth : depths)
     if (!(depth > 0 && depth < radius))
       throw Error(ErrorKind::Usage, "capsule_line_load: expected depths in (0, radius), got " + std::to_string(depth) +
                                         " m for radius " + std::to_string(radius) + " m");
   const ClampedBlock b(block, material);
+  const ContactLayer layer = line_layer ? contact_layer(b.model) : ContactLayer{};
   // The axis along y over the middle of the top face, reaching 2R beyond
   // each side so the rounded ends lie wholly outside the block.
   const double x = 0.5 * (b.box.min.x() + b.box.max.x());
@@ -495,17 +519,15 @@ LineLoadResult capsule_line_load(const TetMesh& block, const Material& material,
   for (double depth : depths) {
     const double z = b.box.max.z() + radius - depth;
     const RigidTool capsule{Vec3(x, b.box.min.y() - 2 * radius, z), Vec3(x, b.box.max.y() + 2 * radius, z), radius};
-    const SurfaceContact c = surface_contact(b.model, *b.solver, b.supports, capsule, b.k_contact);
-    // The force through the clamped base, K u there: at a kink the force
-    // law's penalties are one side's (surface_contact), the base carries
-    // what holds the settled state.
-    Vec3 force = Vec3::Zero();
-    if (!c.displacement.empty()) {
-      const std::vector<Vec3> elastic = b.solver->elastic_force(c.displacement);
-      for (int32_t p : b.bottom) force -= elastic[p];
-    }
+    // The force through the clamped base: at a kink the force law's
+    // penalties are one side's (surface_contact), the base carries what
+    // holds the settled state.
+    const SurfaceContact c =
+        line_layer ? layered_contact(b, layer, capsule, [&](const SurfaceContact& s) { return -base_reaction(b, s).z(); })
+                         .last
+                   : surface_contact(b.model, *b.solver, b.supports, capsule, b.k_contact);
     r.depth.push_back(depth);
-    r.force.push_back(force);
+    r.force.push_back(base_reaction(b, c));
     r.contact_force.push_back(c.force);
     r.contacts.push_back(c.touching);
   }

@@ -84,7 +84,9 @@ struct LineLoadResult {
   int32_t points = 0;
   double capsule_length = 0;      // the axis segment, m
 };
+// With `line_layer` the capsule's surface contact is in series with the
+// sub-cell line layer (force_law::HertzLayer), as the backends apply it.
 LineLoadResult capsule_line_load(const TetMesh& block, const Material& material, double radius,
-                                 const std::vector<double>& depths);
+                                 const std::vector<double>& depths, bool line_layer = false);
 
 }  // namespace organsim

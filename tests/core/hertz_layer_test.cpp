@@ -1,10 +1,12 @@
-// The sub-cell Hertz layer of a sphere's surface contact
-// (force_law::hertz_layer_offset, HertzLayer): the law itself, the
-// reference's and the CPU backends' use of it, before and after a cut.
+// The sub-cell layer of a sphere's or a capsule's surface contact
+// (force_law::hertz_layer_offset, line_layer_offset, HertzLayer): the laws
+// themselves, their blend along a capsule, the reference's and the CPU
+// backends' use of it, before and after a cut.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "core/model/contact_layer.h"
@@ -47,6 +49,124 @@ TEST(HertzLayer, OffsetIsHertzLessAPunchUpToTheCellsRadiusAndConstantBeyond) {
     EXPECT_GE(d, last) << "F " << f;
     last = d;
   }
+}
+
+// The line law against the half-plane it comes from: in plane strain the
+// surface sinks by -(2 / (pi E*)) int p(s) ln|x - s| ds (plus a constant
+// set by the body's size), so the cylinder's indentation less the strip
+// punch's under the same P is that integral at x = 0 over Hertz's
+// elliptical pressure less the punch's 1 / sqrt(c^2 - s^2) pressure,
+// evaluated here by quadrature (s = b sin t, s = c sin t: the integrands'
+// only singularity is ln|sin t|, integrable; 400k midpoints give 1e-6).
+// Beyond b = c the law holds c^2 / (4 R); it is continuous there, and it
+// rises with P.
+TEST(HertzLayer, LineOffsetIsACylinderLessAStripPunchUpToTheCellsHalfWidthAndConstantBeyond) {
+  using force_law::line_layer_offset;
+  constexpr double kCapsule = 0.005, kHalfWidth = 0.003;
+  EXPECT_EQ(line_layer_offset(0, kEStar, kCapsule, kHalfWidth), 0);
+  EXPECT_EQ(line_layer_offset(-1, kEStar, kCapsule, kHalfWidth), 0);
+  const auto half_width = [&](double P) { return std::sqrt(4 * P * kCapsule / (M_PI * kEStar)); };
+  const auto log_moment = [](double width, const std::function<double(double)>& weight) {
+    constexpr int n = 400000;
+    double sum = 0;
+    for (int i = 0; i < n; ++i) {
+      const double t = -M_PI / 2 + (i + 0.5) * M_PI / n;
+      sum += weight(t) * std::log(std::abs(width * std::sin(t)));
+    }
+    return sum * M_PI / n;
+  };
+  for (const double P : {0.2, 1.0, 5.0}) {  // N/m: b from 0.5 to 2.5 mm, all below c
+    const double b = half_width(P);
+    ASSERT_LT(b, kHalfWidth);
+    // int p ln|s| ds: Hertz's p = (2P / (pi b^2)) sqrt(b^2 - s^2), ds = b cos t dt; the punch's p ds = (P / pi) dt.
+    const double cylinder = log_moment(b, [&](double t) { return 2 * P / M_PI * std::cos(t) * std::cos(t); });
+    const double punch = log_moment(kHalfWidth, [&](double) { return P / M_PI; });
+    const double want = -2 / (M_PI * kEStar) * (cylinder - punch);
+    EXPECT_NEAR(line_layer_offset(P, kEStar, kCapsule, kHalfWidth), want, 1e-5 * want) << "P " << P;
+  }
+  const double at = M_PI * kEStar * kHalfWidth * kHalfWidth / (4 * kCapsule);  // b = c
+  const double beyond = kHalfWidth * kHalfWidth / (4 * kCapsule);
+  EXPECT_NEAR(line_layer_offset(at * (1 - 1e-6), kEStar, kCapsule, kHalfWidth), beyond, 1e-9 * beyond);
+  EXPECT_EQ(line_layer_offset(at * 3, kEStar, kCapsule, kHalfWidth), beyond);
+  double last = 0;
+  for (double P = at / 1000; P < 2 * at; P *= 1.1) {
+    const double d = line_layer_offset(P, kEStar, kCapsule, kHalfWidth);
+    EXPECT_GE(d, last) << "P " << P;
+    last = d;
+  }
+}
+
+// Touches spread evenly along a capsule's axis: the layer reads their
+// length (sqrt(12 var), the length of a uniform line load with the same
+// spread: L sqrt(1 - 1/n^2) for n equal touches at spacing L / n) and
+// blends the laws by beta = min(1, L / (2 a_h)): the sphere's alone with no
+// spread, the line's alone (P = F / L) once L reaches 2 a_h, the weighted
+// sum between. Its solve then satisfies delta = delta(G(delta)) whatever
+// the blend, with penalties lifted off as for the sphere.
+TEST(HertzLayer, ACapsulesLayerBlendsTheSphereAndTheLineByTheContactsLengthAlongItsAxis) {
+  constexpr double kCapsule = 0.005;
+  const double a_h = kPunch, raw = kPunch / force_law::kHertzLayerPunchFactor;
+  const double c = force_law::kLineLayerHalfWidthFactor * raw;
+  const double F = 0.3;  // N
+  for (const double length : {0.0, 0.5 * a_h, 1.5 * a_h, 2 * a_h, 10 * a_h}) {
+    SCOPED_TRACE("spread " + std::to_string(length) + " m");
+    force_law::HertzLayer layer;
+    constexpr int n = 20;
+    for (int i = 0; i < n; ++i) {
+      const double f[3] = {0, 0, F / n};
+      layer.add(f, 2 * kEStar * kPunch, raw, kEStar, 0.01 + (i + 0.5) * length / n);
+    }
+    const double L = length * std::sqrt(1 - 1.0 / (n * n));
+    EXPECT_NEAR(layer.contact_length(), L, 1e-9 * a_h);
+    EXPECT_NEAR(layer.punch_radius(), a_h, 1e-15);
+    EXPECT_NEAR(layer.line_half_width(), c, 1e-15);
+    const double beta = std::min(1.0, L / (2 * a_h));
+    EXPECT_NEAR(layer.line_share(), beta, 1e-9);
+    const double sphere = force_law::hertz_layer_offset(F, kEStar, kCapsule, layer.punch_radius());
+    const double line = L > 0 ? force_law::line_layer_offset(F / L, kEStar, kCapsule, c) : 0;
+    EXPECT_NEAR(layer.offset_for(F, kCapsule), (1 - beta) * sphere + beta * line, 1e-6 * sphere);
+    if (length == 0) {
+      EXPECT_EQ(layer.offset_for(F, kCapsule), sphere);
+    }
+    if (beta == 1) {
+      EXPECT_NEAR(layer.offset_for(F, kCapsule), line, 1e-15);
+    }
+  }
+  // The solve over random penalties spread along the axis by 0 to 4 a_h.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> decades(-3, 3), unit(-1, 1), spread(0, 4 * a_h);
+  int dropped = 0, blended = 0, lines = 0;
+  force_law::HertzLayer layer;
+  for (int trial = 0; trial < 2000; ++trial) {
+    layer.clear();
+    const int n = 2 + trial % 6;
+    const double length = spread(rng);
+    std::vector<Vec3> f;
+    std::vector<double> k;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 dir = Vec3(0.5 * unit(rng), 0.5 * unit(rng), -1).normalized();
+      f.push_back(hertz_force(kPunch) * std::pow(10.0, decades(rng)) / n * dir);
+      k.push_back(2 * kEStar * kPunch * std::pow(10.0, decades(rng)));
+      layer.add(f.back().data(), k.back(), raw, kEStar, length * (0.5 + 0.5 * unit(rng)));
+    }
+    layer.solve(kCapsule);
+    const double beta = layer.line_share();
+    blended += beta > 0 && beta < 1;
+    lines += beta == 1;
+    Vec3 sum = Vec3::Zero(), scaled = Vec3::Zero();
+    for (int i = 0; i < n; ++i) sum += f[i];
+    for (int i = 0; i < n; ++i) {
+      dropped += layer.factor(i) == 0;
+      scaled += layer.factor(i) * f[i];
+    }
+    // The solve settles the force to 1e-12 of itself; behind penalties a
+    // thousand times stiffer than the punch that moves delta by up to ~1e-9.
+    const double G = scaled.dot(sum.normalized());
+    EXPECT_NEAR(layer.offset(), layer.offset_for(G, kCapsule), 1e-7 * layer.offset()) << "trial " << trial;
+  }
+  EXPECT_GT(blended, 100);
+  EXPECT_GT(lines, 100);
+  EXPECT_GT(dropped, 10);
 }
 
 // HertzLayer::solve finds the offset delta with F(delta) = G(delta): the
@@ -125,6 +245,14 @@ Model box() { return testing::contact_box(4); }
 const Vec3 kCenter(0.52 * kSize, 0.47 * kSize, kSize + 0.01 - 0.0015);
 constexpr double kToolRadius = 0.01;
 
+// The sphere, and a capsule (radius 1 cm) lying along x over the top, as
+// deep at its middle: its line layer (its contact is longer than the
+// cells' punch diameter). Tilted by 2 degrees: along a face parallel to its
+// axis the closest points tie, and float and double break the ties apart.
+const ToolPlacement kSphere{kCenter, kCenter, kCenter, kToolRadius};
+const ToolPlacement kCapsule{kCenter, kCenter - Vec3(0.012, 0, 0.0004), kCenter + Vec3(0.012, 0, 0.0004),
+                             kToolRadius};
+
 // The reference lowers every touching triangle's penalty by its layer
 // factor: the reaction is still minus what the tissue receives, the total
 // falls, and each triangle's share comes from the same HertzLayer, solved
@@ -132,33 +260,37 @@ constexpr double kToolRadius = 0.01;
 TEST(HertzLayer, TheReferenceAppliesTheLayersFactorToEveryPenalty) {
   const Model m = box();
   const ContactLayer layer = contact_layer(m);
-  std::vector<Vec3> plain(m.npoint(), Vec3::Zero()), layered(m.npoint(), Vec3::Zero());
-  const Reaction without = reference_surface_forces(m, m.rest_position, kCenter, kToolRadius, kK, plain);
-  const Reaction with = reference_surface_forces(m, m.rest_position, kCenter, kToolRadius, kK, layered, &layer);
-  ASSERT_GT(without.force.norm(), 0.1 * kK * 0.0015);
-  EXPECT_GT(with.force.norm(), 0.05 * without.force.norm());
-  EXPECT_LT(with.force.norm(), 0.95 * without.force.norm());
-  Vec3 sum = Vec3::Zero();
-  for (int32_t p = 0; p < m.npoint(); ++p) sum += layered[p];
-  EXPECT_LT((with.force + sum).norm(), 1e-12 * sum.norm());
-  EXPECT_EQ(with.contacts, without.contacts);
-  force_law::HertzLayer h;
-  std::vector<std::pair<const Tri*, Vec3>> touches;
-  for (const Tri& t : m.surface) {
-    double share[3], w[3];
-    for (int i = 0; i < 3; ++i) share[i] = m.tool_scale(t[i]) / m.surface_count(t[i]);
-    Vec3 f;
-    if (!force_law::sphere_triangle_penalty(kCenter, kToolRadius, m.rest_position[t[0]], m.rest_position[t[1]],
-                                            m.rest_position[t[2]], kK, share, f, w))
-      continue;
-    const TriangleLayer tl = triangle_layer(layer, t);
-    h.add(f.data(), kK * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star);
-    touches.push_back({&t, f});
+  for (const ToolPlacement* tool : {&kSphere, &kCapsule}) {
+    SCOPED_TRACE(tool == &kSphere ? "sphere" : "capsule");
+    std::vector<Vec3> plain(m.npoint(), Vec3::Zero()), layered(m.npoint(), Vec3::Zero());
+    const Reaction without = reference_surface_forces(m, m.rest_position, *tool, kK, plain);
+    const Reaction with = reference_surface_forces(m, m.rest_position, *tool, kK, layered, &layer);
+    ASSERT_GT(without.force.norm(), 0.1 * kK * 0.0015);
+    EXPECT_GT(with.force.norm(), 0.05 * without.force.norm());
+    EXPECT_LT(with.force.norm(), 0.95 * without.force.norm());
+    Vec3 sum = Vec3::Zero();
+    for (int32_t p = 0; p < m.npoint(); ++p) sum += layered[p];
+    EXPECT_LT((with.force + sum).norm(), 1e-12 * sum.norm());
+    EXPECT_EQ(with.contacts, without.contacts);
+    force_law::HertzLayer h;
+    std::vector<std::pair<const Tri*, Vec3>> touches;
+    for (const Tri& t : m.surface) {
+      double share[3], w[3];
+      for (int i = 0; i < 3; ++i) share[i] = m.tool_scale(t[i]) / m.surface_count(t[i]);
+      const Vec3 &x0 = m.rest_position[t[0]], &x1 = m.rest_position[t[1]], &x2 = m.rest_position[t[2]];
+      Vec3 f;
+      if (!force_law::capsule_triangle_penalty(tool->a, tool->b, kToolRadius, x0, x1, x2, kK, share, f, w)) continue;
+      const TriangleLayer tl = triangle_layer(layer, t);
+      h.add(f.data(), kK * force_law::triangle_penalty_scale(share), tl.punch_radius, tl.e_star,
+            force_law::segment_axial_position(Vec3(w[0] * x0 + w[1] * x1 + w[2] * x2), tool->a, tool->b));
+      touches.push_back({&t, f});
+    }
+    h.solve(kToolRadius);
+    EXPECT_EQ(h.line_share(), tool == &kSphere ? 0 : 1);
+    Vec3 want = Vec3::Zero();
+    for (size_t i = 0; i < touches.size(); ++i) want -= h.factor(i) * touches[i].second;
+    EXPECT_LT((with.force - want).norm(), 1e-12 * want.norm());
   }
-  h.solve(kToolRadius);
-  Vec3 want = Vec3::Zero();
-  for (size_t i = 0; i < touches.size(); ++i) want -= h.factor(i) * touches[i].second;
-  EXPECT_LT((with.force - want).norm(), 1e-12 * want.norm());
 }
 
 // One substep from rest with the sphere pressed in: every CPU kernel and
@@ -168,29 +300,36 @@ TEST(HertzLayer, TheReferenceAppliesTheLayersFactorToEveryPenalty) {
 TEST(HertzLayer, CpuBackendsApplyTheReferencesLayeredForcesBeforeAndAfterACut) {
   const Model whole = box();
   const Model cut = rebuild_model(whole, testing::split_across_plane_x(whole, 0.5 * kSize));
-  BackendTool tool{true, ToolMode::Push, kToolRadius, kK, ToolContact::Surface};
-  tool.hertz_layer = true;
   const double dt = 1e-4;
-  for (const Model* m : {&whole, &cut}) {
-    const ContactLayer layer = contact_layer(*m);
-    testing::Contact want;
-    want.force.assign(m->npoint(), Vec3::Zero());
-    want.reaction = reference_surface_forces(*m, m->rest_position, kCenter, kToolRadius, kK, want.force, &layer);
-    for (const Precision precision : {Precision::Double, Precision::Float})
-      for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Auto}) {
-        auto backend = make_cpu_backend(*m, tool, {precision, 1, kernel});
-        SCOPED_TRACE(backend->device() + (m == &cut ? ", after the cut" : ""));
-        const double tolerance = precision == Precision::Double ? 1e-8 : 1e-4;  // float: 24-bit positions
-        const Reaction got = backend->tick(testing::one_step_at(dt, kCenter));
-        const testing::Applied applied = testing::applied_in_one_step(*m, *backend, dt, want.force);
-        ASSERT_GT(applied.peak, 0.01);
-        EXPECT_LT(applied.worst, tolerance * applied.peak);
-        EXPECT_LT((got.force - want.reaction.force).norm(), tolerance * want.reaction.force.norm());
-        EXPECT_NE(backend->plan().passes.end(),
-                  std::find_if(backend->plan().passes.begin(), backend->plan().passes.end(), [](const PassInfo& p) {
-                    return p.detail.find("Hertz layer") != std::string::npos;
-                  }));
+  for (const ToolPlacement* placed : {&kSphere, &kCapsule}) {
+    for (const Model* m : {&whole, &cut}) {
+      BackendTool tool{true, ToolMode::Push, kToolRadius, kK, ToolContact::Surface};
+      tool.hertz_layer = true;
+      if (placed == &kCapsule) {
+        tool.shape = ToolShape::Capsule;
+        tool.end_a = placed->a - kCenter, tool.end_b = placed->b - kCenter;
       }
+      const ContactLayer layer = contact_layer(*m);
+      testing::Contact want;
+      want.force.assign(m->npoint(), Vec3::Zero());
+      want.reaction = reference_surface_forces(*m, m->rest_position, *placed, kK, want.force, &layer);
+      for (const Precision precision : {Precision::Double, Precision::Float})
+        for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Auto}) {
+          auto backend = make_cpu_backend(*m, tool, {precision, 1, kernel});
+          SCOPED_TRACE(backend->device() + (placed == &kSphere ? ", sphere" : ", capsule") +
+                       (m == &cut ? ", after the cut" : ""));
+          const double tolerance = precision == Precision::Double ? 1e-8 : 1e-4;  // float: 24-bit positions
+          const Reaction got = backend->tick(testing::one_step_at(dt, kCenter));
+          const testing::Applied applied = testing::applied_in_one_step(*m, *backend, dt, want.force);
+          ASSERT_GT(applied.peak, 0.01);
+          EXPECT_LT(applied.worst, tolerance * applied.peak);
+          EXPECT_LT((got.force - want.reaction.force).norm(), tolerance * want.reaction.force.norm());
+          const Plan plan = backend->plan();  // by value: begin and end from the same copy
+          EXPECT_TRUE(std::any_of(plan.passes.begin(), plan.passes.end(), [](const PassInfo& p) {
+            return p.detail.find("sub-cell layer") != std::string::npos;
+          }));
+        }
+    }
   }
 }
 

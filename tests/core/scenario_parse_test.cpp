@@ -317,7 +317,7 @@ TEST(ScenarioParse, ToolContactIsReadAndChecked) {
 
 // tool.hertz_layer: on by default for a pushing sphere on the surface (and
 // only there), carried to the backend, may be turned off, and refused where
-// it has no law (points, a capsule, a pulling tool).
+// it has no law (points, a grasper, a pulling tool).
 TEST(ScenarioParse, HertzLayerIsReadAndRefusedWhereItHasNoLaw) {
   json j = minimal();
   j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}]})");
@@ -337,15 +337,24 @@ TEST(ScenarioParse, HertzLayerIsReadAndRefusedWhereItHasNoLaw) {
   EXPECT_NE(error_of(j).find("tool.hertz_layer: expected true or false"), std::string::npos) << error_of(j);
   j["tool"]["hertz_layer"] = true;
   j["tool"]["contact"] = "points";
-  EXPECT_NE(error_of(j).find("tool.hertz_layer: the sub-cell Hertz layer is a sphere's surface contact"),
+  EXPECT_NE(error_of(j).find("tool.hertz_layer: the sub-cell layer is a pushing sphere's or capsule's surface contact"),
             std::string::npos)
       << error_of(j);
+  // A capsule has its line layer, on by default; a grasper none.
   j["tool"]["contact"] = "surface";
+  j["tool"].erase("hertz_layer");
   j["tool"]["shape"] = "capsule";
   j["tool"]["ends"] = json::parse("[[0, 0, 0], [0, 0, 0.1]]");
-  EXPECT_NE(error_of(j).find("tool.hertz_layer: the sub-cell"), std::string::npos) << error_of(j);
+  EXPECT_TRUE(parse(j).tool->spec.backend_tool().hertz_layer);
   j["tool"]["hertz_layer"] = false;
   EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
+  j["tool"]["shape"] = "grasper";
+  j["tool"]["friction"] = json::parse(R"({"static": 0.5, "kinetic": 0.4})");
+  j["tool"]["keyframes"] = json::parse(R"([{"t": 0, "position": [0,0,0], "gap": 0.01}])");
+  j["tool"].erase("hertz_layer");
+  EXPECT_FALSE(parse(j).tool->spec.hertz_layer) << error_of(j);
+  j["tool"]["hertz_layer"] = true;
+  EXPECT_NE(error_of(j).find("tool.hertz_layer: the sub-cell"), std::string::npos) << error_of(j);
 }
 
 // A material of spring constants has no E: the layer is off by default
@@ -356,7 +365,7 @@ TEST(ScenarioParse, HertzLayerNeedsAMaterialWithAYoungsModulus) {
   j["tool"] = json::parse(R"({"keyframes": [{"t": 0, "position": [0,0,0]}]})");
   EXPECT_FALSE(parse(j).tool->spec.hertz_layer);
   j["tool"]["hertz_layer"] = true;
-  EXPECT_EQ(error_of(j), "scene.json: tool.hertz_layer: the sub-cell Hertz layer needs the material's young_modulus "
+  EXPECT_EQ(error_of(j), "scene.json: tool.hertz_layer: the sub-cell layer needs the material's young_modulus "
                          "(a spring_stiffness gives none)");
   j["material"] = json::parse(R"({"young_modulus": 5000})");
   EXPECT_TRUE(parse(j).tool->spec.hertz_layer);

@@ -341,6 +341,41 @@ TEST(GlParity, PushWithTheHertzLayerMatchesTheDoubleReference) {
   }
 }
 
+// A capsule (a 4 cm shaft, radius 12 mm, its tip the tool's origin) pressed
+// in on its tip while it turns from 17 degrees to lying flat: its layer goes
+// from Hertz's law at the tip through the blend to the line's along the
+// shaft (hertz_layer.comp's spread along the axis and its regula falsi),
+// following the double reference with 1 and 8 invocations per point; the
+// layer acted.
+TEST(GlParity, CapsuleLyingDownWithItsLayerMatchesTheDoubleReference) {
+  const Model model = gl_test::box_model(8, 8, 4, true, 2e4, Vec3(0, 0, -9.81));
+  BackendTool tool{true, ToolMode::Push, 0.012, 200.0};
+  tool.shape = ToolShape::Capsule;
+  tool.end_b = Vec3(0.04, 0, 0);
+  const Vec3 start(0.03, 0.05, 0.064), end(0.03, 0.05, 0.058);
+  const Quat from(Eigen::AngleAxisd(-0.3, Vec3::UnitY())), to = Quat::Identity();
+  auto request = [&](int n) {
+    TickRequest r = tool_request(n, start, end);
+    r.turn_from = from.slerp(static_cast<double>(n) / kTicks, to);
+    r.turn_to = from.slerp(static_cast<double>(n + 1) / kTicks, to);
+    return r;
+  };
+  const double plain_peak = compare(model, tool, request).peak_force;
+  tool.hertz_layer = true;
+  for (const int32_t threads_per_point : {1, 8}) {
+    SCOPED_TRACE(std::to_string(threads_per_point) + " invocation(s) per point");
+    const Comparison c = compare(model, tool, request, nullptr, threads_per_point);
+    std::cout << "capsule lying down with its layer, " << threads_per_point << " invocation(s) per point: position "
+              << c.position << " of diagonal, force " << c.force << " of peak " << c.peak_force
+              << " N (without the layer " << plain_peak << " N), " << c.max_contacts << " contacts\n";
+    ASSERT_GT(c.max_contacts, 10);
+    ASSERT_GT(c.peak_force, 0.01);
+    EXPECT_LT(c.peak_force, 0.9 * plain_peak);
+    EXPECT_LT(c.position, 1e-5);
+    EXPECT_LT(c.force, 1e-4);
+  }
+}
+
 // A 2 cm sphere pressed 3 mm into the middle of a finer box's top face: its
 // contact falls in several of the layer's blocks of ORGANSIM_GL_LAYER_SIZE
 // triangles (checked on the packed table), and the solve over all of them
