@@ -114,11 +114,20 @@ bool sphere_triangle_penalty(vec3 center, float radius, vec3 x0, vec3 x1, vec3 x
 float hertz_layer_offset_at(float a, float radius, float punch_radius) {
   return a * a / radius - 2.0 * a * a * a / (3.0 * radius * punch_radius);
 }
+// force_law::kLayerContactLimit: the largest contact radius the layer's
+// laws follow, as a share of the tool's radius.
+const float kLayerContactLimit = 0.5;
+// The offset held beyond the largest Hertz radius min(a_h, R / 2).
+float hertz_layer_held(float radius, float punch_radius) {
+  const float limit = kLayerContactLimit * radius;
+  if (punch_radius <= limit) return punch_radius * punch_radius / (3.0 * radius);
+  return hertz_layer_offset_at(limit, radius, punch_radius);
+}
 // delta(F) (force_law::hertz_layer_offset).
 float hertz_layer_offset(float force, float e_star, float radius, float punch_radius) {
   if (!(force > 0.0)) return 0.0;
   const float a = pow(3.0 * force * radius / (4.0 * e_star), 1.0 / 3.0);
-  if (a >= punch_radius) return punch_radius * punch_radius / (3.0 * radius);
+  if (a >= min(punch_radius, kLayerContactLimit * radius)) return hertz_layer_held(radius, punch_radius);
   return a * a / radius - force / (2.0 * e_star * punch_radius);
 }
 float hertz_layer_factor(float m, float k, float c, float delta) {
@@ -132,8 +141,10 @@ float hertz_layer_factor(float m, float k, float c, float delta) {
 float line_layer_offset(float force_per_length, float e_star, float radius, float half_width) {
   if (!(force_per_length > 0.0)) return 0.0;
   const float b = sqrt(4.0 * force_per_length * radius / (3.14159265358979 * e_star));
-  if (b >= half_width) return half_width * half_width / (4.0 * radius);
-  return b * b / (2.0 * radius) * (log(half_width / b) + 0.5);
+  const float limit = kLayerContactLimit * radius;
+  if (b >= half_width && half_width <= limit) return half_width * half_width / (4.0 * radius);
+  const float held = min(b, limit);
+  return held * held / (2.0 * radius) * (log(half_width / held) + 0.5);
 }
 
 // The capsule tool (force_law.h's capsule section): the segment a-b swept by R.

@@ -1,21 +1,21 @@
-// The sub-cell Hertz layer's solve for one substep, after
-// hertz_layer_touch.comp and before the step (force_law::HertzLayer is its
-// CPU twin; docs/physics.md derives it). One workgroup. It reads the
-// penalties {f_t, k_t} and places s_t along the axis of the blocks of
-// ORGANSIM_GL_LAYER_SIZE triangles that the touch pass found in contact (a
-// few of them: the triangles are packed in spatial order), invocation i
-// taking entry i of each block. Shared-memory trees sum F_lin and the
-// m-weighted a_h, E*, s and then (s - mean)^2 in a fixed order
-// (deterministic). With no
-// spread along the axis (a sphere, a capsule on its end): Newton's steps on
-// the Hertz radius a, kept in a bracket; otherwise the blend of the sphere's
-// and the line's law (force_law::HertzLayer) and regula falsi (Illinois) on
-// the force. Either is the same on every invocation: each step sums
-// G(delta) = sum_t c_t m_t hertz_layer_factor(...) (and its slope) over the
-// touches the same way. layer_out = {n, delta} for step.comp, which multiplies each
-// penalty by its hertz_layer_factor. The loops' conditions come from shared
-// values, so every invocation takes the same path (uniform control flow for
-// the barriers).
+// The sub-cell layer's solve for one substep, after hertz_layer_touch.comp
+// and before the step (force_law::HertzLayer is its CPU twin;
+// docs/physics.md derives it). One workgroup. It reads the penalties {f_t,
+// k_t} and places s_t along the axis of the blocks of ORGANSIM_GL_LAYER_SIZE
+// triangles that the touch pass found in contact (a few of them: the
+// triangles are packed in spatial order), invocation i taking entry i of
+// each block. Shared-memory trees sum, in a fixed order (deterministic),
+// F_lin and the m-weighted a_h and E*, then the places weighted by each
+// touch's force along n, then their spread about its mean. With no spread
+// along the axis (a sphere, a capsule on its end): Newton's steps on the
+// Hertz radius a, kept in a bracket; otherwise the blend of the sphere's
+// and the line's law and regula falsi (Illinois) on the force. Either is
+// the same on every invocation: each step sums G(delta) = sum_t c_t m_t
+// hertz_layer_factor(...) (and its slope) over the touches the same way.
+// layer_out = {n, delta} for step.comp, which multiplies each penalty by
+// its hertz_layer_factor. The loops' conditions come from shared values, so
+// every invocation takes the same path (uniform control flow for the
+// barriers).
 layout(local_size_x = ORGANSIM_GL_LAYER_SIZE) in;
 
 struct LayerTri {
@@ -122,30 +122,16 @@ void main() {
   barrier();
 
   vec4 sum = vec4(0.0);       // {F_lin, sum m}
-  vec4 weighted = vec4(0.0);  // {sum m a_h, sum m E*, sum m s, 0}
+  vec4 weighted = vec4(0.0);  // {sum m a_h, sum m E*, 0, 0}
   for (uint i = 0; i < nblocks; ++i) {
     int t;
     const vec4 e = touch_at(lane, i, t);
     const float m = length(e.xyz);
     if (!(m > 0.0)) continue;
     sum += vec4(e.xyz, m);
-    weighted.xyz += m * vec3(tris[t].data.xy, touch[2 * t + 1].x);
+    weighted.xy += m * tris[t].data.xy;
   }
   reduce(lane, sum, weighted);
-  // The spread about the mean in a second pass: sum m s^2 - (sum m s)^2 / sum m
-  // would cancel to float noise where every place is the same (a sphere, a
-  // capsule on its end).
-  const float mean = sum.w > 0.0 ? weighted.z / sum.w : 0.0;
-  vec4 spread = vec4(0.0), unused = vec4(0.0);
-  for (uint i = 0; i < nblocks; ++i) {
-    int t;
-    const vec4 e = touch_at(lane, i, t);
-    const float m = length(e.xyz);
-    if (!(m > 0.0)) continue;
-    const float d = touch[2 * t + 1].x - mean;
-    spread.x += m * d * d;
-  }
-  reduce(lane, spread, unused);
   const float linear = length(sum.xyz);
   if (!(linear > 0.0) || !(sum.w > 0.0)) {
     if (lane == 0) layer_out = vec4(0.0, 0.0, 1.0, 0.0);
@@ -153,7 +139,28 @@ void main() {
   }
   const vec3 n = sum.xyz / linear;
   const float a_h = u_punch_factor * weighted.x / sum.w, e_star = weighted.y / sum.w;
-  const float variance = spread.x / sum.w;
+  // The places along the axis weighted by each touch's force along n
+  // (force_law::HertzLayer::contact_length): their mean, then their spread
+  // about it in a second pass (sum w s^2 - (sum w s)^2 / sum w would cancel
+  // to float noise where every place is the same).
+  vec4 moments = vec4(0.0), spread = vec4(0.0), unused = vec4(0.0);  // {sum w, sum w s}, {sum w (s - mean)^2}
+  for (uint i = 0; i < nblocks; ++i) {
+    int t;
+    const vec4 e = touch_at(lane, i, t);
+    const float w = max(0.0, dot(e.xyz, n));
+    moments.xy += w * vec2(1.0, touch[2 * t + 1].x);
+  }
+  reduce(lane, moments, unused);
+  const float mean = moments.x > 0.0 ? moments.y / moments.x : 0.0;
+  for (uint i = 0; i < nblocks; ++i) {
+    int t;
+    const vec4 e = touch_at(lane, i, t);
+    const float w = max(0.0, dot(e.xyz, n));
+    const float d = touch[2 * t + 1].x - mean;
+    spread.x += w * d * d;
+  }
+  reduce(lane, spread, unused);
+  const float variance = moments.x > 0.0 ? spread.x / moments.x : 0.0;
   const float contact_length = variance > 0.0 ? sqrt(12.0 * variance) : 0.0;
   const float beta = contact_length > 0.0 ? min(1.0, contact_length / (2.0 * a_h)) : 0.0;
   float delta;
@@ -179,10 +186,11 @@ void main() {
       }
     }
   } else {
-    // Beyond a_h the offset is constant (force_law::HertzLayer::solve).
-    delta = a_h * a_h / (3.0 * u_radius);
-    if (along(lane, nblocks, n, delta).x < hertz_force_at(a_h, e_star)) {
-      float lo = 0.0, hi = a_h, a = a_h;
+    // Beyond min(a_h, R / 2) the offset is constant (force_law::HertzLayer::solve).
+    const float a_max = min(a_h, kLayerContactLimit * u_radius);
+    delta = hertz_layer_held(u_radius, a_h);
+    if (along(lane, nblocks, n, delta).x < hertz_force_at(a_max, e_star)) {
+      float lo = 0.0, hi = a_max, a = a_max;
       for (int iteration = 0; iteration < 40; ++iteration) {
         const float d = hertz_layer_offset_at(a, u_radius, a_h);
         const vec2 g = along(lane, nblocks, n, d);
@@ -192,7 +200,7 @@ void main() {
         const float slope = 4.0 * e_star * a * a / u_radius + g.y * 2.0 * a * (1.0 - a / a_h) / u_radius;
         float next = slope > 0.0 ? a - value / slope : lo;
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        const bool settled = abs(next - a) <= 1e-6 * a_h;
+        const bool settled = abs(next - a) <= 1e-6 * a_max;
         a = next;
         if (settled) break;
       }

@@ -438,17 +438,26 @@ inline bool capsule_triangle_penalty(const V3& a, const V3& b, Real radius, cons
 // E / (1 - nu^2)) less that of a flat punch of radius a_h (the cells'
 // own), constant once the Hertz contact radius a reaches a_h (there the
 // cells resolve the contact). delta(0) = 0, and delta rises with F with a
-// continuous slope (zero at a = a_h). a_h = kHertzLayerPunchFactor x the
+// continuous slope (zero at a = a_h). A sphere with R / 2 < a_h (a probe)
+// stops at a = R / 2 instead, its value there held beyond
+// (kLayerContactLimit): Hertz takes the sphere for a paraboloid, within 7 %
+// of its depth up to a = R / 2 and 100 % off at a = R, and a probe pressed
+// deeper than that becomes a punch of radius about R whose further
+// compliance the layer does not carry (it would need an offset beyond what
+// a penalty on a triangle can hold: docs/physics.md, the limits). a_h = kHertzLayerPunchFactor x the
 // touched triangles' punch radius sqrt(vertex-ring area / pi) (core/model/
 // contact_layer.h); the factor is fitted to one validation row (docs/
 // validation.md: Hertz at 8 mm cells, d/R 0.1, nu 0.45) and validated on
 // the others.
 inline constexpr double kHertzLayerPunchFactor = 0.8;
+// The largest contact radius (half-width for the line law) the laws are
+// followed to, as a share of the tool's radius R.
+inline constexpr double kLayerContactLimit = 0.5;
 
 // delta(F), m; 0 for F <= 0.
 double hertz_layer_offset(double force, double e_star, double radius, double punch_radius);
 
-// delta in terms of the Hertz radius a <= a_h (F = 4 E* a^3 / (3 R)):
+// delta in terms of the Hertz radius a <= min(a_h, R / 2) (F = 4 E* a^3 / (3 R)):
 // a^2 / R - 2 a^3 / (3 R a_h), E* cancelling; what the solves iterate on.
 template <class Real>
 inline Real hertz_layer_offset_at(Real a, Real radius, Real punch_radius) {
@@ -476,7 +485,8 @@ inline Real hertz_layer_factor(Real m, Real k, Real c, Real delta) {
 // log terms cancel):
 //   delta(P) = (b^2 / (2 R)) (ln(c / b) + 1/2)   while b < c,
 //   delta(P) = c^2 / (4 R)                       beyond,
-// continuous with a zero slope where b reaches c, and rising with P below.
+// continuous with a zero slope where b reaches c, and rising with P below;
+// as for the sphere, b stops at R / 2 when R / 2 < c (kLayerContactLimit).
 // c = kLineLayerHalfWidthFactor x the touched triangles' punch radius
 // sqrt(vertex-ring area / pi); the factor is fitted to one validation row
 // (docs/validation.md: the line load at 8 mm cells, d 2 mm, nu 0.45) and
@@ -505,9 +515,12 @@ double line_layer_offset(double force_per_length, double e_star, double radius, 
 // shaft lying along the surface:
 //   delta(F) = (1 - beta) delta_sphere(F) + beta delta_line(F / L),
 //   beta = min(1, L / (2 a_h)),
-// L = sqrt(12 var_m(s)) with s_t each touch's place along the tool's axis
+// L = sqrt(12 var(s)) with s_t each touch's place along the tool's axis
 // (the parameter of the segment's point closest to it, in m; 0 for a
-// sphere): the length of a uniform line load with the same spread. A
+// sphere), weighted by each touch's force along n, max(0, f_t . n) (a
+// shaft's touches on the side walls of the hole a probe pressed in push
+// across n and carry no length): the length of a uniform line load with
+// the same spread. A
 // sphere or a capsule pressed on its rounded end has L = 0 (the sphere's
 // law, solved as before); a shaft along the surface longer than the
 // cells' punch diameter has the line law alone; in between (a tilted
@@ -516,7 +529,7 @@ class HertzLayer {
  public:
   void clear() {
     touches_.clear();
-    weight_ = punch_ = e_star_ = along_ = along2_ = delta_ = 0;
+    weight_ = punch_ = e_star_ = delta_ = 0;
   }
   // Triangle penalty f_t with its stiffness k_t, punch radius and E*, in the
   // order the backend visits them; `along` is its place along the tool's
@@ -527,15 +540,9 @@ class HertzLayer {
     for (int i = 0; i < 3; ++i) t.f[i] = f[i];
     t.m = std::sqrt(t.f[0] * t.f[0] + t.f[1] * t.f[1] + t.f[2] * t.f[2]);
     t.k = k_t;
+    t.s = along;
     touches_.push_back(t);
     weight_ += t.m, punch_ += t.m * punch_radius, e_star_ += t.m * triangle_e_star;
-    // The weighted mean and spread of `along` by West's update (no
-    // cancellation: equal places give a spread of exactly 0).
-    if (weight_ > 0) {
-      const double change = along - along_;
-      along_ += t.m / weight_ * change;
-      along2_ += t.m * change * (along - along_);
-    }
   }
   // Finds delta for a tool of radius R.
   void solve(double radius);
@@ -556,13 +563,16 @@ class HertzLayer {
   struct Touch {
     double f[3];
     double m = 0, k = 0, c = 1;
+    double s = 0;  // place along the axis, m
   };
   double force_along(double delta) const;     // G(delta)
   double stiffness_along(double delta) const;  // -G'(delta): sum over active t of k_t c_t^2
-  void solve_sphere(double radius);            // beta = 0: Newton's steps on the Hertz radius
+  double linear_direction(double n[3]) const;  // n and |F_lin| (0: n undefined)
+  // delta(F) with the length L and share beta already measured.
+  double offset_at(double force, double radius, double length, double beta) const;
+  void solve_sphere(double radius);  // beta = 0: Newton's steps on the Hertz radius
   std::vector<Touch> touches_;
   double weight_ = 0, punch_ = 0, e_star_ = 0, delta_ = 0;
-  double along_ = 0, along2_ = 0;  // the m-weighted mean of the places along the axis, and sum m (s - mean)^2
 };
 
 // A pulling tool's attachment spring: f = k s (target - x), target = c + o

@@ -43,6 +43,13 @@ TEST(HertzLayer, OffsetIsHertzLessAPunchUpToTheCellsRadiusAndConstantBeyond) {
   EXPECT_NEAR(hertz_layer_offset(at * (1 - 1e-6), kEStar, kRadius, kPunch), beyond, 1e-9 * beyond);
   EXPECT_EQ(hertz_layer_offset(at * 1.5, kEStar, kRadius, kPunch), beyond);
   EXPECT_EQ(hertz_layer_offset(at * 100, kEStar, kRadius, kPunch), beyond);
+  // A sphere smaller than twice a_h (a probe): held where a reaches R / 2,
+  // continuously (Hertz's paraboloid is 7 % off the sphere there).
+  constexpr double kProbe = 0.006, kLimit = force_law::kLayerContactLimit * kProbe;
+  const double at_limit = 4 * kEStar * kLimit * kLimit * kLimit / (3 * kProbe);
+  const double held = force_law::hertz_layer_offset_at(kLimit, kProbe, kPunch);
+  EXPECT_NEAR(hertz_layer_offset(at_limit * (1 - 1e-9), kEStar, kProbe, kPunch), held, 1e-8 * held);
+  EXPECT_EQ(hertz_layer_offset(at_limit * 2, kEStar, kProbe, kPunch), held);
   double last = 0;
   for (double f = at / 1000; f < 2 * at; f *= 1.1) {
     const double d = hertz_layer_offset(f, kEStar, kRadius, kPunch);
@@ -62,7 +69,7 @@ TEST(HertzLayer, OffsetIsHertzLessAPunchUpToTheCellsRadiusAndConstantBeyond) {
 // rises with P.
 TEST(HertzLayer, LineOffsetIsACylinderLessAStripPunchUpToTheCellsHalfWidthAndConstantBeyond) {
   using force_law::line_layer_offset;
-  constexpr double kCapsule = 0.005, kHalfWidth = 0.003;
+  constexpr double kCapsule = 0.008, kHalfWidth = 0.003;  // c below R / 2
   EXPECT_EQ(line_layer_offset(0, kEStar, kCapsule, kHalfWidth), 0);
   EXPECT_EQ(line_layer_offset(-1, kEStar, kCapsule, kHalfWidth), 0);
   const auto half_width = [&](double P) { return std::sqrt(4 * P * kCapsule / (M_PI * kEStar)); };
@@ -75,7 +82,7 @@ TEST(HertzLayer, LineOffsetIsACylinderLessAStripPunchUpToTheCellsHalfWidthAndCon
     }
     return sum * M_PI / n;
   };
-  for (const double P : {0.2, 1.0, 5.0}) {  // N/m: b from 0.5 to 2.5 mm, all below c
+  for (const double P : {0.2, 1.0, 3.0}) {  // N/m: b from 0.6 to 2.5 mm, all below c
     const double b = half_width(P);
     ASSERT_LT(b, kHalfWidth);
     // int p ln|s| ds: Hertz's p = (2P / (pi b^2)) sqrt(b^2 - s^2), ds = b cos t dt; the punch's p ds = (P / pi) dt.
@@ -94,6 +101,14 @@ TEST(HertzLayer, LineOffsetIsACylinderLessAStripPunchUpToTheCellsHalfWidthAndCon
     EXPECT_GE(d, last) << "P " << P;
     last = d;
   }
+  // A shaft narrower than the cells (R / 2 < c): held where b reaches R / 2,
+  // continuously.
+  constexpr double kThin = 0.004, kLimit = force_law::kLayerContactLimit * kThin;
+  const double at_limit = M_PI * kEStar * kLimit * kLimit / (4 * kThin);  // b = R / 2
+  const double held = kLimit * kLimit / (2 * kThin) * (std::log(kHalfWidth / kLimit) + 0.5);
+  EXPECT_NEAR(line_layer_offset(at_limit * (1 - 1e-9), kEStar, kThin, kHalfWidth), held, 1e-8 * held);
+  EXPECT_EQ(line_layer_offset(at_limit * 2, kEStar, kThin, kHalfWidth), held);
+  EXPECT_EQ(line_layer_offset(at_limit * 100, kEStar, kThin, kHalfWidth), held);
 }
 
 // Touches spread evenly along a capsule's axis: the layer reads their
@@ -131,6 +146,18 @@ TEST(HertzLayer, ACapsulesLayerBlendsTheSphereAndTheLineByTheContactsLengthAlong
     if (beta == 1) {
       EXPECT_NEAR(layer.offset_for(F, kCapsule), line, 1e-15);
     }
+  }
+  // A probe pressed in on its end: the shaft's touches on the walls of the
+  // hole push across the contact's direction and carry no length (weighed
+  // by their size they would make it a line).
+  {
+    force_law::HertzLayer probe;
+    const double tip[3] = {0, 0, 0.2}, east[3] = {0.3, 0, 0}, west[3] = {-0.3, 0, 0};
+    probe.add(tip, 2 * kEStar * kPunch, raw, kEStar, 0.0);
+    probe.add(east, 2 * kEStar * kPunch, raw, kEStar, 0.004);
+    probe.add(west, 2 * kEStar * kPunch, raw, kEStar, 0.008);
+    EXPECT_EQ(probe.contact_length(), 0);
+    EXPECT_EQ(probe.line_share(), 0);
   }
   // The solve over random penalties spread along the axis by 0 to 4 a_h.
   std::mt19937 rng(11);
