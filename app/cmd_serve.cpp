@@ -4,6 +4,10 @@
 // (core/run) with a LiveSession (core/live) as its tool driver and an
 // IgtlServer (igtl/) as the session's link; OUTDIR gets forces.json and
 // session.json, which `organsim run` replays bit for bit.
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -53,6 +57,19 @@ bool write_session(const fs::path& path, const ServeArgs& args, const LiveSessio
   return true;
 }
 
+// "All threads" (a scenario's backend.threads 0) means all but one in a
+// live loop, unless --threads or OMP_NUM_THREADS says otherwise: the
+// network, the client (often on the same machine) and the system need a
+// core, and a stepping thread the OS deschedules stalls the whole tick
+// (docs/live.md, "Threads").
+void leave_a_hardware_thread(int32_t asked, int32_t resolved) {
+  if (asked >= 0 || resolved != 0 || std::getenv("OMP_NUM_THREADS")) return;
+  const int procs = omp_get_num_procs();
+  omp_set_num_threads(std::max(1, procs - 1));
+  std::cout << "threads:  at most " << std::max(1, procs - 1) << " of " << procs
+            << " hardware threads, one left to the network and the client (--threads to change)\n";
+}
+
 void serve_command(const ServeArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (!s.tool) throw Error(ErrorKind::Scenario, args.scenario + ": organsim serve needs a \"tool\": the client drives it");
@@ -71,6 +88,7 @@ void serve_command(const ServeArgs& args) {
   if (!args.client_transform.empty()) frame.to_scene = read_client_transform(args.client_transform);
 
   BackendSelection selection = scenario_backend_selection(s, args.backend, args.precision, args.threads);
+  leave_a_hardware_thread(args.threads, selection.threads);
   selection.gl_keep_reaction_positions = true;  // the reply's stiffness and the surface without waiting for the tick in flight
   const std::string backend_choice = resolve_auto_backend(selection);
   if (!backend_choice.empty()) std::cout << "backend:  " << backend_choice << "\n";
@@ -178,7 +196,9 @@ const bool registered = register_command("serve", 25, [](CLI::App& root) {
       ->check(CLI::IsMember({"auto", "cpu", "gl"}));
   cmd->add_option("--precision", args->precision, "double or float; overrides the scenario's precision")
       ->check(CLI::IsMember({"double", "float"}));
-  cmd->add_option("--threads", args->threads, "CPU threads (0: all); overrides the scenario's backend.threads")
+  cmd->add_option("--threads", args->threads,
+                  "CPU threads (0: all); overrides the scenario's backend.threads, whose 0 (all) serve takes as all "
+                  "but one")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--surface-rate", args->surface_rate,
                   "Send the boundary surface as POLYDATA \"OrganSurface\" this many times per second, in the "

@@ -27,6 +27,33 @@ constexpr double kEStar = 5000, kRadius = 0.02, kPunch = 0.004;
 
 double hertz_force(double a) { return 4 * kEStar * a * a * a / (3 * kRadius); }
 
+// n random penalties f with stiffnesses k: normals within about 45 degrees
+// of -z, forces and stiffnesses over six decades about the punch's own (2
+// E* a_h), each placed along the axis within `spread` of its start (0: a
+// sphere).
+void add_random_penalties(force_law::HertzLayer& layer, std::mt19937& rng, int n, double spread, std::vector<Vec3>& f,
+                          std::vector<double>& k) {
+  std::uniform_real_distribution<double> decades(-3, 3), unit(-1, 1);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 dir = Vec3(0.5 * unit(rng), 0.5 * unit(rng), -1).normalized();
+    f.push_back(hertz_force(kPunch) * std::pow(10.0, decades(rng)) / n * dir);
+    k.push_back(2 * kEStar * kPunch * std::pow(10.0, decades(rng)));
+    const double along = spread > 0 ? spread * (0.5 + 0.5 * unit(rng)) : 0;
+    layer.add(f.back().data(), k.back(), kPunch / force_law::kHertzLayerPunchFactor, kEStar, along);
+  }
+}
+
+// offset(load) never falls as the load rises from `from` to `to` by 10 % steps.
+template <class Offset>
+void expect_rising(const Offset& offset, double from, double to) {
+  double last = 0;
+  for (double load = from; load < to; load *= 1.1) {
+    const double d = offset(load);
+    EXPECT_GE(d, last) << "load " << load;
+    last = d;
+  }
+}
+
 // delta(F) is Hertz's indentation a^2 / R less the punch's F / (2 E* a_h)
 // below a_h (so nearly all of Hertz's at small F, where the punch's is of
 // higher order), continuous with a zero slope where a reaches a_h, and
@@ -50,12 +77,7 @@ TEST(HertzLayer, OffsetIsHertzLessAPunchUpToTheCellsRadiusAndConstantBeyond) {
   const double held = force_law::hertz_layer_offset_at(kLimit, kProbe, kPunch);
   EXPECT_NEAR(hertz_layer_offset(at_limit * (1 - 1e-9), kEStar, kProbe, kPunch), held, 1e-8 * held);
   EXPECT_EQ(hertz_layer_offset(at_limit * 2, kEStar, kProbe, kPunch), held);
-  double last = 0;
-  for (double f = at / 1000; f < 2 * at; f *= 1.1) {
-    const double d = hertz_layer_offset(f, kEStar, kRadius, kPunch);
-    EXPECT_GE(d, last) << "F " << f;
-    last = d;
-  }
+  expect_rising([](double f) { return hertz_layer_offset(f, kEStar, kRadius, kPunch); }, at / 1000, 2 * at);
 }
 
 // The line law against the half-plane it comes from: in plane strain the
@@ -95,12 +117,7 @@ TEST(HertzLayer, LineOffsetIsACylinderLessAStripPunchUpToTheCellsHalfWidthAndCon
   const double beyond = kHalfWidth * kHalfWidth / (4 * kCapsule);
   EXPECT_NEAR(line_layer_offset(at * (1 - 1e-6), kEStar, kCapsule, kHalfWidth), beyond, 1e-9 * beyond);
   EXPECT_EQ(line_layer_offset(at * 3, kEStar, kCapsule, kHalfWidth), beyond);
-  double last = 0;
-  for (double P = at / 1000; P < 2 * at; P *= 1.1) {
-    const double d = line_layer_offset(P, kEStar, kCapsule, kHalfWidth);
-    EXPECT_GE(d, last) << "P " << P;
-    last = d;
-  }
+  expect_rising([](double P) { return line_layer_offset(P, kEStar, kCapsule, kHalfWidth); }, at / 1000, 2 * at);
   // A shaft narrower than the cells (R / 2 < c): held where b reaches R / 2,
   // continuously.
   constexpr double kThin = 0.004, kLimit = force_law::kLayerContactLimit * kThin;
@@ -161,21 +178,15 @@ TEST(HertzLayer, ACapsulesLayerBlendsTheSphereAndTheLineByTheContactsLengthAlong
   }
   // The solve over random penalties spread along the axis by 0 to 4 a_h.
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> decades(-3, 3), unit(-1, 1), spread(0, 4 * a_h);
+  std::uniform_real_distribution<double> spread(0, 4 * a_h);
   int dropped = 0, blended = 0, lines = 0;
   force_law::HertzLayer layer;
   for (int trial = 0; trial < 2000; ++trial) {
     layer.clear();
     const int n = 2 + trial % 6;
-    const double length = spread(rng);
     std::vector<Vec3> f;
     std::vector<double> k;
-    for (int i = 0; i < n; ++i) {
-      const Vec3 dir = Vec3(0.5 * unit(rng), 0.5 * unit(rng), -1).normalized();
-      f.push_back(hertz_force(kPunch) * std::pow(10.0, decades(rng)) / n * dir);
-      k.push_back(2 * kEStar * kPunch * std::pow(10.0, decades(rng)));
-      layer.add(f.back().data(), k.back(), raw, kEStar, length * (0.5 + 0.5 * unit(rng)));
-    }
+    add_random_penalties(layer, rng, n, spread(rng), f, k);
     layer.solve(kCapsule);
     const double beta = layer.line_share();
     blended += beta > 0 && beta < 1;
@@ -218,7 +229,6 @@ double layer_force(const force_law::HertzLayer& layer) {
 
 TEST(HertzLayer, ItsForceEqualsThePenaltiesWithTheSphereMovedBackByItsOffset) {
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> decades(-3, 3), unit(-1, 1);
   int below = 0, beyond = 0, dropped = 0;
   force_law::HertzLayer layer;
   for (int trial = 0; trial < 2000; ++trial) {
@@ -226,13 +236,7 @@ TEST(HertzLayer, ItsForceEqualsThePenaltiesWithTheSphereMovedBackByItsOffset) {
     const int n = 1 + trial % 6;
     std::vector<Vec3> f;
     std::vector<double> k;
-    for (int i = 0; i < n; ++i) {
-      // Normals within about 45 degrees of -z, forces spread over decades.
-      const Vec3 dir = Vec3(0.5 * unit(rng), 0.5 * unit(rng), -1).normalized();
-      f.push_back(hertz_force(kPunch) * std::pow(10.0, decades(rng)) / n * dir);
-      k.push_back(2 * kEStar * kPunch * std::pow(10.0, decades(rng)));
-      layer.add(f.back().data(), k.back(), kPunch / force_law::kHertzLayerPunchFactor, kEStar);
-    }
+    add_random_penalties(layer, rng, n, 0, f, k);
     layer.solve(kRadius);
     Vec3 sum = Vec3::Zero(), scaled = Vec3::Zero();
     for (int i = 0; i < n; ++i) sum += f[i];
