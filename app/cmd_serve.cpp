@@ -5,9 +5,12 @@
 // IgtlServer (igtl/) as the session's link; OUTDIR gets forces.json and
 // session.json, which `organsim run` replays bit for bit.
 #include <omp.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -46,6 +49,7 @@ struct ServeArgs {
   double duration = 60;
   bool allow_unstable = false;
   double surface_rate = 0;
+  int realtime_priority = 0;  // 0: the loop at the normal policy
 };
 
 // Writes OUTDIR/session.json; false (and nothing written) when no tick was served: there is nothing to replay.
@@ -68,6 +72,38 @@ void leave_a_hardware_thread(int32_t asked, int32_t resolved) {
   omp_set_num_threads(std::max(1, procs - 1));
   std::cout << "threads:  at most " << std::max(1, procs - 1) << " of " << procs
             << " hardware threads, one left to the network and the client (--threads to change)\n";
+}
+
+// The loop thread at SCHED_FIFO `priority` (docs/live.md, "Threads"), so
+// that no other thread of the machine's normal policy (the client, a
+// build) takes its core mid-tick. Only with a hardware thread left to the
+// others: real-time threads on every core would starve the network and
+// the client, and the kernel throttles them for 50 ms a second. Set after
+// the frame writer and OpenMP's pool exist (an empty parallel region makes
+// the pool), so that they keep the normal policy; the change worker sets
+// its own. `threads` is the backend's count (0: OpenMP's). Returns the
+// policy as the system reports it, for the meta.
+nlohmann::json raise_loop_priority(int priority, int32_t threads) {
+  const int procs = omp_get_num_procs(), steppers = threads > 0 ? threads : omp_get_max_threads();
+  if (steppers >= procs)
+    throw Error(ErrorKind::Usage, "--realtime-priority: the loop's " + std::to_string(steppers) +
+                                      " stepping threads would take all " + std::to_string(procs) +
+                                      " hardware threads; leave one to the network and the client (--threads " +
+                                      std::to_string(std::max(1, procs - 1)) + " or fewer)");
+#pragma omp parallel num_threads(steppers)
+  { /* makes OpenMP's pool at the normal policy */ }
+  sched_param param{};
+  param.sched_priority = priority;
+  if (const int err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param); err != 0)
+    throw Error(ErrorKind::Usage, "--realtime-priority " + std::to_string(priority) + ": the system refused SCHED_FIFO (" +
+                                      std::strerror(err) + "); it needs CAP_SYS_NICE or a real-time priority limit "
+                                      "(ulimit -r) of at least " + std::to_string(priority));
+  int policy = 0;
+  pthread_getschedparam(pthread_self(), &policy, &param);
+  std::cout << "priority: the loop thread at " << (policy == SCHED_FIFO ? "SCHED_FIFO " : "policy ")
+            << param.sched_priority << "\n";
+  return {{"policy", policy == SCHED_FIFO ? "SCHED_FIFO" : std::to_string(policy)},
+          {"priority", param.sched_priority}};
 }
 
 void serve_command(const ServeArgs& args) {
@@ -108,6 +144,9 @@ void serve_command(const ServeArgs& args) {
   BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks(), true);
   prepared.start(*backend);
 
+  // Before the port opens: a refusal leaves nothing listening.
+  const nlohmann::json loop_scheduling =
+      args.realtime_priority > 0 ? raise_loop_priority(args.realtime_priority, selection.threads) : nlohmann::json();
   StopSignals signals;  // SIGINT ends the session after the current tick, with its record written
   // With surfaces each client's send buffer holds a liver surface (about
   // 130 KB) and its replies; without, a small one keeps replies fresh.
@@ -137,6 +176,7 @@ void serve_command(const ServeArgs& args) {
   options.observers.push_back(&session);  // last: the reply leaves once the tick is checked
   options.tool_driver = &session;
   options.meta_extra = {{"mesh", s.mesh.path.string()}, {"command", "serve"}};
+  if (!loop_scheduling.is_null()) options.meta_extra["loop_scheduling"] = loop_scheduling;
   options.meta_extra.update(prepared.meta());
   if (!backend_choice.empty()) options.meta_extra["backend_choice"] = backend_choice;
 
@@ -204,6 +244,10 @@ const bool registered = register_command("serve", 25, [](CLI::App& root) {
                   "Send the boundary surface as POLYDATA \"OrganSurface\" this many times per second, in the "
                   "client's frame and units (e.g. 30 for 3D Slicer; default 0: never)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--realtime-priority", args->realtime_priority,
+                  "Run the loop thread at SCHED_FIFO priority 1-99 (needs CAP_SYS_NICE or ulimit -r; default 0: the "
+                  "normal policy); refused when the stepping threads would take every hardware thread")
+      ->check(CLI::Range(0, 99));
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "Serve even when time.dt exceeds the critical step dt_crit [s] (the blow-up check will likely stop it)");
   cmd->callback([args] { serve_command(*args); });

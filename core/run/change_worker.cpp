@@ -1,5 +1,7 @@
 #include "core/run/change_worker.h"
 
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -14,7 +16,11 @@ void ChangeWorker::start(TopologyEvents& events, const Model& current, std::vect
   future_ = std::async(std::launch::async, [&events, &current, x = std::move(x), t0, t1, dt, tool, &backend] {
     // The worker's thread yields to the run loop's stepping threads (and to
     // a live client on the same cores): a change may go in later, but it
-    // takes no tick's time. Linux gives each thread its own nice value.
+    // takes no tick's time. It leaves a real-time policy it inherited from
+    // the loop (organsim serve --realtime-priority) first; Linux gives each
+    // thread its own nice value.
+    const sched_param normal{};
+    pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal);
     setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
     Built b;
     auto next = std::make_unique<Model>();

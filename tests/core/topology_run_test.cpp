@@ -2,6 +2,8 @@
 // through drops its lower part in free fall, threaded and single-threaded
 // runs stay bit-identical across cuts, and meta.events lists each change.
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -210,13 +212,16 @@ TEST(TopologyRun, ACutOffTheTicksPathStepsTheOldModelUntilItsAppliedTick) {
 // The nice value of the calling thread (Linux keeps one per thread).
 int this_threads_nice() { return getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid))); }
 
-// Records the nice value of the thread that prepares a change's tables.
+// Records the nice value and scheduling policy of the thread that prepares
+// a change's tables.
 class NiceOfPrepare final : public test::ForwardingBackend {
  public:
   using ForwardingBackend::ForwardingBackend;
-  mutable int nice = -100;
+  mutable int nice = -100, policy = -1;
   std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
     nice = this_threads_nice();
+    sched_param param{};
+    pthread_getschedparam(pthread_self(), &policy, &param);
     return inner_->prepare(next);
   }
 };
@@ -237,6 +242,29 @@ TEST(TopologyRun, TheWorkerOffTheTicksPathYieldsToTheRunLoop) {
   ASSERT_EQ(result.meta.extra["events"][0]["applied_t"], 25 * later.time.tick());
   EXPECT_EQ(backend.nice, 19);
   EXPECT_EQ(this_threads_nice(), loop_nice);
+}
+
+// Under organsim serve --realtime-priority the loop's thread runs
+// SCHED_FIFO; the worker it starts must not inherit that (it would take
+// the ticks' core for a whole rebuild): it returns to the normal policy at
+// nice 19.
+TEST(TopologyRun, TheWorkerLeavesTheLoopsRealTimePolicy) {
+  Scenario later = hanging_block();
+  later.events.cuts[0].applied_at = 0.025;
+  const Model model = block_model(later);
+  NiceOfPrepare backend(make_cpu_backend(model, backend_tool(later), {Precision::Double, 1}));
+  RunOptions options;
+  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "topology_off_path_fifo";
+  sched_param fifo{};
+  fifo.sched_priority = 1;
+  if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo) != 0)
+    GTEST_SKIP() << "SCHED_FIFO is not permitted here (it needs CAP_SYS_NICE)";
+  const RunResult result = run_scenario(later, model, backend, options);
+  const sched_param normal{};
+  ASSERT_EQ(pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal), 0);
+  ASSERT_EQ(result.meta.extra["events"][0]["applied_t"], 25 * later.time.tick());
+  EXPECT_EQ(backend.policy, SCHED_OTHER);
+  EXPECT_EQ(backend.nice, 19);
 }
 
 TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {

@@ -246,14 +246,15 @@ TEST(LiveSession, PosesApplyAtTheirTickHoldBetweenAndReplayBitForBit) {
 }
 
 // With the sub-cell Hertz layer the reply carries the layered contact's
-// stiffness (softer along the push than the contact without it), and the
-// session replays bit for bit.
+// stiffness (softer along the push than the contact without it while the
+// layer's offset still rises, its Hertz radius below R / 2: here pressed
+// about 4 mm into the top at most), and the session replays bit for bit.
 TEST(LiveSession, WithTheHertzLayerTheReplyCarriesTheLayeredStiffnessAndReplays) {
   Scenario s = cube();
   s.tool->spec.hertz_layer = true;
   const Model model = cube_model(s);
   ScriptedLink link;
-  for (int64_t k = 3; k < 70; k += 2) link.script[k] = {pose_mm("Tool", 20.3, 19.7, 51 - 0.1 * k)};
+  for (int64_t k = 3; k < 70; k += 2) link.script[k] = {pose_mm("Tool", 20.3, 19.7, 51 - 0.07 * k)};
   const ContactLayer layer = contact_layer(model);
   StiffnessProbe probe, plain;
   probe.tool = backend_tool(s);

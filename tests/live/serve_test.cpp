@@ -235,6 +235,42 @@ TEST(Serve, ACapsuleToolIsRefusedBeforeListening) {
   }
 }
 
+// --realtime-priority puts the loop thread at SCHED_FIFO (the meta holds
+// what the system reports for it), and is refused before listening when
+// the stepping threads would take every hardware thread. Where the system
+// does not permit SCHED_FIFO the refusal names what it needs.
+TEST(Serve, RealTimePriorityRaisesTheLoopAndLeavesAHardwareThreadFree) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_realtime";
+  fs::remove_all(dir);
+  const std::string all = std::to_string(omp_get_num_procs());
+  const CliResult refused = run_organsim("serve '" + kScenario + "' -o '" + (dir / "refused").string() +
+                                             "' --port 0 --duration 0.01 --threads " + all + " --realtime-priority 5",
+                                         dir / "log");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("leave one to the network and the client"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(dir / "refused" / "forces.json"));
+
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "0.2", "--threads", "1",
+                      "--realtime-priority", "5"},
+                     dir);
+  const int port = serve.port();
+  if (port <= 0) {
+    const std::string err = serve.stderr_text();
+    ASSERT_NE(err.find("CAP_SYS_NICE"), std::string::npos) << err;
+    GTEST_SKIP() << "SCHED_FIFO is not permitted here: " << err;
+  }
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  const auto start = Clock::now();
+  for (int k = 0; k < 200 && client.send_pose("Tool", {20, 20, 50}); ++k)
+    std::this_thread::sleep_until(start + std::chrono::microseconds(1000 * (k + 1)));
+  ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+  const nlohmann::json meta = read_json(dir / "out/forces.json")["meta"];
+  EXPECT_EQ(meta["loop_scheduling"]["policy"], "SCHED_FIFO") << meta["loop_scheduling"];
+  EXPECT_EQ(meta["loop_scheduling"]["priority"], 5);
+  EXPECT_EQ(meta["live"]["ticks"], 200);
+}
+
 TEST(Serve, AClientThatNeverReadsDoesNotStallTheLoop) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_never_reads";
   fs::remove_all(dir);
