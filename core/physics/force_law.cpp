@@ -49,6 +49,13 @@ double HertzLayer::linear_direction(double n[3]) const {
   return linear;
 }
 
+double HertzLayer::measure_cosines() {
+  double n[3];
+  const double linear = linear_direction(n);
+  for (Touch& t : touches_) t.c = t.m > 0 ? (t.f[0] * n[0] + t.f[1] * n[1] + t.f[2] * n[2]) / t.m : 0;
+  return linear;
+}
+
 double HertzLayer::contact_length() const {
   double n[3];
   if (!(linear_direction(n) > 0)) return 0;
@@ -73,10 +80,11 @@ double HertzLayer::contact_length() const {
   return variance > 0 ? std::sqrt(12 * variance) : 0;
 }
 
-double HertzLayer::line_share() const {
-  const double length = contact_length();
+double HertzLayer::share_of(double length) const {
   return length > 0 ? std::min(1.0, length / (2 * punch_radius())) : 0;
 }
+
+double HertzLayer::line_share() const { return share_of(contact_length()); }
 
 double HertzLayer::offset_at(double force, double radius, double length, double beta) const {
   const double sphere = beta < 1 ? hertz_layer_offset(force, e_star(), radius, punch_radius()) : 0;
@@ -87,7 +95,21 @@ double HertzLayer::offset_at(double force, double radius, double length, double 
 double HertzLayer::offset_for(double force, double radius) const {
   if (!touching()) return 0;
   const double length = contact_length();
-  return offset_at(force, radius, length, length > 0 ? std::min(1.0, length / (2 * punch_radius())) : 0);
+  return offset_at(force, radius, length, share_of(length));
+}
+
+void HertzLayer::add_touch(const double f[3], double k_t, double punch_radius, double triangle_e_star, double along) {
+  Touch t;
+  for (int i = 0; i < 3; ++i) t.f[i] = f[i];
+  t.m = std::sqrt(t.f[0] * t.f[0] + t.f[1] * t.f[1] + t.f[2] * t.f[2]);
+  t.k = k_t;
+  t.s = along;
+  touches_.push_back(t);
+  weight_ += t.m, punch_ += t.m * punch_radius, e_star_ += t.m * triangle_e_star;
+}
+
+double HertzLayer::factor(size_t i) const {
+  return hertz_layer_factor(touches_[i].m, touches_[i].k, touches_[i].c, delta_);
 }
 
 double HertzLayer::force_along(double delta) const {
@@ -104,14 +126,11 @@ double HertzLayer::stiffness_along(double delta) const {
 }
 
 void HertzLayer::solve(double radius) {
-  const double length = contact_length();
-  const double beta = length > 0 ? std::min(1.0, length / (2 * punch_radius())) : 0;
+  const double length = contact_length(), beta = share_of(length);
   if (beta == 0) return solve_sphere(radius);
   delta_ = 0;
-  double n[3];
-  const double linear = linear_direction(n);
+  const double linear = measure_cosines();
   if (!(linear > 0)) return;
-  for (Touch& t : touches_) t.c = t.m > 0 ? (t.f[0] * n[0] + t.f[1] * n[1] + t.f[2] * n[2]) / t.m : 0;
   const auto offset = [&](double force) { return offset_at(force, radius, length, beta); };
   // h(F) = F - G(delta(F)) rises strictly with F (delta rises, G falls),
   // h(0) = -|F_lin| < 0 <= h(|F_lin|) (G <= G(0) = |F_lin|): regula falsi
@@ -137,12 +156,7 @@ void HertzLayer::solve(double radius) {
 
 void HertzLayer::solve_sphere(double radius) {
   delta_ = 0;
-  double sum[3] = {0, 0, 0};
-  for (const Touch& t : touches_)
-    for (int i = 0; i < 3; ++i) sum[i] += t.f[i];
-  const double linear = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-  if (!(linear > 0) || !(weight_ > 0)) return;
-  for (Touch& t : touches_) t.c = t.m > 0 ? (t.f[0] * sum[0] + t.f[1] * sum[1] + t.f[2] * sum[2]) / (t.m * linear) : 0;
+  if (!(measure_cosines() > 0) || !(weight_ > 0)) return;
   const double e_star = this->e_star(), a_h = punch_radius(), a_max = std::min(a_h, kLayerContactLimit * radius);
   // Beyond min(a_h, R / 2) the offset is constant.
   const double beyond = hertz_layer_held(radius, a_h);

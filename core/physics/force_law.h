@@ -536,18 +536,15 @@ class HertzLayer {
   // axis (m; 0 for a sphere).
   template <class Real>
   void add(const Real f[3], double k_t, double punch_radius, double triangle_e_star, double along = 0) {
-    Touch t;
-    for (int i = 0; i < 3; ++i) t.f[i] = f[i];
-    t.m = std::sqrt(t.f[0] * t.f[0] + t.f[1] * t.f[1] + t.f[2] * t.f[2]);
-    t.k = k_t;
-    t.s = along;
-    touches_.push_back(t);
-    weight_ += t.m, punch_ += t.m * punch_radius, e_star_ += t.m * triangle_e_star;
+    const double f_double[3] = {double(f[0]), double(f[1]), double(f[2])};
+    add_touch(f_double, k_t, punch_radius, triangle_e_star, along);
   }
   // Finds delta for a tool of radius R.
   void solve(double radius);
   // The i-th added penalty's factor (1 before solve or with nothing touching).
-  double factor(size_t i) const { return hertz_layer_factor(touches_[i].m, touches_[i].k, touches_[i].c, delta_); }
+  // Out of line: one compiled copy, so every caller gets the same bits
+  // (m - k c delta cancels where the layer nearly lifts a penalty off).
+  double factor(size_t i) const;
   double offset() const { return delta_; }  // m
   bool touching() const { return weight_ > 0; }
   double punch_radius() const { return kHertzLayerPunchFactor * punch_ / weight_; }     // a_h, m
@@ -567,7 +564,12 @@ class HertzLayer {
   };
   double force_along(double delta) const;     // G(delta)
   double stiffness_along(double delta) const;  // -G'(delta): sum over active t of k_t c_t^2
+  // Out of line, as factor(): |f_t| computed in one place, the same bits for
+  // every caller.
+  void add_touch(const double f[3], double k_t, double punch_radius, double triangle_e_star, double along);
   double linear_direction(double n[3]) const;  // n and |F_lin| (0: n undefined)
+  double measure_cosines();                    // every c_t = n_t . n; returns |F_lin|
+  double share_of(double length) const;  // beta for a contact length L
   // delta(F) with the length L and share beta already measured.
   double offset_at(double force, double radius, double length, double beta) const;
   void solve_sphere(double radius);  // beta = 0: Newton's steps on the Hertz radius
