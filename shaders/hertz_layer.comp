@@ -61,6 +61,13 @@ void reduce(uint lane, inout vec4 a, inout vec4 b) {
 
 float hertz_force_at(float a, float e_star) { return 4.0 * e_star * a * a * a / (3.0 * u_radius); }
 
+// delta(F) of the sphere's and the line's laws blended by beta
+// (force_law::HertzLayer::offset_for), for a contact of length L.
+float blended_offset(float force, float beta, float contact_length, float e_star, float a_h, float c_line) {
+  return (1.0 - beta) * hertz_layer_offset(force, e_star, u_radius, a_h) +
+         beta * line_layer_offset(force / contact_length, e_star, u_radius, c_line);
+}
+
 // The exclusive prefix sum of v over the lanes (Hillis-Steele in shared
 // memory), and in `total` the sum over all of them.
 uint exclusive_scan(uint lane, uint v, out uint total) {
@@ -169,14 +176,12 @@ void main() {
     // rises with F from -|F_lin| at 0 to >= 0 at |F_lin|.
     const float c_line = u_line_factor * weighted.x / sum.w;
     float lo = 0.0, hi = linear, h_lo = -linear, force = linear;
-    delta = (1.0 - beta) * hertz_layer_offset(linear, e_star, u_radius, a_h) +
-            beta * line_layer_offset(linear / contact_length, e_star, u_radius, c_line);
+    delta = blended_offset(linear, beta, contact_length, e_star, a_h, c_line);
     float h_hi = linear - along(lane, nblocks, n, delta).x;
     for (int iteration = 0; iteration < 60 && h_hi > 0.0 && hi - lo > 1e-6 * hi; ++iteration) {
       force = hi - h_hi * (hi - lo) / (h_hi - h_lo);
       if (!(force > lo && force < hi)) force = 0.5 * (lo + hi);
-      delta = (1.0 - beta) * hertz_layer_offset(force, e_star, u_radius, a_h) +
-              beta * line_layer_offset(force / contact_length, e_star, u_radius, c_line);
+      delta = blended_offset(force, beta, contact_length, e_star, a_h, c_line);
       const float h = force - along(lane, nblocks, n, delta).x;
       if (h == 0.0) break;
       if (h < 0.0) {
