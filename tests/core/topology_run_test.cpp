@@ -226,21 +226,31 @@ class NiceOfPrepare final : public test::ForwardingBackend {
   }
 };
 
-// The worker that makes a change off the tick's path runs at the lowest
-// priority (nice 19), so that on a machine whose cores the run loop and a
-// live client share it takes idle time, not the ticks'; the loop's own
-// thread keeps its priority.
-TEST(TopologyRun, TheWorkerOffTheTicksPathYieldsToTheRunLoop) {
+// hanging_block with its cut built off the tick's path, going in at 25 ms:
+// the nice value and policy of the worker's thread as it prepared the
+// tables.
+struct WorkerThread {
+  int nice = -100, policy = -1;
+};
+WorkerThread run_a_cut_off_the_ticks_path(const std::string& name) {
   Scenario later = hanging_block();
   later.events.cuts[0].applied_at = 0.025;
   const Model model = block_model(later);
   NiceOfPrepare backend(make_cpu_backend(model, backend_tool(later), {Precision::Double, 1}));
   RunOptions options;
-  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "topology_off_path_nice";
-  const int loop_nice = this_threads_nice();
+  options.outdir = fs::path(ORGANSIM_TEST_TMP) / name;
   const RunResult result = run_scenario(later, model, backend, options);
-  ASSERT_EQ(result.meta.extra["events"][0]["applied_t"], 25 * later.time.tick());
-  EXPECT_EQ(backend.nice, 19);
+  EXPECT_EQ(result.meta.extra["events"][0]["applied_t"], 25 * later.time.tick());
+  return {backend.nice, backend.policy};
+}
+
+// The worker that makes a change off the tick's path runs at the lowest
+// priority (nice 19), so that on a machine whose cores the run loop and a
+// live client share it takes idle time, not the ticks'; the loop's own
+// thread keeps its priority.
+TEST(TopologyRun, TheWorkerOffTheTicksPathYieldsToTheRunLoop) {
+  const int loop_nice = this_threads_nice();
+  EXPECT_EQ(run_a_cut_off_the_ticks_path("topology_off_path_nice").nice, 19);
   EXPECT_EQ(this_threads_nice(), loop_nice);
 }
 
@@ -249,22 +259,15 @@ TEST(TopologyRun, TheWorkerOffTheTicksPathYieldsToTheRunLoop) {
 // the ticks' core for a whole rebuild): it returns to the normal policy at
 // nice 19.
 TEST(TopologyRun, TheWorkerLeavesTheLoopsRealTimePolicy) {
-  Scenario later = hanging_block();
-  later.events.cuts[0].applied_at = 0.025;
-  const Model model = block_model(later);
-  NiceOfPrepare backend(make_cpu_backend(model, backend_tool(later), {Precision::Double, 1}));
-  RunOptions options;
-  options.outdir = fs::path(ORGANSIM_TEST_TMP) / "topology_off_path_fifo";
   sched_param fifo{};
   fifo.sched_priority = 1;
   if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo) != 0)
     GTEST_SKIP() << "SCHED_FIFO is not permitted here (it needs CAP_SYS_NICE)";
-  const RunResult result = run_scenario(later, model, backend, options);
+  const WorkerThread worker = run_a_cut_off_the_ticks_path("topology_off_path_fifo");
   const sched_param normal{};
   ASSERT_EQ(pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal), 0);
-  ASSERT_EQ(result.meta.extra["events"][0]["applied_t"], 25 * later.time.tick());
-  EXPECT_EQ(backend.policy, SCHED_OTHER);
-  EXPECT_EQ(backend.nice, 19);
+  EXPECT_EQ(worker.policy, SCHED_OTHER);
+  EXPECT_EQ(worker.nice, 19);
 }
 
 TEST(TopologyRun, DtAboveTheNewDtCritStopsTheRunWithANumericalError) {
