@@ -5,6 +5,7 @@
 // validation.csv and validation.png (error against cell size). SI units.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -35,6 +36,7 @@ struct ValidateArgs {
   std::string contact = "surface";
   std::string hertz_layer;  // "on", "off"; empty: on with surface contact
   double line_load_reference = 0;  // m; 0: the line-load case is left out
+  std::vector<std::string> cases;  // empty: every case
 };
 
 std::string fmt(double v, const char* spec = "%.4g") {
@@ -78,6 +80,17 @@ void validate_command(const ValidateArgs& args) {
     throw Error(ErrorKind::Usage, "--line-load-reference: expected a cell size in m (> 0), got " +
                                       fmt(args.line_load_reference));
   if (args.line_load_reference > 0) options.line_load_reference = args.line_load_reference;
+  for (const std::string& c : args.cases) {
+    if (std::find(kSuiteCases.begin(), kSuiteCases.end(), c) == kSuiteCases.end()) {
+      std::string names;
+      for (const std::string& n : kSuiteCases) names += (names.empty() ? "" : ", ") + n;
+      throw Error(ErrorKind::Usage, "--cases: expected some of " + names + ", got '" + c + "'");
+    }
+    if (c == "line-load" && !options.line_load_reference)
+      throw Error(ErrorKind::Usage, "--cases line-load: the line load is compared with a reference mesh "
+                                    "(--line-load-reference SIZE)");
+  }
+  options.cases = args.cases;
   if (args.volume_formulation == "nodal")
     options.volume_formulation = VolumeFormulation::Nodal;
   else if (args.volume_formulation == "per_tet")
@@ -101,6 +114,7 @@ void validate_command(const ValidateArgs& args) {
   j["probe_radius"] = options.probe_radius;
   j["contact"] = args.contact;
   j["hertz_layer"] = options.hertz_layer;
+  j["cases"] = options.cases.empty() ? kSuiteCases : options.cases;
   if (options.line_load_reference)
     j["line_load"] = {{"block", {options.line_load_block.x(), options.line_load_block.y(), options.line_load_block.z()}},
                       {"depths", options.line_load_depths},
@@ -172,6 +186,10 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
   cmd->add_option("--hertz-layer", args->hertz_layer,
                   "The spheres' and the capsule's surface contact in series with the sub-cell layer, as a scenario's "
                   "tool.hertz_layer: 'on' (default with surface contact) or 'off'");
+  cmd->add_option("--cases", args->cases,
+                  "Only these cases, comma-separated: uniaxial, cantilever, hertz, probe, line-load (default: all; "
+                  "line-load needs --line-load-reference)")
+      ->delimiter(',');
   cmd->add_option("--line-load-reference", args->line_load_reference,
                   "Adds the line-load case (a capsule R 5 mm across a block, pressed 1, 2, 4 mm) compared with "
                   "itself on a mesh of this cell size, m (0.0025: converged; minutes per material)");

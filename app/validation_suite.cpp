@@ -1,5 +1,7 @@
 #include "app/validation_suite.h"
 
+#include <algorithm>
+
 #include <cstdio>
 
 #include "core/mesh/example_shapes.h"
@@ -36,6 +38,11 @@ constexpr double kLineLoadTolerance = 0.15;
 
 }  // namespace
 
+bool SuiteOptions::runs(const std::string& name) const {
+  if (name == "line-load" && !line_load_reference) return false;
+  return cases.empty() || std::find(cases.begin(), cases.end(), name) != cases.end();
+}
+
 std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
                                            const std::function<void(int, int, const std::string&)>& progress) {
   // Shapes: a block for uniaxial compression, a 10:1 beam, and the issue's
@@ -47,7 +54,7 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
   std::vector<SuiteRow> rows;
   // The line-load case's reference: the same case on the refined mesh, per material.
   std::vector<LineLoadResult> line_load_reference;
-  if (options.line_load_reference) {
+  if (options.runs("line-load")) {
     const TetMesh reference = mesh_box(options.line_load_block, *options.line_load_reference);
     for (const auto& nu : options.poisson_ratios) {
       if (progress) progress(done, total, material_name(nu) + ", line-load reference");
@@ -56,8 +63,12 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
     }
   }
   for (double h : options.cell_sizes) {
-    const TetMesh block_mesh = mesh_box(block, h), beam_mesh = mesh_box(beam, h), slab_mesh = mesh_box(slab, h);
-    const TetMesh line_mesh = options.line_load_reference ? mesh_box(options.line_load_block, h) : TetMesh{};
+    // Only the meshes of the cases asked for.
+    const auto mesh_if = [&](bool wanted, const Vec3& size) { return wanted ? mesh_box(size, h) : TetMesh{}; };
+    const TetMesh block_mesh = mesh_if(options.runs("uniaxial"), block);
+    const TetMesh beam_mesh = mesh_if(options.runs("cantilever"), beam);
+    const TetMesh slab_mesh = mesh_if(options.runs("hertz") || options.runs("probe"), slab);
+    const TetMesh line_mesh = mesh_if(options.runs("line-load"), options.line_load_block);
     for (size_t material = 0; material < options.poisson_ratios.size(); ++material) {
       const auto& nu = options.poisson_ratios[material];
       const Material m = suite_material(options, nu);
@@ -69,28 +80,36 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
         rows.push_back({test, name, h, points, measured, theory, ratio ? measured / theory : measured - theory,
                         ratio ? "ratio" : "difference", tolerance});
       };
-      const UniaxialResult u = uniaxial_compression(block_mesh, m);
-      add("uniaxial E", u.points, u.young_modulus, m.young_modulus, true);
-      add("uniaxial nu", u.points, u.poisson_ratio, asked_nu, false);
-      const BeamResult tip = cantilever(beam_mesh, m, BeamEnd::TipLoad);
-      add("cantilever tip load", tip.points, tip.stiffness, tip.timoshenko, true);
-      const BeamResult guided = cantilever(beam_mesh, m, BeamEnd::Guided);
-      add("cantilever guided", guided.points, guided.stiffness, guided.timoshenko, true);
-      std::vector<double> depths;
-      for (double r : depth_ratios) depths.push_back(r * options.indenter_radius);
-      const IndentationResult hz = sphere_indentation(slab_mesh, m, options.indenter_radius, depths, options.contact,
-                                                        options.hertz_layer);
-      for (size_t i = 0; i < depths.size(); ++i) {
-        char test[48];
-        std::snprintf(test, sizeof test, "hertz d/R=%.2g", depth_ratios[i]);
-        add(test, hz.points, hz.force[i], hz.hertz[i], true);
+      if (options.runs("uniaxial")) {
+        const UniaxialResult u = uniaxial_compression(block_mesh, m);
+        add("uniaxial E", u.points, u.young_modulus, m.young_modulus, true);
+        add("uniaxial nu", u.points, u.poisson_ratio, asked_nu, false);
       }
-      // A probe smaller than a cell (an instrument's tip), at d/R = 0.2.
-      const IndentationResult probe =
-          sphere_indentation(slab_mesh, m, options.probe_radius, {0.2 * options.probe_radius}, options.contact,
-                             options.hertz_layer);
-      add("hertz probe d/R=0.2", probe.points, probe.force[0], probe.hertz[0], true);
-      if (options.line_load_reference) {
+      if (options.runs("cantilever")) {
+        const BeamResult tip = cantilever(beam_mesh, m, BeamEnd::TipLoad);
+        add("cantilever tip load", tip.points, tip.stiffness, tip.timoshenko, true);
+        const BeamResult guided = cantilever(beam_mesh, m, BeamEnd::Guided);
+        add("cantilever guided", guided.points, guided.stiffness, guided.timoshenko, true);
+      }
+      if (options.runs("hertz")) {
+        std::vector<double> depths;
+        for (double r : depth_ratios) depths.push_back(r * options.indenter_radius);
+        const IndentationResult hz = sphere_indentation(slab_mesh, m, options.indenter_radius, depths,
+                                                          options.contact, options.hertz_layer);
+        for (size_t i = 0; i < depths.size(); ++i) {
+          char test[48];
+          std::snprintf(test, sizeof test, "hertz d/R=%.2g", depth_ratios[i]);
+          add(test, hz.points, hz.force[i], hz.hertz[i], true);
+        }
+      }
+      if (options.runs("probe")) {
+        // A probe smaller than a cell (an instrument's tip), at d/R = 0.2.
+        const IndentationResult probe =
+            sphere_indentation(slab_mesh, m, options.probe_radius, {0.2 * options.probe_radius}, options.contact,
+                               options.hertz_layer);
+        add("hertz probe d/R=0.2", probe.points, probe.force[0], probe.hertz[0], true);
+      }
+      if (options.runs("line-load")) {
         const LineLoadResult line = capsule_line_load(line_mesh, m, options.line_load_radius, options.line_load_depths,
                                                      options.hertz_layer);
         const LineLoadResult& reference = line_load_reference[material];

@@ -37,7 +37,14 @@ struct SuiteOptions {
   // The block (m; the capsule lies along y, across its 4 cm) and the depths (m).
   Vec3 line_load_block{0.08, 0.04, 0.03};
   std::vector<double> line_load_depths{0.001, 0.002, 0.004};
+  // The cases to run, from kSuiteCases; empty: every one (the line load
+  // only with its reference).
+  std::vector<std::string> cases;
+  bool runs(const std::string& name) const;
 };
+
+// The suite's case names, in the order they run.
+inline const std::vector<std::string> kSuiteCases{"uniaxial", "cantilever", "hertz", "probe", "line-load"};
 
 // One measured quantity against its theory.
 struct SuiteRow {

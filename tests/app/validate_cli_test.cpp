@@ -66,22 +66,22 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
 
 // The line-load case against its reference mesh: at the reference's own
 // cell size the ratio is 1 (the same mesh, CGAL's meshing is deterministic),
-// every row carries the 15 % target and its verdict in JSON and CSV.
+// every row carries the 15 % target and its verdict in JSON and CSV. Run
+// alone (--cases line-load): no other case's rows.
 TEST(ValidateCli, LineLoadRowsCompareWithTheReferenceMeshAndCarryTheTarget) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_line_load";
   fs::remove_all(dir);
-  const auto r = test::run_organsim(
-      "validate --cell-size 0.02,0.012 --poisson-ratio 0.4 --line-load-reference 0.012 -o " + (dir / "out").string(),
-      dir / "log");
+  const auto r = test::run_organsim("validate --cell-size 0.02,0.012 --poisson-ratio 0.4 --line-load-reference 0.012 "
+                                    "--cases line-load -o " +
+                                        (dir / "out").string(),
+                                    dir / "log");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(test::slurp(dir / "out" / "validation.json"));
   EXPECT_EQ(j["line_load"]["reference_cell_size"].get<double>(), 0.012);
+  EXPECT_EQ(j["cases"], nlohmann::json::array({"line-load"}));
   int rows = 0, at_reference = 0;
   for (const auto& row : j["rows"]) {
-    if (row["test"].get<std::string>().rfind("line load d=", 0) != 0) {
-      EXPECT_FALSE(row.contains("tolerance")) << row["test"];
-      continue;
-    }
+    ASSERT_EQ(row["test"].get<std::string>().rfind("line load d=", 0), 0u) << row["test"];
     ++rows;
     const double error = row["error"];
     EXPECT_GT(row["theory"].get<double>(), 0) << row["test"];
@@ -105,6 +105,20 @@ TEST(ValidateCli, NegativeLineLoadReferenceIsAUsageError) {
   const auto r = test::run_organsim("validate --line-load-reference -0.002 -o " + (dir / "out").string(), dir / "log");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--line-load-reference"), std::string::npos) << r.err;
+}
+
+// An unknown case, and the line load without its reference, are usage errors naming the option.
+TEST(ValidateCli, UnknownCaseOrALineLoadWithoutItsReferenceIsAUsageError) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_bad_cases";
+  const auto unknown = test::run_organsim("validate --cases hertz,bending -o " + (dir / "out").string(), dir / "log");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("--cases: expected some of uniaxial, cantilever, hertz, probe, line-load, got 'bending'"),
+            std::string::npos)
+      << unknown.err;
+  const auto alone = test::run_organsim("validate --cases line-load -o " + (dir / "out").string(), dir / "log");
+  EXPECT_EQ(alone.exit_code, 2);
+  EXPECT_NE(alone.err.find("--line-load-reference"), std::string::npos) << alone.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "validation.json"));
 }
 
 TEST(ValidateCli, BadPoissonRatioIsAUsageError) {
