@@ -45,6 +45,35 @@ std::pair<int32_t, double> most_pressable_point(const Model& m) {
   return best;
 }
 
+// The surface contact's stiffness on point p along z at positions x, by
+// central differences of the force its triangles give it (the sphere held
+// at `center`), and how many of its triangles touch the sphere.
+std::pair<double, int> contact_stiffness_z(const Model& m, const std::vector<Vec3>& x, int32_t p, const Vec3& center,
+                                           double k) {
+  auto force_z = [&](double dz, int* touching) {
+    std::vector<Vec3> moved = x;
+    moved[p].z() += dz;
+    double fz = 0;
+    for (int32_t i = m.surface_offset[p]; i < m.surface_offset[p + 1]; ++i) {
+      const Tri& tri = m.surface[m.surface_tri[i]];
+      double share[3], w[3];
+      for (int c = 0; c < 3; ++c) share[c] = m.tool_scale(tri[c]) / m.surface_count(tri[c]);
+      Vec3 f;
+      if (!force_law::sphere_triangle_penalty(center, kRadius, moved[tri[0]], moved[tri[1]], moved[tri[2]], k, share,
+                                              f, w))
+        continue;
+      if (touching) ++*touching;
+      for (int c = 0; c < 3; ++c)
+        if (tri[c] == p) fz += w[c] * f.z();
+    }
+    return fz;
+  };
+  int touching = 0;
+  force_z(0, &touching);
+  const double h = 1e-3 * kDepth;
+  return {-(force_z(h, nullptr) - force_z(-h, nullptr)) / (2 * h), touching};
+}
+
 // Does the motion started at x0 (at rest there) grow more than `limit` away
 // from `reference` within 10000 steps of dt, undamped, the sphere held at
 // `center`? A non-finite position counts as growing.
@@ -147,6 +176,20 @@ TEST(StabilityToolContact, SmallToolOnALightPointIsStableBelowDtCritAndCrossesOv
   EXPECT_FALSE(first_touch_motion_grows(m, center, k, 0.95 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
   EXPECT_TRUE(first_touch_motion_grows(m, center, k, 1.2 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
   const std::vector<Vec3> pressed = pressed_equilibrium(center, k, 0.5 * r.dt_crit);
+  // Why pressed crosses over later: the vertex sinks until it nearly rests
+  // on the sphere's surface and only some of its triangles still reach into
+  // the sphere (4 of 6 here), so its stiffness is about 0.63 of the bound,
+  // and 1 / sqrt(0.63) = 1.26 is where its perturbation grows. At first
+  // touch all of them push it: the bound. The band 0.55-0.7 holds 4 of 6
+  // and fails at 3 (0.5) or 5 (0.8).
+  const double bound = k * m.tool_scale(p);
+  const auto [first_touch_k, first_touch_triangles] = contact_stiffness_z(m, m.rest_position, p, center, k);
+  const auto [pressed_k, pressed_triangles] = contact_stiffness_z(m, pressed, p, center, k);
+  EXPECT_EQ(first_touch_triangles, m.surface_count(p));
+  EXPECT_NEAR(first_touch_k / bound, fraction, 0.02);
+  EXPECT_LT(pressed_triangles, m.surface_count(p));
+  EXPECT_GT(pressed_k / bound, 0.55);
+  EXPECT_LT(pressed_k / bound, 0.7) << pressed_triangles << " of " << m.surface_count(p) << " triangles touch";
   EXPECT_FALSE(contact_perturbation_grows(m, pressed, center, k, 0.95 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
   EXPECT_TRUE(contact_perturbation_grows(m, pressed, center, k, 1.3 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
 }
