@@ -9,6 +9,7 @@
 #include "core/physics/force_law.h"
 #include "core/scenario/tool_spec.h"
 #include "core/sim/cpu_backend.h"
+#include "core/sim/reference_forces.h"
 #include "core/stability/critical_step.h"
 #include "tests/core/stability_test_util.h"
 
@@ -45,33 +46,26 @@ std::pair<int32_t, double> most_pressable_point(const Model& m) {
   return best;
 }
 
-// The surface contact's stiffness on point p along z at positions x, by
-// central differences of the force its triangles give it (the sphere held
-// at `center`), and how many of its triangles touch the sphere.
+// The surface contact's stiffness on point p along z at positions x (the
+// sphere held at `center`), by central differences of the reference
+// contact force on p, and how many of p's triangles reach into the sphere.
 std::pair<double, int> contact_stiffness_z(const Model& m, const std::vector<Vec3>& x, int32_t p, const Vec3& center,
                                            double k) {
-  auto force_z = [&](double dz, int* touching) {
-    std::vector<Vec3> moved = x;
+  auto force_z = [&](double dz) {
+    std::vector<Vec3> moved = x, force(m.npoint(), Vec3::Zero());
     moved[p].z() += dz;
-    double fz = 0;
-    for (int32_t i = m.surface_offset[p]; i < m.surface_offset[p + 1]; ++i) {
-      const Tri& tri = m.surface[m.surface_tri[i]];
-      double share[3], w[3];
-      for (int c = 0; c < 3; ++c) share[c] = m.tool_scale(tri[c]) / m.surface_count(tri[c]);
-      Vec3 f;
-      if (!force_law::sphere_triangle_penalty(center, kRadius, moved[tri[0]], moved[tri[1]], moved[tri[2]], k, share,
-                                              f, w))
-        continue;
-      if (touching) ++*touching;
-      for (int c = 0; c < 3; ++c)
-        if (tri[c] == p) fz += w[c] * f.z();
-    }
-    return fz;
+    reference_surface_forces(m, moved, center, kRadius, k, force);
+    return force[p].z();
   };
   int touching = 0;
-  force_z(0, &touching);
+  for (int32_t i = m.surface_offset[p]; i < m.surface_offset[p + 1]; ++i) {
+    const Tri& tri = m.surface[m.surface_tri[i]];
+    double w[3];
+    force_law::triangle_closest_weights(center, x[tri[0]], x[tri[1]], x[tri[2]], w);
+    if ((w[0] * x[tri[0]] + w[1] * x[tri[1]] + w[2] * x[tri[2]] - center).norm() < kRadius) ++touching;
+  }
   const double h = 1e-3 * kDepth;
-  return {-(force_z(h, nullptr) - force_z(-h, nullptr)) / (2 * h), touching};
+  return {-(force_z(h) - force_z(-h)) / (2 * h), touching};
 }
 
 // Does the motion started at x0 (at rest there) grow more than `limit` away
