@@ -6,7 +6,8 @@
 # half and holding it there. Prints ticks served, late ticks, reply latency
 # (receipt of a pose to the force reply of its tick: median, p99, max) and
 # the real-time factor from the force log's meta, with the CPU and the load,
-# and the CPU time of the reply's stiffness on each tick in contact.
+# the CPU time of the reply's stiffness on each tick in contact, and how late
+# the loop woke from its waits on the clock (the machine's scheduling).
 # ORGANSIM_LIVE_BENCH_SCENARIO=FILE serves another scenario of examples/liver.off
 # (e.g. the same one meshed finer, for a GPU); the client's path is the same.
 # With ORGANSIM_LIVE_BENCH_CUT=S the client's tool points down into the liver
@@ -65,6 +66,10 @@ print(f"latency:  median {lat['median_ms']:.3f} ms, p99 {lat['p99_ms']:.3f} ms, 
 st = live["reply_stiffness"]
 print(f"stiffness: median {st['median_ms']:.3f} ms, p99 {st['p99_ms']:.3f} ms, max {st['max_ms']:.3f} ms of CPU before each of {st['count']} replies in contact")
 peak = max((sum(c * c for c in f) ** 0.5 for f in json.load(open(sys.argv[1]))["samples"]["force"]), default=0)
+wake = live["wake_up"]
+print(f"wake-up:  {wake['count']} waits ran out on the clock; the loop ran median {wake['median_ms']:.3f} ms, "
+      f"p99 {wake['p99_ms']:.3f} ms, max {wake['max_ms']:.3f} ms after the deadline; "
+      f"{wake['over_0.25_ms']} over 0.25 ms, {wake['over_0.5_ms']} over 0.5 ms, {wake['over_1_ms']} over 1 ms")
 slow = ", ".join(f"tick {s['tick']} {s['ms']:.1f} ms" for s in live.get("slowest_ticks", []))
 print(f"slowest:  {slow} (wall time from the reply before)")
 print(f"contact:  peak tool force {peak:.3g} N; replies sent {live['link']['replies_sent']}, dropped {live['link']['replies_dropped']}")

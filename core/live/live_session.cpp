@@ -27,6 +27,16 @@ std::string format_vec(const Vec3& v) {
 
 std::string ms(double s) { return format_number(s * 1e3, "%.3g") + " ms"; }
 
+// As the reply latency, and how many wake-ups came over 0.25, 0.5 and 1 ms
+// late: a tick that costs c of its T is late after a wake-up over T - c late
+// (docs/live.md, "Latency measured").
+nlohmann::json wake_up_json(std::vector<double>& late) {
+  nlohmann::json j = latency_json(summarise_latency(late));
+  for (const auto& [name, s] : {std::pair{"over_0.25_ms", 0.25e-3}, {"over_0.5_ms", 0.5e-3}, {"over_1_ms", 1e-3}})
+    j[name] = std::count_if(late.begin(), late.end(), [&](double v) { return v > s; });
+  return j;
+}
+
 }  // namespace
 
 bool sweeps_one_tick(const CutEvent& cut, double tick) {
@@ -76,8 +86,8 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
   const double t_start = tick == 0 ? 0.0 : end_time_;
   const LiveClock::time_point scheduled = start_ + from_seconds(t_start);
   early_ = scheduled - from_seconds(o_.tick);
-  link_.receive_until(early_, *this);
-  if (!pending_) link_.receive_until(scheduled, *this);
+  wait_until(early_);
+  if (!pending_) wait_until(scheduled);
   if (stopped()) return std::nullopt;
   apply_pending(tick, t_start, t_end);
   // A scripted cut at its tick; a client's waits until no cut is in flight
@@ -92,6 +102,18 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
   }
   end_time_ = t_end;
   return current_;
+}
+
+void LiveSession::wait_until(LiveClock::time_point deadline) {
+  const LiveClock::time_point before = LiveClock::now();
+  pose_started_at_.reset();
+  link_.receive_until(deadline, *this);
+  if (before >= deadline) return;  // behind the clock: no wait
+  // The loop ran again at the pose that started the tick or, without one,
+  // now. A pose before the deadline ended the wait early (no wake-up to
+  // record); one read in the link's last pass came after the clock woke it.
+  const LiveClock::time_point woke = pose_started_at_.value_or(LiveClock::now());
+  if (woke >= deadline) wake_up_seconds_.push_back(seconds(woke - deadline));
 }
 
 std::optional<CutEvent> LiveSession::cut_for_tick() {
@@ -203,7 +225,10 @@ bool LiveSession::on_pose(const ClientPose& pose) {
   if (pending_) ++superseded_;
   pending_ = pose;
   pending_position_ = p;
-  return LiveClock::now() >= early_;
+  const LiveClock::time_point now = LiveClock::now();
+  if (now < early_) return false;
+  if (!pose_started_at_) pose_started_at_ = now;
+  return true;
 }
 
 void LiveSession::apply_pending(int64_t tick, double t_start, double t_end) {
@@ -329,6 +354,7 @@ void LiveSession::note_tick_wall(int64_t tick, double seconds) {
 void LiveSession::add_meta(nlohmann::json& extra) const {
   std::vector<double> all(latencies_.begin(), latencies_.end());
   std::vector<double> stiffness(stiffness_seconds_.begin(), stiffness_seconds_.end());
+  std::vector<double> wake_up(wake_up_seconds_.begin(), wake_up_seconds_.end());
   nlohmann::json poses = nlohmann::json::array();
   for (const AppliedPose& a : applied_) {
     poses.push_back({{"tick", a.tick},
@@ -347,6 +373,7 @@ void LiveSession::add_meta(nlohmann::json& extra) const {
       {"slowest_ticks", slowest},
       {"latency", latency_json(summarise_latency(all))},
       {"reply_stiffness", latency_json(summarise_latency(stiffness))},
+      {"wake_up", wake_up_json(wake_up)},
       {"real_time_factor", wall_seconds_ > 0 ? end_time_ / wall_seconds_ : 0.0},
       {"wall_seconds", wall_seconds_},
       {"device", device_},

@@ -117,6 +117,9 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   void make_cut(int64_t tick, double t_start, double t_end);
   void apply_pending(int64_t tick, double t_start, double t_end);
   void maybe_status(LiveClock::time_point now);
+  // Waits for the link until `deadline` (or a pose that starts the tick)
+  // and, when the wait ran out on the clock, records how late it woke.
+  void wait_until(LiveClock::time_point deadline);
   // Keeps the slowest ticks (wall time from the last reply to this one).
   void note_tick_wall(int64_t tick, double seconds);
   void find_surface(const Model& model);
@@ -132,6 +135,8 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   LiveClock::time_point start_{};
   LiveClock::time_point early_{};  // a new pose from here on starts the tick
   std::optional<ClientPose> pending_;  // the newest pose not yet applied
+  // When a pose asked the link to return and start the tick (in this wait).
+  std::optional<LiveClock::time_point> pose_started_at_;
   Vec3 pending_position_{0, 0, 0};
   int64_t superseded_ = 0;   // poses replaced by a newer one before a tick applied them
   int64_t poses_received_ = 0;
@@ -165,6 +170,10 @@ class LiveSession : public ToolDriver, public RunObserver, private LivePoseSink 
   // s, one per tick in contact: the reply's stiffness (the reaction's
   // positions and the pass over the surface), CPU work before each reply.
   std::deque<double> stiffness_seconds_;
+  // s, one per wait that ran out on the clock: how long after its deadline
+  // the loop thread ran again. The machine's scheduling latency as the
+  // session meets it (what cyclictest measures), apart from the tick's work.
+  std::deque<double> wake_up_seconds_;
   std::string stopped_by_;
 
   LiveClock::time_point last_status_{};

@@ -34,18 +34,26 @@ class ScriptedLink : public LiveLink {
   std::map<int64_t, std::vector<ClientPose>> script;
   std::map<int64_t, std::vector<std::string>> texts;  // STRING commands, after the tick's poses
   std::map<int64_t, int> pause_ms;  // a slow client: waits this long before delivering the tick's messages
+  // A loop that wakes late: waits this long past the deadline of the tick's
+  // first wait (when it is still ahead), then delivers; counted in `overslept`.
+  std::map<int64_t, int> oversleep_ms;
+  int overslept = 0;
   std::vector<std::pair<double, Vec3>> replies;  // (t, force)
   std::vector<Eigen::Matrix3d> stiffness;         // per reply
   int64_t stop_at = -1;
   std::atomic<bool> stop{false};
 
   bool wait_for_client(const std::atomic<bool>&) override { return true; }
-  void receive_until(LiveClock::time_point, LivePoseSink& sink) override {
+  void receive_until(LiveClock::time_point deadline, LivePoseSink& sink) override {
     const int64_t tick = static_cast<int64_t>(replies.size());
     if (tick == stop_at) stop = true;
     if (delivered_ > tick) return;
     delivered_ = tick + 1;
     if (pause_ms.count(tick)) std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms[tick]));
+    if (oversleep_ms.count(tick) && LiveClock::now() < deadline) {
+      std::this_thread::sleep_until(deadline + std::chrono::milliseconds(oversleep_ms[tick]));
+      ++overslept;
+    }
     for (ClientPose p : script[tick]) {
       p.received = LiveClock::now();
       sink.on_pose(p);
@@ -347,6 +355,29 @@ TEST(LiveSession, TheSlowestTicksAreNamedWithTheirWallTime) {
   ASSERT_EQ(ms.count(7), 1u) << slowest;
   EXPECT_GE(ms[15], 60.0);
   EXPECT_GE(ms[7], 30.0);
+}
+
+// meta.live.wake_up counts the waits that ran out on the clock and how late
+// the loop ran after each: here only the two the link overslept (the others
+// return at once, ahead of their deadlines), poses delivered after the
+// deadline included.
+TEST(LiveSession, ItsWakeUpsFromTheClockAreCountedWithHowLateTheyCame) {
+  Scenario s = cube();
+  s.time.duration = 0.06;
+  const Model model = cube_model(s);
+  ScriptedLink link;
+  link.oversleep_ms[10] = 3;
+  link.oversleep_ms[40] = 6;
+  link.script[40] = {pose_mm("Tool", 20, 20, 50)};
+  const Served served = serve(s, model, link);
+  const nlohmann::json& wake = served.live["wake_up"];
+  ASSERT_GE(link.overslept, 1) << "the session never waited ahead of the clock";
+  EXPECT_EQ(wake["count"].get<int64_t>(), link.overslept) << wake;
+  EXPECT_EQ(wake["over_1_ms"].get<int64_t>(), link.overslept) << wake;
+  EXPECT_EQ(wake["over_0.25_ms"].get<int64_t>(), link.overslept) << wake;
+  // sleep_until never returns early; the loop ran at least 3 ms after the deadline.
+  EXPECT_GE(wake["max_ms"].get<double>(), link.overslept == 2 ? 6.0 : 3.0) << wake;
+  EXPECT_GE(wake["median_ms"].get<double>(), 3.0) << wake;
 }
 
 // Where the session's first applied pose lives, after every tick.
