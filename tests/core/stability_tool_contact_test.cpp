@@ -184,6 +184,13 @@ TEST(StabilityToolContact, SmallToolOnALightPointIsStableBelowDtCritAndCrossesOv
   EXPECT_LT(pressed_triangles, m.surface_count(p));
   EXPECT_GT(pressed_k / bound, 0.55);
   EXPECT_LT(pressed_k / bound, 0.7) << pressed_triangles << " of " << m.surface_count(p) << " triangles touch";
+  // Just outside the sphere (inside it, every triangle's closest point would
+  // be in it too) and by less than 1 % of the depth: a micrometre's motion
+  // in any substep gives all six back, so no step chosen per tick from the
+  // contact state could safely count less than the bound here either.
+  const double gap = (pressed[p] - center).norm() - kRadius;
+  EXPECT_GT(gap, 0.0);
+  EXPECT_LT(gap, 0.01 * kDepth);
   EXPECT_FALSE(contact_perturbation_grows(m, pressed, center, k, 0.95 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
   EXPECT_TRUE(contact_perturbation_grows(m, pressed, center, k, 1.3 * r.dt_crit)) << "dt_crit " << r.dt_crit << " s";
 }
