@@ -32,8 +32,10 @@ std::string ms(double s) { return format_number(s * 1e3, "%.3g") + " ms"; }
 // (docs/live.md, "Latency measured").
 nlohmann::json wake_up_json(std::vector<double>& late) {
   nlohmann::json j = latency_json(summarise_latency(late));
-  for (const auto& [name, s] : {std::pair{"over_0.25_ms", 0.25e-3}, {"over_0.5_ms", 0.5e-3}, {"over_1_ms", 1e-3}})
-    j[name] = std::count_if(late.begin(), late.end(), [&](double v) { return v > s; });
+  for (const auto& over : {std::pair{"over_0.25_ms", 0.25e-3}, {"over_0.5_ms", 0.5e-3}, {"over_1_ms", 1e-3}}) {
+    const double limit = over.second;
+    j[over.first] = std::count_if(late.begin(), late.end(), [limit](double v) { return v > limit; });
+  }
   return j;
 }
 

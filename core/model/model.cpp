@@ -16,6 +16,7 @@
 #include "core/model/stiffness.h"
 #include "core/model/tet_edges.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim {
 
@@ -113,20 +114,17 @@ std::vector<int32_t> tet_materials(const std::vector<int32_t>& labels, const std
   return index;
 }
 
-bool selector_matches(const FixedSelector& s, const Vec3& x) {
-  switch (s.kind) {
-    case FixedSelector::Kind::Box:
-      return (x.array() >= s.min.array()).all() && (x.array() <= s.max.array()).all();
-    case FixedSelector::Kind::Plane:
-      return (x - s.point).dot(s.normal) >= 0;
-    case FixedSelector::Kind::Sphere:
-      return (x - s.center).norm() <= s.radius;
-    case FixedSelector::Kind::Indices:
-    case FixedSelector::Kind::Label:
-      return false;  // handled by id
-  }
-  return false;
+std::string no_point_selected(const TetMesh& mesh, const FixedSelector& s, size_t k) {
+  static const char* const kinds[] = {"box", "plane", "sphere", "indices", "label"};
+  Eigen::AlignedBox3d box;
+  for (const Vec3& x : mesh.points) box.extend(x);
+  const auto span = [](double lo, double hi) { return format_number(lo) + " .. " + format_number(hi); };
+  return "fixed[" + std::to_string(k) + "]." + kinds[static_cast<int>(s.kind)] +
+         ": matches no point of the mesh, which spans x " + span(box.min().x(), box.max().x()) + ", y " +
+         span(box.min().y(), box.max().y()) + ", z " + span(box.min().z(), box.max().z()) +
+         " m (check the selector against the mesh's units and placement)";
 }
+
 
 std::vector<uint8_t> select_fixed(const TetMesh& mesh, const std::vector<FixedSelector>& selectors) {
   const int32_t n = static_cast<int32_t>(mesh.points.size());
@@ -156,9 +154,20 @@ std::vector<uint8_t> select_fixed(const TetMesh& mesh, const std::vector<FixedSe
       if (!any) throw Error(ErrorKind::Scenario, at + ": no tet has label " + std::to_string(s.label));
       continue;
     }
-    for (int32_t i = 0; i < n; ++i)
-      if (selector_matches(s, mesh.points[i])) fixed[i] = 1;
+    bool any = false;
+    for (int32_t i = 0; i < n; ++i) {
+      if (!selector_matches(s, mesh.points[i])) continue;
+      fixed[i] = 1;
+      any = true;
+    }
+    // A selector written for another mesh, its units or its placement
+    // would otherwise leave the model free, to fall under gravity.
+    if (!any && n > 0) throw Error(ErrorKind::Scenario, no_point_selected(mesh, s, k));
   }
+  if (n > 0 && std::all_of(fixed.begin(), fixed.end(), [](uint8_t f) { return f != 0; }))
+    throw Error(ErrorKind::Scenario, "fixed: the selectors hold all " + std::to_string(n) +
+                                         " points of the mesh, so nothing can move (a plane's normal points "
+                                         "to the side it holds)");
   return fixed;
 }
 
@@ -334,6 +343,21 @@ void assemble_model(Model& model, const std::vector<uint8_t>& held, int32_t chun
   }
 
   model.layout = build_gather_layout(model, chunk_size, sort_window);
+}
+
+bool selector_matches(const FixedSelector& s, const Vec3& x) {
+  switch (s.kind) {
+    case FixedSelector::Kind::Box:
+      return (x.array() >= s.min.array()).all() && (x.array() <= s.max.array()).all();
+    case FixedSelector::Kind::Plane:
+      return (x - s.point).dot(s.normal) >= 0;
+    case FixedSelector::Kind::Sphere:
+      return (x - s.center).norm() <= s.radius;
+    case FixedSelector::Kind::Indices:
+    case FixedSelector::Kind::Label:
+      return false;  // handled by id
+  }
+  return false;
 }
 
 }  // namespace organsim

@@ -139,9 +139,15 @@ struct ModelOptions {
 
 // Builds the Model. Throws Error(Input) naming the element for tets with
 // non-positive or tiny volume, out-of-range indices, non-finite points, and
-// Error(Scenario) for non-positive density or stiffness. `source` names the
-// mesh in error messages.
+// Error(Scenario) for non-positive density or stiffness, and for fixed
+// selectors of which one matches no point or which together hold them all.
+// `source` names the mesh in error messages.
 Model build_model(const TetMesh& mesh, const Material& material, const ModelOptions& options,
                   const std::string& source = "mesh");
+
+
+// Whether a box, plane or sphere selector matches a rest position x (m);
+// false for indices and labels, which select by id.
+bool selector_matches(const FixedSelector& s, const Vec3& x);
 
 }  // namespace organsim

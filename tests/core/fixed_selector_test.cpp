@@ -1,7 +1,9 @@
 // Fixed-point selectors on a box mesh whose points are known: each selector
 // kind alone, and several together, fix exactly the expected points (a point
 // is fixed when any selector matches it), in the user's input numbering even
-// though the Model reorders points internally.
+// though the Model reorders points internally. A box, plane or sphere that
+// matches no point, or selectors that hold every point, are scenario errors,
+// not a model left free to fall or one that cannot move.
 #include <gtest/gtest.h>
 
 #include <set>
@@ -51,6 +53,28 @@ FixedSelector indices(std::vector<int32_t> ids) {
   s.kind = FixedSelector::Kind::Indices;
   s.indices = std::move(ids);
   return s;
+}
+
+FixedSelector plane(const Vec3& point, const Vec3& normal) {
+  FixedSelector s;
+  s.kind = FixedSelector::Kind::Plane;
+  s.point = point;
+  s.normal = normal;
+  return s;
+}
+
+// What build_model says of these selectors on the grid.
+std::string refusal(const std::vector<FixedSelector>& selectors) {
+  ModelOptions options;
+  options.fixed = selectors;
+  try {
+    build_model(grid(), Material{}, options, "grid");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Scenario);
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted";
+  return "";
 }
 
 FixedSelector box(const Vec3& min, const Vec3& max) {
@@ -110,6 +134,27 @@ TEST(FixedSelectors, AnIndexBeyondTheMeshIsAScenarioErrorNamingIt) {
     EXPECT_EQ(e.kind(), ErrorKind::Scenario);
     EXPECT_NE(std::string(e.what()).find("fixed[1].indices[1]"), std::string::npos) << e.what();
   }
+}
+
+TEST(FixedSelectors, OneThatMatchesNoPointIsRefusedWithTheMeshsExtent) {
+  // A plane below the grid facing down (a surface in millimetres read as
+  // metres, say), after one that holds the bottom face.
+  const std::string below = refusal({plane({0, 0, 0.01}, {0, 0, -1}), plane({0, 0, -0.03}, {0, 0, -1})});
+  EXPECT_NE(below.find("fixed[1].plane: matches no point of the mesh, which spans x 0 .. 0.1, y 0 .. 0.1, z 0 .. 0.1 m"),
+            std::string::npos)
+      << below;
+  EXPECT_NE(refusal({box({0.2, 0.2, 0.2}, {0.3, 0.3, 0.3})}).find("fixed[0].box: matches no point"), std::string::npos);
+  // Inside the grid, between its points (0.0125 from the nearest ones).
+  EXPECT_NE(refusal({sphere({0.0125, 0.0125, 0.0125}, 0.01)}).find("fixed[0].sphere: matches no point"),
+            std::string::npos);
+}
+
+TEST(FixedSelectors, SelectorsThatHoldEveryPointAreRefused) {
+  // The bottom face's plane with its normal turned up holds all but the bottom face.
+  EXPECT_EQ(fixed_inputs(grid(), {plane({0, 0, 0.01}, {0, 0, 1})}).size(), 100u);
+  EXPECT_NE(refusal({plane({0, 0, 0.01}, {0, 0, 1}), plane({0, 0, 0.01}, {0, 0, -1})})
+                .find("fixed: the selectors hold all 125 points of the mesh, so nothing can move"),
+            std::string::npos);
 }
 
 }  // namespace

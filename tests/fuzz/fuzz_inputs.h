@@ -100,7 +100,15 @@ inline void scenario_model(const Scenario& s) {
   for (const LabelMaterial& m : s.materials) labels.insert(labels.end(), m.labels.begin(), m.labels.end());
   if (!labels.empty())
     for (size_t t = 0; t < mesh.tets.size(); ++t) mesh.labels.push_back(labels[t % labels.size()]);
-  const Model model = build_model(mesh, s.material, model_options(s), "box.mesh");
+  // The scenario's box, plane and sphere selectors are written for its own
+  // mesh, not this stand-in: those that match none of the box's points are
+  // left out (build_model refuses them, as it should for a real mesh).
+  ModelOptions options = model_options(s);
+  std::erase_if(options.fixed, [&](const FixedSelector& f) {
+    if (f.kind == FixedSelector::Kind::Indices || f.kind == FixedSelector::Kind::Label) return false;
+    return std::none_of(mesh.points.begin(), mesh.points.end(), [&](const Vec3& x) { return selector_matches(f, x); });
+  });
+  const Model model = build_model(mesh, s.material, options, "box.mesh");
   const ToolSpec* tool = s.tool ? &s.tool->spec : nullptr;
   const StabilityReport report = estimate_critical_step(model, critical_step_options(model, tool));
   check_time_step(report, s.time.dt, s.time.substeps, /*allow_unstable=*/false);
