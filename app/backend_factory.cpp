@@ -24,6 +24,7 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
     throw Error(ErrorKind::Usage, "precision: expected \"double\" or \"float\" (got \"" + precision + "\")");
   }
   o.threads = s.threads;
+  o.live_share = s.cpu_live_share;
   return make_cpu_backend(model, tool, o);
 }
 

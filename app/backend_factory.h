@@ -18,6 +18,7 @@ struct BackendSelection {
   int32_t threads = 0;                   // cpu: 0 = all hardware threads
   int32_t gl_threads_per_point = 0;      // gl: invocations per point, 0 = the backend's choice
   bool gl_keep_reaction_positions = false;  // gl: GlBackendOptions::keep_reaction_positions (organsim serve)
+  double cpu_live_share = 0;             // cpu: CpuBackendOptions::live_share (organsim serve)
 };
 
 // The backend a scenario runs on, with the command line's --backend,

@@ -65,13 +65,25 @@ bool write_session(const fs::path& path, const ServeArgs& args, const LiveSessio
 // live loop, unless --threads or OMP_NUM_THREADS says otherwise: the
 // network, the client (often on the same machine) and the system need a
 // core, and a stepping thread the OS deschedules stalls the whole tick
-// (docs/live.md, "Threads").
-void leave_a_hardware_thread(int32_t asked, int32_t resolved) {
-  if (asked >= 0 || resolved != 0 || std::getenv("OMP_NUM_THREADS")) return;
+// (docs/live.md, "Threads"). The CPU backend takes the last one too while a
+// step on the others takes over kLiveShare of dt (a slow machine, where
+// every tick would be late), except with --realtime-priority, which needs
+// the core free.
+constexpr double kLiveShare = 0.8;
+void leave_a_hardware_thread(int32_t asked, BackendSelection& selection, bool realtime) {
+  if (asked >= 0 || selection.threads != 0 || std::getenv("OMP_NUM_THREADS")) return;
   const int procs = omp_get_num_procs();
-  omp_set_num_threads(std::max(1, procs - 1));
-  std::cout << "threads:  at most " << std::max(1, procs - 1) << " of " << procs
-            << " hardware threads, one left to the network and the client (--threads to change)\n";
+  if (procs < 2) return;
+  if (realtime) {
+    omp_set_num_threads(procs - 1);
+    std::cout << "threads:  at most " << procs - 1 << " of " << procs
+              << " hardware threads, one left to the network and the client (--threads to change)\n";
+    return;
+  }
+  selection.cpu_live_share = kLiveShare;
+  std::cout << "threads:  cpu: " << procs - 1 << " of " << procs
+            << " hardware threads, one left to the network and the client, all " << procs
+            << " while a step takes over " << kLiveShare << " dt on " << procs - 1 << " (--threads to fix)\n";
 }
 
 // The loop thread at SCHED_FIFO `priority` (docs/live.md, "Threads"), so
@@ -124,7 +136,7 @@ void serve_command(const ServeArgs& args) {
   if (!args.client_transform.empty()) frame.to_scene = read_client_transform(args.client_transform);
 
   BackendSelection selection = scenario_backend_selection(s, args.backend, args.precision, args.threads);
-  leave_a_hardware_thread(args.threads, selection.threads);
+  leave_a_hardware_thread(args.threads, selection, args.realtime_priority > 0);
   selection.gl_keep_reaction_positions = true;  // the reply's stiffness and the surface without waiting for the tick in flight
   const std::string backend_choice = resolve_auto_backend(selection);
   if (!backend_choice.empty()) std::cout << "backend:  " << backend_choice << "\n";

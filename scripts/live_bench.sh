@@ -6,8 +6,9 @@
 # half and holding it there. Prints ticks served, late ticks, reply latency
 # (receipt of a pose to the force reply of its tick: median, p99, max) and
 # the real-time factor from the force log's meta, with the CPU and the load,
-# the CPU time of the reply's stiffness on each tick in contact, and how late
-# the loop woke from its waits on the clock (the machine's scheduling).
+# the CPU time of the reply's stiffness on each tick in contact, how late
+# the loop woke from its waits on the clock (the machine's scheduling), and
+# the backend's device at the end (the CPU backend's thread count then).
 # ORGANSIM_LIVE_BENCH_SCENARIO=FILE serves another scenario of examples/liver.off
 # (e.g. the same one meshed finer, for a GPU); the client's path is the same.
 # With ORGANSIM_LIVE_BENCH_CUT=S the client's tool points down into the liver
@@ -61,6 +62,7 @@ cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.start
 lat = live["latency"]
 print(f"cpu:      {cpu}, {os.cpu_count()} hardware threads, load average {os.getloadavg()[0]:.1f} at the end")
 print(f"model:    {meta['points']} points on {meta['backend']} ({meta['precision']}), dt {meta['dt']} s x {meta['substeps']}")
+print(f"device:   {meta.get('device_at_end', meta['device'])}")
 print(f"served:   {live['ticks']} ticks, {live['late_ticks']} late, real-time factor {live['real_time_factor']:.3f}")
 print(f"latency:  median {lat['median_ms']:.3f} ms, p99 {lat['p99_ms']:.3f} ms, max {lat['max_ms']:.3f} ms over {lat['count']} poses")
 st = live["reply_stiffness"]

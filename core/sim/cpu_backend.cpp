@@ -136,8 +136,22 @@ class CpuBackend final : public Backend {
     install();
     std::string how;
     if (options.threads <= 0 && omp_get_max_threads() > 1) {
-      how = choose_threads_by_timing();
-      choice_.emplace(threads_, threads_ == 1 ? omp_get_max_threads() : 1);
+      if (options.live_share > 0) {
+        // A live loop: all but one (or one, for a model too small to gain
+        // from them) while that keeps up with the clock, all when it does
+        // not (thread_choice.h); the ticks themselves tell.
+        const int all = omp_get_max_threads();
+        if (all - 1 > 1) how = choose_threads_by_timing(all - 1);
+        else threads_ = 1;
+        live_share_ = options.live_share;
+        choice_.emplace(threads_, all);
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " (live: %d while a step takes over %.2g dt on %d)", all, live_share_, threads_);
+        how += buf;
+      } else {
+        how = choose_threads_by_timing(omp_get_max_threads());
+        choice_.emplace(threads_, threads_ == 1 ? omp_get_max_threads() : 1);
+      }
     }
     device_ = cpu_model_name() + ", " + threads_text(threads_) + how;
   }
@@ -349,6 +363,7 @@ class CpuBackend final : public Backend {
       return reaction;
     }
     // Thread count chosen by timing: keep timing (thread_choice.h).
+    if (live_share_ > 0) choice_->set_budget(live_share_ * request.dt);
     int32_t first = 0;
     if (choice_->probe_due() && request.substeps > 0) {
       threads_ = choice_->other();
@@ -569,14 +584,13 @@ class CpuBackend final : public Backend {
     return reaction;
   }
 
-  // Times steps from rest on 1 thread and on all hardware threads
-  // (alternating, best of five each, at least ~2 ms of steps per timing so
+  // Times steps from rest on 1 thread and on `all` (the hardware threads,
+  // or all but one in a live loop) (alternating, best of five each, at least ~2 ms of steps per timing so
   // that a liver-size model is timed over several steps, not one) and keeps
   // the faster; the state is put back to rest afterwards. Small models stay
   // on one thread when the fork/join costs more than it saves. Returns what
   // it measured, for device().
-  std::string choose_threads_by_timing() {
-    const int all = omp_get_max_threads();
+  std::string choose_threads_by_timing(int all) {
     KernelStepInputs<Real> ctx{};
     ctx.dt = Real(1e-6), ctx.inv_dt = Real(1e6), ctx.dt2 = Real(1e-12), ctx.drag = Real(1);
     ctx.shear_damping = static_cast<Real>(t_.model->shear_damping_time * 1e6);
@@ -1020,6 +1034,7 @@ class CpuBackend final : public Backend {
   int threads_;
   StepTiming timing_;                     // stands in for the clock in tests (thread choice)
   std::optional<ThreadChoice> choice_;    // set when the thread count is chosen by timing
+  double live_share_ = 0;                 // CpuBackendOptions::live_share
   std::string device_;
   double time_ = 0;
   // The state: with the AVX-512 kernel it lives in t_.fast, and these hold

@@ -32,6 +32,12 @@ struct CpuBackendOptions {
   // Avx512 when it cannot run here (a build without AVX-512, an unsupported
   // model) is an Error(Backend) naming why; Auto never fails.
   CpuKernel kernel = CpuKernel::Auto;
+  // A live loop's share of the clock (organsim serve; 0: not live). With
+  // threads 0 it steps on all hardware threads but one, leaving a core to
+  // the network and the client, while a step takes at most live_share x dt
+  // of wall time, and on all of them only while it takes longer and they
+  // are faster (thread_choice.h, the budget). No timing at construction.
+  double live_share = 0;
 };
 
 // What the thread choice is told a run of `steps` steps on `threads`

@@ -21,11 +21,17 @@ void ThreadChoice::record_tick(int32_t steps, double seconds) {
   recent_step_ = sorted[n / 2];
   --ticks_to_probe_;
   ++ticks_since_probe_;
-  // Load arrived: the recent ticks much slower than the best so far bring
-  // the next probe forward, though not within early_gap_ ticks of the last
-  // (a probe step in a tick slowed by a passing wake-up only makes it slower).
-  if (best_step_ > 0 && recent_step_ > options_.slowdown * best_step_ && ticks_since_probe_ >= early_gap_)
+  if (budget_ > 0 && chosen_ < other_) {
+    // A live loop on the fewer count: it stays while its recent steps fit
+    // the budget; when they do not, the more is probed (not within
+    // early_gap_ ticks of the last probe, as below).
+    ticks_to_probe_ = recent_step_ > budget_ && ticks_since_probe_ >= early_gap_ ? 0 : std::max(ticks_to_probe_, 1);
+  } else if (best_step_ > 0 && recent_step_ > options_.slowdown * best_step_ && ticks_since_probe_ >= early_gap_) {
+    // Load arrived: the recent ticks much slower than the best so far bring
+    // the next probe forward, though not within early_gap_ ticks of the last
+    // (a probe step in a tick slowed by a passing wake-up only makes it slower).
     ticks_to_probe_ = 0;
+  }
   if (best_step_ == 0 || per_step < best_step_) best_step_ = per_step;
 }
 
@@ -40,7 +46,11 @@ void ThreadChoice::record_probe(double seconds) {
   // probe against a few noisy ticks can be wrong (a live session's client
   // slows the two-thread ticks now and then), and a wrong switch to one
   // thread costs every tick until the next probe.
-  if (recent_step_ > 0 && seconds < (1 - options_.switch_margin) * recent_step_) {
+  // A live loop on the more count moves back to the fewer when that fits
+  // the budget with the margin to spare, not only when it is faster.
+  const bool back_to_fewer = budget_ > 0 && other_ < chosen_;
+  const double bar = back_to_fewer ? budget_ : recent_step_;
+  if (recent_step_ > 0 && seconds < (1 - options_.switch_margin) * bar) {
     std::swap(chosen_, other_);
     ++switches_;
     recent_step_ = best_step_ = seconds;

@@ -16,6 +16,14 @@
 // steps, and one-thread ticks are noisy). Results do not depend on the
 // thread count, so a switch changes only the speed.
 //
+// A live loop (organsim serve) wants the fewer of the two counts, which
+// leaves a core to the network and the client, as long as it keeps up with
+// the clock, and the more only when it cannot: set_budget() gives the wall
+// seconds a step may take (a share of dt). With a budget, the fewer count
+// is kept without probes while its recent steps fit, the more is probed
+// when they do not (and taken when faster, as above), and on the more a
+// probe of the fewer moves back when it fits with the margin to spare.
+//
 // Pure bookkeeping on the times it is given, so it can be tested with made-up
 // timings; the backend measures them.
 #include <array>
@@ -43,6 +51,11 @@ class ThreadChoice {
   int32_t switches() const { return switches_; }
   int32_t probes() const { return probes_; }
 
+  // Wall seconds a step may take in a live loop; 0 (the default): none, the
+  // faster count is chosen.
+  void set_budget(double seconds_per_step) { budget_ = seconds_per_step; }
+  double budget() const { return budget_; }
+
   // A probe step on other() took `seconds`.
   void record_probe(double seconds);
   // A tick's `steps` steps on chosen() took `seconds` in all (a probe step
@@ -60,6 +73,7 @@ class ThreadChoice {
   std::array<double, kRecent> last_{};  // the last ticks' times per step, a ring
   int64_t nlast_ = 0;                   // ticks recorded into last_
   double recent_step_ = 0, best_step_ = 0;
+  double budget_ = 0;
   int32_t switches_ = 0, probes_ = 0;
 };
 

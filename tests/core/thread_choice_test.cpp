@@ -128,6 +128,52 @@ TEST(ThreadChoice, AProbeOnlyAsFastAsTheChoiceWithinTheMarginDoesNotSwitch) {
   EXPECT_GT(choice.probes(), 0);
 }
 
+// A live loop (organsim serve) at dt 0.5 ms with a budget of 0.8 dt per
+// step: one thread, leaving a core to the client, is kept while it fits,
+// and never probes two threads meanwhile, though they are faster.
+constexpr double kLiveBudget = 0.8 * 5e-4;
+
+TEST(ThreadChoice, ALiveLoopKeepsTheFewerCountWithoutProbesWhileItsStepsFitTheBudget) {
+  ThreadChoice choice(1, 2);
+  choice.set_budget(kLiveBudget);
+  run_ticks(choice, 0, 1000, [](int32_t n, int32_t) { return n == 2 ? 1.8e-4 : 3.5e-4; });
+  EXPECT_EQ(choice.chosen(), 1);
+  EXPECT_EQ(choice.probes(), 0);
+}
+
+// A slow moment of the machine (one thread's step 0.45 ms, every tick late
+// on it) moves the loop to two threads within the shortest interval; when
+// the machine is quick again (0.3 ms, within the budget with the margin to
+// spare) a probe moves it back, within the longest interval.
+TEST(ThreadChoice, ALiveLoopTakesTheMoreCountWhenTheFewerMissesTheBudgetAndReturnsWhenItFits) {
+  ThreadChoice choice(1, 2);
+  choice.set_budget(kLiveBudget);
+  const auto cost = [](int32_t n, int32_t tick) { return n == 2 ? 2.5e-4 : (tick < 500 ? 4.5e-4 : 3e-4); };
+  run_ticks(choice, 0, 17, cost);
+  EXPECT_EQ(choice.chosen(), 2);
+  EXPECT_EQ(choice.switches(), 1);
+  run_ticks(choice, 17, 483, cost);
+  EXPECT_EQ(choice.chosen(), 2) << "a one-thread step over the budget is no reason to move back";
+  run_ticks(choice, 500, 1025, cost);
+  EXPECT_EQ(choice.chosen(), 1);
+  EXPECT_EQ(choice.switches(), 2);
+}
+
+// Back to the fewer count only with the margin to spare: a one-thread step
+// of 0.38 ms fits the 0.4 ms budget but not 0.9 of it, so the loop stays on
+// two threads (no back and forth at the edge of the budget).
+TEST(ThreadChoice, ALiveLoopOnTheMoreCountStaysWhenTheFewerOnlyJustFits) {
+  ThreadChoice choice(1, 2);
+  choice.set_budget(kLiveBudget);
+  const auto cost = [](int32_t n, int32_t tick) { return n == 2 ? 2.5e-4 : (tick < 30 ? 4.5e-4 : 3.8e-4); };
+  run_ticks(choice, 0, 30, cost);
+  ASSERT_EQ(choice.chosen(), 2);
+  run_ticks(choice, 30, 2000, cost);
+  EXPECT_EQ(choice.chosen(), 2);
+  EXPECT_EQ(choice.switches(), 1);
+  EXPECT_GT(choice.probes(), 3);
+}
+
 // The backend with injected timings: two threads look fast at construction
 // (a quiet moment) and slow from the 30th tick on. The run must end on one
 // thread, say so, and give the very same positions as a one-thread run.
@@ -173,6 +219,62 @@ TEST(ThreadChoice, BackendSwitchesToOneThreadWhenTwoGetSlowAndResultsStayBitIden
     moved = moved || xa[i] != model.rest_position[i];
   }
   EXPECT_TRUE(moved) << "the beam must sag under gravity for the comparison to mean anything";
+}
+
+// The backend in a live loop (CpuBackendOptions::live_share): it starts on
+// all hardware threads but one (on two, without timing; on more, one
+// against all but one, timed), keeps them while a step fits 0.8 dt, and
+// takes the last one when the steps on the others get slower than that
+// (injected timings: from the 30th tick); the results stay those of a fixed
+// count, bit for bit.
+TEST(ThreadChoice, BackendInALiveLoopTakesTheLastThreadWhenTheOthersMissTheBudget) {
+  const int32_t all = omp_get_max_threads();
+  if (all < 2) GTEST_SKIP() << "one hardware thread: nothing to choose";
+  Material material;
+  material.young_modulus = 4000;
+  material.volume_modulus = 30000;
+  ModelOptions options;
+  options.gravity = Vec3(0, 0, -9.81);
+  FixedSelector base;
+  base.kind = FixedSelector::Kind::Plane;
+  base.point = Vec3(0, 0, 1e-9);
+  base.normal = Vec3(0, 0, -1);
+  options.fixed.push_back(base);
+  const Model model = build_model(testing::jittered_box(4, 0.05, 0.25, 1), material, options);
+  int32_t tick = 0;
+  int32_t timed_at_construction = 0;
+  auto timing = [&](int32_t threads, int32_t steps, double) {
+    if (tick == 0) ++timed_at_construction;
+    // Budget: 0.8 x 1e-4 s. On more than two, all but one beat one at construction.
+    const double per_step = threads == all ? 5e-5 : tick < 30 ? (threads == 1 && all > 2 ? 2e-5 : 1e-5) : 5e-4;
+    return steps * per_step;
+  };
+  CpuBackendOptions live{Precision::Float, 0};
+  live.live_share = 0.8;
+  auto adaptive = make_cpu_backend(model, {}, live, timing);
+  if (all == 2) {
+    EXPECT_EQ(timed_at_construction, 0) << "on two hardware threads a live loop starts on one without timing";
+  }
+  const std::string start = adaptive->device();
+  EXPECT_NE(start.find(", " + std::to_string(all - 1) + " thread"), std::string::npos) << start;
+  EXPECT_NE(start.find(" (live: " + std::to_string(all) + " while a step takes over 0.8 dt on " +
+                       std::to_string(all - 1) + ")"),
+            std::string::npos)
+      << start;
+  auto fixed = make_cpu_backend(model, {}, {Precision::Float, 1});
+  TickRequest request;
+  request.dt = 1e-4;
+  request.substeps = kSubsteps;
+  for (tick = 0; tick < 30; ++tick) adaptive->tick(request), fixed->tick(request);
+  EXPECT_EQ(adaptive->device().find("re-timed"), std::string::npos) << "no probe while the steps fit";
+  for (; tick < 80; ++tick) adaptive->tick(request), fixed->tick(request);
+  const std::string device = adaptive->device();
+  EXPECT_NE(device.find("1 switch, now " + std::to_string(all) + " threads"), std::string::npos) << device;
+  std::vector<Vec3> xa, xf;
+  adaptive->positions(xa);
+  fixed->positions(xf);
+  ASSERT_EQ(xa.size(), xf.size());
+  for (size_t i = 0; i < xa.size(); ++i) ASSERT_EQ(xa[i], xf[i]) << "point " << i;
 }
 
 }  // namespace
