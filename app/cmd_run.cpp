@@ -129,7 +129,7 @@ void print_plan(std::ostream& out, const Scenario& s, const Model& model, const 
       out << "  - sutures at t = " << u.t << " s: "
           << (u.along.empty() ? std::to_string(u.pairs.size()) + " given pairs" : "along cut \"" + u.along + "\"")
           << ", " << u.stiffness << " N/m each, tightening " << u.rate << " m/s to " << u.min_length
-          << " m (springs added to the Model, tension only on the generic CPU kernel and step.comp; the "
+          << " m (springs added to the Model, tension only, on every CPU kernel and step.comp; the "
              "backend refreshes their rest lengths per tick; dt_crit checked)\n";
     }
   }
