@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
+#include "core/util/atomic_file.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -30,8 +30,11 @@ double column_value(const ForceSamples& s, size_t i, const std::string& column) 
 }  // namespace
 
 MeasuredCurve read_measured_curve(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw input_error(path.string(), "cannot open the measured curve");
+  return parse_measured_curve(read_text_file(path), path.string());
+}
+
+MeasuredCurve parse_measured_curve(std::string_view text, const std::string& source) {
+  std::istringstream in{std::string(text)};
   MeasuredCurve c;
   std::string line;
   int line_no = 0;
@@ -45,23 +48,23 @@ MeasuredCurve read_measured_curve(const std::filesystem::path& path) {
     if (!header) {
       header = true;
       if (cells.size() < 2 || (cells[0] != "t" && cells[0] != "displacement"))
-        throw input_error(path.string(), where + "expected a header 't' or 'displacement' followed by force columns "
+        throw input_error(source, where + "expected a header 't' or 'displacement' followed by force columns "
                                                  "(force, fx, fy, fz)");
       c.abscissa = cells[0] == "t" ? MeasuredCurve::Abscissa::Time : MeasuredCurve::Abscissa::Displacement;
       for (size_t k = 1; k < cells.size(); ++k) {
         const std::string& name = cells[k];
         if (name != "force" && name != "fx" && name != "fy" && name != "fz")
-          throw input_error(path.string(), where + "column " + std::to_string(k + 1) + " '" + name +
+          throw input_error(source, where + "column " + std::to_string(k + 1) + " '" + name +
                                                    "': expected force, fx, fy or fz");
         if (std::count(c.columns.begin(), c.columns.end(), name))
-          throw input_error(path.string(), where + "column '" + name + "' appears twice");
+          throw input_error(source, where + "column '" + name + "' appears twice");
         c.columns.push_back(name);
       }
       c.force.resize(c.columns.size());
       continue;
     }
     if (cells.size() != c.columns.size() + 1)
-      throw input_error(path.string(), where + "expected " + std::to_string(c.columns.size() + 1) + " values, got " +
+      throw input_error(source, where + "expected " + std::to_string(c.columns.size() + 1) + " values, got " +
                                            std::to_string(cells.size()));
     std::vector<double> values;
     for (size_t k = 0; k < cells.size(); ++k) {
@@ -73,17 +76,17 @@ MeasuredCurve read_measured_curve(const std::filesystem::path& path) {
         used = 0;
       }
       if (used != cells[k].size() || cells[k].empty() || !std::isfinite(v))
-        throw input_error(path.string(), where + "column " + std::to_string(k + 1) + ": expected a number, got '" +
+        throw input_error(source, where + "column " + std::to_string(k + 1) + ": expected a number, got '" +
                                              cells[k] + "'");
       values.push_back(v);
     }
     if (!c.x.empty() && !(values[0] > c.x.back()))
-      throw input_error(path.string(), where + "the first column must increase strictly");
+      throw input_error(source, where + "the first column must increase strictly");
     c.x.push_back(values[0]);
     for (size_t k = 1; k < values.size(); ++k) c.force[k - 1].push_back(values[k]);
   }
-  if (!header) throw input_error(path.string(), "empty: expected a header line and samples");
-  if (c.x.size() < 2) throw input_error(path.string(), "expected at least 2 samples");
+  if (!header) throw input_error(source, "empty: expected a header line and samples");
+  if (c.x.size() < 2) throw input_error(source, "expected at least 2 samples");
   return c;
 }
 

@@ -7,6 +7,7 @@
 // Lines starting with '#' and blank lines are skipped.
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/io/force_log.h"
@@ -22,6 +23,8 @@ struct MeasuredCurve {
 
 // Throws Error(Input) naming the file, the line and what was expected.
 MeasuredCurve read_measured_curve(const std::filesystem::path& path);
+// The same from the file's text; errors name `source`.
+MeasuredCurve parse_measured_curve(std::string_view text, const std::string& source);
 
 // The simulated counterpart of a measured curve: each column of `curve`
 // taken from `samples` and linearly interpolated at the curve's x (held at

@@ -36,10 +36,13 @@ double client_unit_metres(const std::string& unit) {
 }
 
 Matrix4 read_client_transform(const std::filesystem::path& file) {
-  const std::string name = file.string();
+  return parse_client_transform(read_text_file(file), file.string());
+}
+
+Matrix4 parse_client_transform(std::string_view text, const std::string& name) {
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(read_text_file(file));
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw input_error(name, std::string("not JSON (") + e.what() + ")");
   }
@@ -58,7 +61,8 @@ Matrix4 read_client_transform(const std::filesystem::path& file) {
   if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) throw input_error(name, "the last row must be [0, 0, 0, 1]");
   const Eigen::Matrix3d rot = m.topLeftCorner<3, 3>();
   const double off = (rot.transpose() * rot - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (off > 1e-6 || rot.determinant() < 0)
+  // Asked so that NaN (entries whose products overflow) is refused too.
+  if (!(off <= 1e-6) || !(rot.determinant() > 0))
     throw input_error(name, "the upper 3x3 must be a rotation (orthonormal, determinant +1): the client's "
                             "frame is registered rigidly; units are --client-units");
   return m;

@@ -9,6 +9,7 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/util/vec.h"
@@ -40,6 +41,8 @@ double client_unit_metres(const std::string& unit);
 // when it is not one: unreadable, not JSON, not 4x4, not finite, last row not
 // [0, 0, 0, 1], or an upper 3x3 that is not a rotation (within 1e-6).
 Matrix4 read_client_transform(const std::filesystem::path& file);
+// The same from the file's text; errors name `source`.
+Matrix4 parse_client_transform(std::string_view text, const std::string& source);
 
 // A box around the scene: poses whose centre falls outside it are refused
 // (a client sending metres to a server expecting millimetres lands 1000x

@@ -29,7 +29,9 @@
 #include "core/stability/study_files.h"
 #include "core/sweep/case_names.h"
 #include "core/sweep/sweep_spec.h"
+#include "core/fit/measured_curve.h"
 #include "core/live/client_command.h"
+#include "core/live/client_frame.h"
 #include "igtl/igtl_stream.h"
 #include "meshing/label_image.h"
 #include "meshing/surface_check.h"
@@ -220,6 +222,47 @@ inline LabelImage label_image_input(std::string_view bytes, const std::string& s
   require(image.axes.allFinite() && image.origin.allFinite() && image.axes.determinant() != 0,
           "image accepted with a degenerate placement");
   return image;
+}
+
+// kind measured_curve: the CSV force curve of `organsim fit --measured`
+// (parse_measured_curve). An accepted curve has finite, strictly increasing
+// abscissae (at least 2), known distinct force columns and one finite value
+// per column and sample: what the fit's interpolation relies on. Returns
+// the sample count.
+inline size_t measured_curve_input(std::string_view text, const std::string& source) {
+  const MeasuredCurve c = parse_measured_curve(text, source);
+  require(c.x.size() >= 2, "curve accepted with fewer than 2 samples");
+  for (size_t i = 0; i < c.x.size(); ++i) {
+    require(std::isfinite(c.x[i]), "curve accepted with a non-finite abscissa");
+    require(i == 0 || c.x[i] > c.x[i - 1], "curve accepted with an abscissa that does not increase");
+  }
+  require(!c.columns.empty() && c.columns.size() == c.force.size(), "curve accepted without force columns");
+  for (size_t k = 0; k < c.columns.size(); ++k) {
+    const std::string& name = c.columns[k];
+    require(name == "force" || name == "fx" || name == "fy" || name == "fz", "curve accepted with column " + name);
+    require(std::count(c.columns.begin(), c.columns.end(), name) == 1, "curve accepted with a column twice");
+    require(c.force[k].size() == c.x.size(), "a force column's length differs from the samples'");
+    for (double f : c.force[k]) require(std::isfinite(f), "curve accepted with a non-finite force");
+  }
+  return c.x.size();
+}
+
+// kind client_transform: the JSON matrix of `organsim serve
+// --client-transform` (parse_client_transform). An accepted matrix is a
+// rigid motion the pose and reply conversions can trust: finite, last row
+// 0 0 0 1, an upper 3x3 orthonormal within 1e-6 with determinant +1.
+// Returns 16 (its entries).
+inline size_t client_transform_input(std::string_view text, const std::string& source) {
+  const Matrix4 m = parse_client_transform(text, source);
+  require(m.allFinite(), "transform accepted with a non-finite entry");
+  require(m.row(3) == Eigen::RowVector4d(0, 0, 0, 1), "transform accepted without the last row 0 0 0 1");
+  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d gram = r.transpose() * r;
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      require(std::abs(gram(i, k) - (i == k ? 1.0 : 0.0)) <= 1e-6, "transform accepted with a non-orthonormal 3x3");
+  require(r.determinant() > 0, "transform accepted with a reflection");
+  return static_cast<size_t>(m.size());
 }
 
 // kind igtl: the OpenIGTLink byte stream a client sends to `organsim serve`

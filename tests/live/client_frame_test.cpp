@@ -58,6 +58,9 @@ TEST(ClientFrame, RefusesATransformFileThatIsNotARigidMatrixNamingTheFile) {
       {"mirror.json", "[[-1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]"},
       {"lastrow.json", "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,1,1]]"},
       {"text.json", R"({"matrix": "identity"})"},
+      // Entries whose products overflow (R^T R holds inf and NaN).
+      {"overflow.json", "[[1e200,1e200,0,0],[-1e200,1e200,0,0],[0,0,1,0],[0,0,0,1]]"},
+      {"overflow_diag.json", "[[1e200,0,0,0],[0,1e200,0,0],[0,0,1e200,0],[0,0,0,1]]"},
   };
   for (const auto& [name, text] : bad) {
     const fs::path file = write(name, text);
