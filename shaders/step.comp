@@ -218,7 +218,7 @@ void main() {
 #endif
   const bool owner = part == 0;
 
-  const vec4 m = mass[p];  // {1/m, m, tool stiffness scale, 0}
+  const vec4 m = mass[p];  // {1/m, m, tool stiffness scale s, s / surface triangles of p (0 off the surface)}
 #ifdef HAS_GRAVITY
   f += m.y * u_gravity;
 #endif

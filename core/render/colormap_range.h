@@ -13,7 +13,7 @@ namespace organsim {
 
 struct ColormapRange {
   double max = 0;      // top of the scale (m or dimensionless); 0: not known yet
-  std::string source;  // "scenario" or "estimate", for the legend
+  std::string source;  // "scenario", "estimate" or "first frame", for the legend
 };
 
 // How far the tool will move the model: for a push, the deepest its sphere

@@ -33,10 +33,11 @@ struct CpuBackendOptions {
   // model) is an Error(Backend) naming why; Auto never fails.
   CpuKernel kernel = CpuKernel::Auto;
   // A live loop's share of the clock (organsim serve; 0: not live). With
-  // threads 0 it steps on all hardware threads but one, leaving a core to
-  // the network and the client, while a step takes at most live_share x dt
-  // of wall time, and on all of them only while it takes longer and they
-  // are faster (thread_choice.h, the budget). No timing at construction.
+  // threads 0 it steps on fewer than all hardware threads, leaving a core
+  // to the network and the client (on two, one without timing; on more, the
+  // faster of one and all but one, timed at construction), while a step
+  // takes at most live_share x dt of wall time, and on all of them only
+  // while it takes longer and they are faster (thread_choice.h, the budget).
   double live_share = 0;
 };
 
