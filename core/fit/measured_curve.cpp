@@ -48,14 +48,15 @@ MeasuredCurve parse_measured_curve(std::string_view text, const std::string& sou
     if (!header) {
       header = true;
       if (cells.size() < 2 || (cells[0] != "t" && cells[0] != "displacement"))
-        throw input_error(source, where + "expected a header 't' or 'displacement' followed by force columns "
-                                                 "(force, fx, fy, fz)");
+        throw input_error(source, where +
+                                      "expected a header 't' or 'displacement' followed by force columns "
+                                      "(force, fx, fy, fz)");
       c.abscissa = cells[0] == "t" ? MeasuredCurve::Abscissa::Time : MeasuredCurve::Abscissa::Displacement;
       for (size_t k = 1; k < cells.size(); ++k) {
         const std::string& name = cells[k];
         if (name != "force" && name != "fx" && name != "fy" && name != "fz")
-          throw input_error(source, where + "column " + std::to_string(k + 1) + " '" + name +
-                                                   "': expected force, fx, fy or fz");
+          throw input_error(
+              source, where + "column " + std::to_string(k + 1) + " '" + name + "': expected force, fx, fy or fz");
         if (std::count(c.columns.begin(), c.columns.end(), name))
           throw input_error(source, where + "column '" + name + "' appears twice");
         c.columns.push_back(name);
@@ -65,7 +66,7 @@ MeasuredCurve parse_measured_curve(std::string_view text, const std::string& sou
     }
     if (cells.size() != c.columns.size() + 1)
       throw input_error(source, where + "expected " + std::to_string(c.columns.size() + 1) + " values, got " +
-                                           std::to_string(cells.size()));
+                                    std::to_string(cells.size()));
     std::vector<double> values;
     for (size_t k = 0; k < cells.size(); ++k) {
       size_t used = 0;
@@ -76,8 +77,8 @@ MeasuredCurve parse_measured_curve(std::string_view text, const std::string& sou
         used = 0;
       }
       if (used != cells[k].size() || cells[k].empty() || !std::isfinite(v))
-        throw input_error(source, where + "column " + std::to_string(k + 1) + ": expected a number, got '" +
-                                             cells[k] + "'");
+        throw input_error(source,
+                          where + "column " + std::to_string(k + 1) + ": expected a number, got '" + cells[k] + "'");
       values.push_back(v);
     }
     if (!c.x.empty() && !(values[0] > c.x.back()))

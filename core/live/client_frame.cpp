@@ -39,32 +39,33 @@ Matrix4 read_client_transform(const std::filesystem::path& file) {
   return parse_client_transform(read_text_file(file), file.string());
 }
 
-Matrix4 parse_client_transform(std::string_view text, const std::string& name) {
+Matrix4 parse_client_transform(std::string_view text, const std::string& source) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    throw input_error(name, std::string("not JSON (") + e.what() + ")");
+    throw input_error(source, std::string("not JSON (") + e.what() + ")");
   }
   if (j.is_object() && j.contains("matrix")) j = j["matrix"];
   const char* expected = "expected a 4x4 matrix: four rows of four numbers, or {\"matrix\": [[...], ...]}";
-  if (!j.is_array() || j.size() != 4) throw input_error(name, expected);
+  if (!j.is_array() || j.size() != 4) throw input_error(source, expected);
   Matrix4 m;
   for (int r = 0; r < 4; ++r) {
-    if (!j[r].is_array() || j[r].size() != 4) throw input_error(name, expected);
+    if (!j[r].is_array() || j[r].size() != 4) throw input_error(source, expected);
     for (int c = 0; c < 4; ++c) {
-      if (!j[r][c].is_number()) throw input_error(name, expected);
+      if (!j[r][c].is_number()) throw input_error(source, expected);
       m(r, c) = j[r][c].get<double>();
-      if (!std::isfinite(m(r, c))) throw input_error(name, "matrix entries must be finite");
+      if (!std::isfinite(m(r, c))) throw input_error(source, "matrix entries must be finite");
     }
   }
-  if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) throw input_error(name, "the last row must be [0, 0, 0, 1]");
+  if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) throw input_error(source, "the last row must be [0, 0, 0, 1]");
   const Eigen::Matrix3d rot = m.topLeftCorner<3, 3>();
   const double off = (rot.transpose() * rot - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   // Asked so that NaN (entries whose products overflow) is refused too.
   if (!(off <= 1e-6) || !(rot.determinant() > 0))
-    throw input_error(name, "the upper 3x3 must be a rotation (orthonormal, determinant +1): the client's "
-                            "frame is registered rigidly; units are --client-units");
+    throw input_error(source,
+                      "the upper 3x3 must be a rotation (orthonormal, determinant +1): the client's "
+                      "frame is registered rigidly; units are --client-units");
   return m;
 }
 

@@ -19,6 +19,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/fit/measured_curve.h"
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/mesh_io_detail.h"
 #include "core/mesh/mesh_stats.h"
@@ -29,7 +30,6 @@
 #include "core/stability/study_files.h"
 #include "core/sweep/case_names.h"
 #include "core/sweep/sweep_spec.h"
-#include "core/fit/measured_curve.h"
 #include "core/live/client_command.h"
 #include "core/live/client_frame.h"
 #include "igtl/igtl_stream.h"
