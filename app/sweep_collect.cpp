@@ -97,9 +97,11 @@ void write_results_plot(const fs::path& path, const Sweep& plan, const nlohmann:
 ManifestCounts collect_sweep(const fs::path& outdir, const CollectOptions& options) {
   const Sweep plan = read_plan(outdir);
   const std::vector<CaseRecord> records = read_case_records(plan, outdir);
+  // Every force log read before anything is written: a log that is not one
+  // stops the collection with the files of the last one intact.
+  const nlohmann::json rows = results_json(plan, records, outdir, options.at_times);
   ManifestCounts counts;
   write_manifest(plan, records, outdir, &counts);
-  const nlohmann::json rows = results_json(plan, records, outdir, options.at_times);
   const std::string json_text = rows.dump(2) + "\n";
   write_file_atomically(outdir / "results.json", [&](std::ostream& out) { out << json_text; });
   const std::string csv = results_csv(plan, rows, options.at_times);

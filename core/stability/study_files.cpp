@@ -1,10 +1,10 @@
 #include "core/stability/study_files.h"
 
 #include <cmath>
-#include <limits>
 
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/json_fields.h"
 
 namespace organsim {
 namespace {
@@ -21,66 +21,6 @@ json number(double v) {
   if (std::isfinite(v)) return v;
   return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
 }
-
-class Reader {
- public:
-  Reader(const std::string& source) : source_(source) {}
-
-  Error error(const std::string& where, const std::string& expected) const {
-    return input_error(source_, where + ": expected " + expected);
-  }
-  const json& field(const json& object, const char* name, const std::string& where) const {
-    if (!object.is_object()) throw error(where, "an object");
-    const auto it = object.find(name);
-    if (it == object.end()) throw error(where + "." + name, "a value (missing)");
-    return *it;
-  }
-  double number(const json& v, const std::string& where) const {
-    if (v.is_number()) return v.get<double>();
-    if (v == "inf") return std::numeric_limits<double>::infinity();
-    if (v == "-inf") return -std::numeric_limits<double>::infinity();
-    if (v == "nan") return std::numeric_limits<double>::quiet_NaN();
-    throw error(where, "a number");
-  }
-  double number(const json& object, const char* name, const std::string& where) const {
-    return number(field(object, name, where), where + "." + name);
-  }
-  int64_t whole(const json& object, const char* name, const std::string& where, int64_t min, int64_t max) const {
-    const json& v = field(object, name, where);
-    const bool too_large = v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(max);
-    if (!v.is_number_integer() || too_large || v.get<int64_t>() < min || v.get<int64_t>() > max)
-      throw error(where + "." + name, "a whole number in " + std::to_string(min) + ".." + std::to_string(max));
-    return v.get<int64_t>();
-  }
-  std::string text(const json& object, const char* name, const std::string& where) const {
-    const json& v = field(object, name, where);
-    if (!v.is_string()) throw error(where + "." + name, "a string");
-    return v.get<std::string>();
-  }
-  bool flag(const json& object, const char* name, const std::string& where) const {
-    const json& v = field(object, name, where);
-    if (!v.is_boolean()) throw error(where + "." + name, "true or false");
-    return v.get<bool>();
-  }
-  const json& array(const json& object, const char* name, const std::string& where) const {
-    const json& v = field(object, name, where);
-    if (!v.is_array()) throw error(where + "." + name, "an array");
-    return v;
-  }
-  void format(const json& j, const char* expected) const {
-    if (text(j, "format", "file") != expected) throw error("file.format", std::string("\"") + expected + "\"");
-  }
-  // A flat array of x, y, z numbers as points.
-  std::vector<Vec3> points(const json& v, const std::string& where) const {
-    if (!v.is_array() || v.size() % 3 != 0) throw error(where, "an array of x, y, z numbers");
-    std::vector<Vec3> out(v.size() / 3);
-    for (size_t i = 0; i < v.size(); ++i) out[i / 3][static_cast<int>(i % 3)] = number(v[i], where + "[" + std::to_string(i) + "]");
-    return out;
-  }
-
- private:
-  std::string source_;
-};
 
 json points_json(const std::vector<Vec3>& points) {
   json a = json::array();
@@ -99,7 +39,7 @@ json plan_json(const StudyPlan& plan) {
 }
 
 StudyPlan parse_study_plan(const json& j, const std::string& source) {
-  const Reader r(source);
+  const JsonFields r(source);
   r.format(j, kPlanFormat);
   StudyPlan plan;
   plan.request = r.field(j, "request", "file");
@@ -135,7 +75,7 @@ json trajectory_json(const Trajectory& t) {
 }
 
 Trajectory parse_trajectory(const json& j, const std::string& source) {
-  const Reader r(source);
+  const JsonFields r(source);
   r.format(j, kReferenceFormat);
   Trajectory t;
   t.latency_ticks = static_cast<int32_t>(r.whole(j, "latency_ticks", "file", 0, 1 << 20));
@@ -180,7 +120,7 @@ json outcome_record_json(const StudyOutcome& o) {
 }
 
 StudyOutcome parse_outcome_record(const json& j, const std::string& source) {
-  const Reader r(source);
+  const JsonFields r(source);
   r.format(j, kRunFormat);
   StudyOutcome o;
   o.backend = r.text(j, "backend", "file");
@@ -203,13 +143,7 @@ StudyOutcome parse_outcome_record(const json& j, const std::string& source) {
   return o;
 }
 
-json parse_study_json(const std::string& text, const std::string& source) {
-  try {
-    return json::parse(text);
-  } catch (const json::exception& e) {
-    throw input_error(source, std::string("invalid JSON: ") + e.what());
-  }
-}
+json parse_study_json(const std::string& text, const std::string& source) { return JsonFields(source).parse(text); }
 
 json read_study_file(const std::string& path) { return parse_study_json(read_text_file(path), path); }
 

@@ -1,11 +1,13 @@
 #include "core/sweep/case_status.h"
 
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <sstream>
 
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/json_fields.h"
 
 namespace organsim {
 
@@ -28,22 +30,33 @@ nlohmann::json to_json(const CaseStatus& s) {
       {"wall_seconds", s.wall_seconds}, {"scenario_hash", s.scenario_hash}, {"meta", s.meta}};
 }
 
+std::optional<CaseStatus> parse_case_status(const std::string& text) {
+  const JsonFields r("status.json");
+  try {
+    const nlohmann::json j = r.parse(text);
+    CaseStatus s;
+    const std::string state = r.text(j, "status", "file");
+    if (state != "done" && state != "failed") return std::nullopt;
+    s.state = state == "done" ? CaseState::Done : CaseState::Failed;
+    s.exit_code = static_cast<int>(r.whole(j, "exit_code", "file", -(1 << 30), 1 << 30));
+    s.signal = static_cast<int>(r.whole(j, "signal", "file", 0, 1 << 30));
+    s.error = r.text(j, "error", "file");
+    s.wall_seconds = r.number(j, "wall_seconds", "file");
+    if (!(s.wall_seconds >= 0 && std::isfinite(s.wall_seconds))) return std::nullopt;
+    s.scenario_hash = r.text(j, "scenario_hash", "file");
+    s.meta = r.field(j, "meta", "file");
+    return s;
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+}
+
 std::optional<CaseStatus> read_case_status(const fs::path& case_dir) {
   const fs::path path = case_dir / "status.json";
   if (!fs::exists(path)) return std::nullopt;
   try {
-    const nlohmann::json j = nlohmann::json::parse(read_text_file(path));
-    CaseStatus s;
-    const std::string state = j.at("status").get<std::string>();
-    s.state = state == "done" ? CaseState::Done : state == "failed" ? CaseState::Failed : CaseState::Pending;
-    s.exit_code = j.at("exit_code").get<int>();
-    s.signal = j.at("signal").get<int>();
-    s.error = j.at("error").get<std::string>();
-    s.wall_seconds = j.at("wall_seconds").get<double>();
-    s.scenario_hash = j.at("scenario_hash").get<std::string>();
-    s.meta = j.at("meta");
-    return s;
-  } catch (const std::exception&) {
+    return parse_case_status(read_text_file(path));
+  } catch (const Error&) {  // unreadable (a folder, no permission)
     return std::nullopt;
   }
 }

@@ -29,8 +29,11 @@ struct CaseStatus {
 
 nlohmann::json to_json(const CaseStatus& s);
 
-// The status file of a case folder; nullopt when absent or unreadable
-// (a case whose record cannot be read is simply run again).
+// A status file's text; nullopt unless it is one (valid JSON with every
+// entry of to_json, of its type, the status "done" or "failed").
+std::optional<CaseStatus> parse_case_status(const std::string& text);
+// The status file of a case folder; nullopt when absent or not a status
+// file (a case whose record cannot be read is simply run again).
 std::optional<CaseStatus> read_case_status(const std::filesystem::path& case_dir);
 void write_case_status(const std::filesystem::path& case_dir, const CaseStatus& s);
 

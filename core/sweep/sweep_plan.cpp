@@ -1,7 +1,11 @@
 #include "core/sweep/sweep_plan.h"
 
+#include <set>
+
+#include "core/sweep/case_names.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/json_fields.h"
 
 namespace organsim {
 
@@ -32,31 +36,45 @@ nlohmann::json plan_json(const Sweep& sweep) {
           {"cases", cases}};
 }
 
+Sweep parse_plan(const std::string& text, const std::string& source) {
+  const JsonFields r(source);
+  const nlohmann::json j = r.parse(text);
+  Sweep sweep;
+  sweep.file = r.text(j, "sweep", "file");
+  sweep.scenario = r.text(j, "scenario", "file");
+  if (sweep.file.empty()) throw r.error("sweep", "the sweep file's path");
+  if (sweep.scenario.empty()) throw r.error("scenario", "the base scenario's path");
+  const nlohmann::json& swept = r.array(j, "swept", "file");
+  for (size_t i = 0; i < swept.size(); ++i) {
+    if (!swept[i].is_string()) throw r.error("swept[" + std::to_string(i) + "]", "a field path");
+    sweep.swept_paths.push_back(swept[i].get<std::string>());
+  }
+  for (const auto& item : r.object(j, "set", "file").items()) sweep.fixed.push_back({item.key(), item.value(), "set"});
+  const nlohmann::json& cases = r.array(j, "cases", "file");
+  std::set<std::string> names;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const std::string where = "cases[" + std::to_string(i) + "]";
+    const nlohmann::json& jc = cases[i];
+    SweepCase c;
+    c.name = r.text(jc, "name", where);
+    // The name is a folder under OUTDIR/cases/: one safe path component.
+    const std::string problem = case_name_problem(c.name);
+    if (!problem.empty()) throw input_error(source, where + ".name: " + problem);
+    if (!names.insert(c.name).second) throw r.error(where + ".name", "a name no other case has");
+    const nlohmann::json& overrides = r.object(jc, "overrides", where);
+    for (const std::string& p : sweep.swept_paths) {
+      if (overrides.contains(p)) c.overrides.push_back({p, overrides.at(p), ""});
+    }
+    c.scenario_hash = r.text(jc, "scenario_hash", where);
+    c.writes_forces = r.flag(jc, "writes_forces", where);
+    sweep.cases.push_back(std::move(c));
+  }
+  return sweep;
+}
+
 Sweep read_plan(const fs::path& outdir) {
   const fs::path path = outdir / "cases.json";
-  try {
-    const nlohmann::json j = nlohmann::json::parse(read_text_file(path));
-    Sweep sweep;
-    sweep.file = j.at("sweep").get<std::string>();
-    sweep.scenario = j.at("scenario").get<std::string>();
-    sweep.swept_paths = j.at("swept").get<std::vector<std::string>>();
-    for (const auto& item : j.at("set").items()) sweep.fixed.push_back({item.key(), item.value(), "set"});
-    for (const auto& jc : j.at("cases")) {
-      SweepCase c;
-      c.name = jc.at("name").get<std::string>();
-      for (const std::string& p : sweep.swept_paths) {
-        if (jc.at("overrides").contains(p)) c.overrides.push_back({p, jc["overrides"][p], ""});
-      }
-      c.scenario_hash = jc.at("scenario_hash").get<std::string>();
-      c.writes_forces = jc.at("writes_forces").get<bool>();
-      sweep.cases.push_back(std::move(c));
-    }
-    return sweep;
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw input_error(path.string(), std::string("not a sweep plan (written by organsim sweep): ") + e.what());
-  }
+  return parse_plan(read_text_file(path), path.string());
 }
 
 void write_plan(const fs::path& outdir, const Sweep& sweep, bool must_match) {

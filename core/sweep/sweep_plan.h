@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/sweep/case_status.h"
@@ -20,8 +21,12 @@ std::filesystem::path case_dir(const std::filesystem::path& outdir, const SweepC
 nlohmann::json overrides_json(const SweepCase& c);
 
 nlohmann::json plan_json(const Sweep& sweep);
-// The cases of a plan (names, overrides, hashes; no scenario text).
-// Throws Error(Input) naming the file when it is not a plan.
+// The cases of a plan (names, overrides, hashes; no scenario text) from
+// its text. Throws Error(Input) naming `source` and the entry when it is not
+// a plan: an entry missing or of another type, a case name that is not a
+// usable folder name (case_name_problem) or repeated.
+Sweep parse_plan(const std::string& text, const std::string& source);
+// OUTDIR/cases.json, parsed.
 Sweep read_plan(const std::filesystem::path& outdir);
 
 // Writes OUTDIR/cases.json unless it already holds this plan. With

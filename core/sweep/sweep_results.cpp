@@ -1,10 +1,12 @@
 #include "core/sweep/sweep_results.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "core/sweep/sweep_plan.h"
 #include "core/util/atomic_file.h"
+#include "core/util/json_fields.h"
 
 namespace organsim {
 
@@ -18,46 +20,77 @@ std::string figure_label(const std::string& figure) {
   return figure;
 }
 
-nlohmann::json force_log_figures(const nlohmann::json& log, const std::vector<double>& at_times) {
-  const nlohmann::json& meta = log.at("meta");
-  const nlohmann::json& t = log.at("samples").at("t");
-  const nlohmann::json& force = log.at("samples").at("force");
-  auto magnitude = [&](size_t i) -> double {
-    const auto& f = force[i];
-    if (f[0].is_null() || f[1].is_null() || f[2].is_null()) return std::numeric_limits<double>::quiet_NaN();
-    return std::sqrt(f[0].get<double>() * f[0].get<double>() + f[1].get<double>() * f[1].get<double>() +
-                     f[2].get<double>() * f[2].get<double>());
-  };
-  nlohmann::json fig = nlohmann::json::object();
+namespace {
+
+// The meta entry `name` when present and of the type `is` tests, `fallback` when absent.
+template <class Test>
+nlohmann::json meta_entry(const JsonFields& r, const nlohmann::json& meta, const char* name, Test is,
+                          const char* expected, nlohmann::json fallback) {
+  if (!meta.contains(name)) return fallback;
+  const nlohmann::json& v = meta.at(name);
+  if (!is(v)) throw r.error(std::string("meta.") + name, expected);
+  return v;
+}
+
+}  // namespace
+
+ForceLogSummary force_log_summary(const std::string& text, const std::string& source,
+                                  const std::vector<double>& at_times) {
+  const JsonFields r(source);
+  const nlohmann::json log = r.parse(text);
+  const nlohmann::json& meta = r.object(log, "meta", "file");
+  const nlohmann::json& samples = r.object(log, "samples", "file");
+  const nlohmann::json& tj = r.array(samples, "t", "samples");
+  const nlohmann::json& fj = r.array(samples, "force", "samples");
+  if (fj.size() != tj.size()) throw r.error("samples.force", "one force per time (" + std::to_string(tj.size()) + ")");
+  std::vector<double> t(tj.size()), magnitude(tj.size());
+  for (size_t i = 0; i < t.size(); ++i) {
+    const std::string index = std::to_string(i);
+    if (!tj[i].is_number()) throw r.error("samples.t[" + index + "]", "a time in s");
+    t[i] = tj[i].get<double>();
+    const nlohmann::json& f = fj[i];
+    if (!f.is_array() || f.size() != 3 ||
+        !std::all_of(f.begin(), f.end(), [](const nlohmann::json& v) { return v.is_number() || v.is_null(); }))
+      throw r.error("samples.force[" + index + "]", "three numbers or nulls (N)");
+    magnitude[i] = f[0].is_null() || f[1].is_null() || f[2].is_null()
+                       ? std::numeric_limits<double>::quiet_NaN()
+                       : std::sqrt(f[0].get<double>() * f[0].get<double>() + f[1].get<double>() * f[1].get<double>() +
+                                   f[2].get<double>() * f[2].get<double>());
+  }
+  const auto is_number = [](const nlohmann::json& v) { return v.is_number(); };
+  const auto is_number_or_null = [](const nlohmann::json& v) { return v.is_number() || v.is_null(); };
+  const double tick = meta_entry(r, meta, "tick", is_number, "a tick in s", 0.0).get<double>();
+
+  ForceLogSummary s;
+  nlohmann::json& fig = s.figures = nlohmann::json::object();
   double peak = 0, peak_t = 0;
-  for (size_t i = 0; i < force.size(); ++i) {
-    const double m = magnitude(i);
-    if (m > peak) {
-      peak = m;
-      peak_t = t[i].get<double>();
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (magnitude[i] > peak) {
+      peak = magnitude[i];
+      peak_t = t[i];
     }
   }
   fig["peak_force"] = peak;
   fig["peak_force_t"] = peak_t;
-  const double tick = meta.value("tick", 0.0);
   for (double at : at_times) {
     nlohmann::json value = nullptr;
-    size_t best = force.size();
-    for (size_t i = 0; i < force.size(); ++i) {
-      if (best == force.size() || std::abs(t[i].get<double>() - at) < std::abs(t[best].get<double>() - at)) best = i;
+    size_t best = t.size();
+    for (size_t i = 0; i < t.size(); ++i) {
+      if (best == t.size() || std::abs(t[i] - at) < std::abs(t[best] - at)) best = i;
     }
     // Nearest sample, unless the run stopped more than half a tick before t.
-    if (best < force.size() && at <= t[best].get<double>() + 0.5 * tick) {
-      const double m = magnitude(best);
-      if (std::isfinite(m)) value = m;
-    }
+    if (best < t.size() && at <= t[best] + 0.5 * tick && std::isfinite(magnitude[best])) value = magnitude[best];
     fig[force_at_name(at)] = value;
   }
-  fig["dt_crit"] = meta.contains("dt_crit") ? meta["dt_crit"] : nlohmann::json(nullptr);
-  fig["completed"] = meta.value("completed", false);
-  fig["stop_reason"] = meta.value("stop_reason", std::string());
-  fig["samples"] = force.size();
-  return fig;
+  fig["dt_crit"] = meta_entry(r, meta, "dt_crit", is_number_or_null, "a step in s or null", nullptr);
+  fig["completed"] = meta_entry(
+      r, meta, "completed", [](const nlohmann::json& v) { return v.is_boolean(); }, "true or false", false);
+  fig["stop_reason"] = meta_entry(
+      r, meta, "stop_reason", [](const nlohmann::json& v) { return v.is_string(); }, "a string", "");
+  fig["samples"] = t.size();
+  s.timing = {{"real_time_factor", meta_entry(r, meta, "real_time_factor", is_number, "a number", 0.0)},
+              {"wall_seconds", meta_entry(r, meta, "wall_seconds", is_number, "a time in s", 0.0)}};
+  return s;
 }
 
 nlohmann::json results_json(const Sweep& plan, const std::vector<CaseRecord>& records, const fs::path& outdir,
@@ -71,10 +104,9 @@ nlohmann::json results_json(const Sweep& plan, const std::vector<CaseRecord>& re
                           {"figures", nullptr}, {"timing", nullptr},     {"error", m.value("error", std::string())}};
     const fs::path log_path = case_dir(outdir, c) / "forces.json";
     if (m["status"] != "pending" && fs::exists(log_path)) {
-      const nlohmann::json log = nlohmann::json::parse(read_text_file(log_path));
-      row["figures"] = force_log_figures(log, at_times);
-      row["timing"] = {{"real_time_factor", log["meta"].value("real_time_factor", 0.0)},
-                       {"wall_seconds", log["meta"].value("wall_seconds", 0.0)}};
+      ForceLogSummary log = force_log_summary(read_text_file(log_path), log_path.string(), at_times);
+      row["figures"] = std::move(log.figures);
+      row["timing"] = std::move(log.timing);
     }
     rows.push_back(std::move(row));
   }

@@ -16,8 +16,20 @@
 
 namespace organsim {
 
-// Figures of one force log (forces.json as parsed); `at_times` in s.
-nlohmann::json force_log_figures(const nlohmann::json& log, const std::vector<double>& at_times);
+// What a results row takes from one force log.
+struct ForceLogSummary {
+  nlohmann::json figures;  // peak_force, peak_force_t, force_at_<t>, dt_crit, completed, stop_reason, samples
+  nlohmann::json timing;   // real_time_factor, wall_seconds
+};
+
+// The figures and timing of one force log's text (forces.json as `organsim
+// run` writes it); `at_times` in s. Throws Error(Input) naming `source` and
+// the entry when it is not one: invalid JSON, meta or samples not objects,
+// samples.t and samples.force not arrays of one length, a time that is not
+// a number, a force that is not three numbers or nulls (null: not finite),
+// a meta entry read here of another type.
+ForceLogSummary force_log_summary(const std::string& text, const std::string& source,
+                                  const std::vector<double>& at_times);
 
 // "force_at_0.1" for t = 0.1: the column name of a force_at figure.
 std::string force_at_name(double t);

@@ -295,6 +295,44 @@ TEST(SweepCli, BadShardAndBadSweepRunNothing) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
+// --collect reads back files any process or person may have touched: a
+// force log or a plan that is not one stops it with exit 3 naming the file
+// and the entry, before it writes anything (the last collection's files stay).
+TEST(SweepCli, CollectRefusesAForceLogOrPlanThatIsNotOneAndWritesNothing) {
+  const fs::path dir = tmp("collect_refused");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path out = dir / "out";
+  fs::copy(reference_sweep(), out, fs::copy_options::recursive);
+  const std::string collect = std::string("sweep --collect '").append(out.string()).append("'");
+  const fs::path log = out / "cases" / "young_modulus=6000,position2=0.044" / "forces.json";
+  nlohmann::json j = read_json(log);
+  j["samples"]["force"][7] = {0.5};  // one component: reading on would run past the array
+  std::ofstream(log) << j.dump();
+  // Files a collection would write anew, in another layout than it writes them.
+  for (const char* f : {"results.json", "manifest.json"}) {
+    const std::string relaid = read_json(out / f).dump(4);
+    std::ofstream(out / f) << relaid;
+  }
+  const std::string results = slurp(out / "results.json"), manifest = slurp(out / "manifest.json");
+  CliResult r = run_organsim(collect, dir);
+  EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find(log.string() + ": samples.force[7]: expected three numbers or nulls (N)"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(slurp(out / "results.json"), results);
+  EXPECT_EQ(slurp(out / "manifest.json"), manifest);
+
+  nlohmann::json plan = read_json(out / "cases.json");
+  plan["cases"][2]["name"] = "../../elsewhere";
+  std::ofstream(out / "cases.json") << plan.dump();
+  r = run_organsim(collect, dir);
+  EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find((out / "cases.json").string() + ": cases[2].name: a case name must not start with '.' or '-'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(slurp(out / "manifest.json"), manifest);
+}
+
 TEST(SweepCli, SlurmScriptForTheSweep) {
   const fs::path dir = tmp("slurm_script");
   fs::remove_all(dir);

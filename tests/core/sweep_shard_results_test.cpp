@@ -1,5 +1,6 @@
 // Shard slices (local and from a Slurm array task's environment), a
-// finished run's judgement, and the figures collected from a force log.
+// finished run's judgement, the figures collected from a force log, and the
+// sweep's files read back (plan, status, force log) refusing what is not one.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -9,9 +10,11 @@
 #include <set>
 #include <string>
 
+#include "core/sweep/case_names.h"
 #include "core/sweep/case_status.h"
 #include "core/sweep/shard.h"
 #include "core/sweep/slurm_script.h"
+#include "core/sweep/sweep_plan.h"
 #include "core/sweep/sweep_results.h"
 #include "core/util/error.h"
 
@@ -101,7 +104,8 @@ nlohmann::json force_log(bool completed) {
 }
 
 TEST(SweepResults, FiguresOfAForceLog) {
-  const nlohmann::json f = force_log_figures(force_log(true), {0.0021, 0.004, 0.0044, 0.01});
+  const ForceLogSummary log = force_log_summary(force_log(true).dump(), "forces.json", {0.0021, 0.004, 0.0044, 0.01});
+  const nlohmann::json& f = log.figures;
   EXPECT_EQ(f["peak_force"], 13.0);
   EXPECT_EQ(f["peak_force_t"], 0.003);
   EXPECT_EQ(f[force_at_name(0.0021)], 5.0);  // nearest sample: t = 0.002
@@ -110,10 +114,148 @@ TEST(SweepResults, FiguresOfAForceLog) {
   EXPECT_FALSE(f[force_at_name(0.0044)].is_null());  // within half a tick of the last
   EXPECT_EQ(f["dt_crit"], 0.0005);
   EXPECT_EQ(f["samples"], 4);
+  EXPECT_EQ(log.timing["real_time_factor"], 2.0);
+  EXPECT_EQ(log.timing["wall_seconds"], 0.0);  // absent: 0
   EXPECT_EQ(figure_label("peak_force"), "peak_force (N)");
   EXPECT_EQ(figure_label(force_at_name(0.1)), "force_at_0.1 (N)");
   EXPECT_EQ(figure_label("dt_crit"), "dt_crit (s)");
   EXPECT_EQ(figure_label("real_time_factor"), "real_time_factor");
+}
+
+// What force_log_summary says of `log`'s text, "" when it accepts it.
+std::string force_log_refusal(const nlohmann::json& log) {
+  try {
+    force_log_summary(log.dump(), "c/forces.json", {0.002});
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    return e.what();
+  }
+  return "";
+}
+
+// A force log that is not one (truncated, edited, from elsewhere) is refused
+// naming the file and the entry, never read past its arrays.
+TEST(SweepResults, AForceLogThatIsNotOneIsRefusedNamingTheEntry) {
+  EXPECT_EQ(force_log_refusal(force_log(true)), "");
+  auto changed = [](auto change) {
+    nlohmann::json log = force_log(true);
+    change(log);
+    return force_log_refusal(log);
+  };
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["samples"]["force"][2] = {5.0}; }),
+            "c/forces.json: samples.force[2]: expected three numbers or nulls (N)");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["samples"]["force"][1][0] = "3"; }),
+            "c/forces.json: samples.force[1]: expected three numbers or nulls (N)");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["samples"]["t"][3] = nullptr; }),
+            "c/forces.json: samples.t[3]: expected a time in s");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["samples"]["t"].erase(3); }),
+            "c/forces.json: samples.force: expected one force per time (3)");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["samples"].erase("t"); }),
+            "c/forces.json: samples.t: expected a value (missing)");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["meta"] = 1; }), "c/forces.json: file.meta: expected an object");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["meta"]["tick"] = "1 ms"; }),
+            "c/forces.json: meta.tick: expected a tick in s");
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["meta"]["completed"] = 1; }),
+            "c/forces.json: meta.completed: expected true or false");
+  // A force written as null (not finite) is accepted and has no magnitude.
+  EXPECT_EQ(changed([](nlohmann::json& l) { l["samples"]["force"][1] = {nullptr, nullptr, nullptr}; }), "");
+  try {
+    force_log_summary("{\"meta\": {", "c/forces.json", {});
+    ADD_FAILURE() << "truncated log accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("c/forces.json: invalid JSON: ", 0), 0u) << e.what();
+  }
+}
+
+Sweep two_case_plan() {
+  Sweep plan;
+  plan.file = "/s/sweep.json";
+  plan.scenario = "/s/base.json";
+  plan.swept_paths = {"material.young_modulus"};
+  plan.fixed = {{"time.duration", 0.05, "set"}};
+  for (int e : {4000, 8000}) {
+    SweepCase c;
+    c.name = "young_modulus=" + std::to_string(e);
+    c.overrides = {{"material.young_modulus", e, ""}};
+    c.scenario_hash = text_hash(c.name);
+    c.writes_forces = true;
+    plan.cases.push_back(c);
+  }
+  return plan;
+}
+
+std::string plan_refusal(const nlohmann::json& plan) {
+  try {
+    parse_plan(plan.dump(), "out/cases.json");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    return e.what();
+  }
+  return "";
+}
+
+// The plan read back is the plan written (shards and --collect agree on it);
+// one that is not a plan is refused naming the entry, and a case name that
+// could leave OUTDIR/cases/ or name two cases' folder is refused too.
+TEST(SweepPlanFile, ReadBackEqualsWrittenAndBadPlansAreRefusedNamingTheEntry) {
+  const nlohmann::json written = plan_json(two_case_plan());
+  const Sweep read = parse_plan(written.dump(), "out/cases.json");
+  ASSERT_EQ(read.cases.size(), 2u);
+  EXPECT_EQ(read.cases[1].name, "young_modulus=8000");
+  EXPECT_EQ(read.cases[1].overrides.at(0).value, 8000);
+  EXPECT_EQ(plan_json(read), written);
+
+  auto changed = [&](auto change) {
+    nlohmann::json j = written;
+    change(j);
+    return plan_refusal(j);
+  };
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["cases"][1]["name"] = "../../escape"; }),
+            "out/cases.json: cases[1].name: a case name must not start with '.' or '-'");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["cases"][1]["name"] = "a/b"; }),
+            "out/cases.json: cases[1].name: a case name may hold letters, digits and . _ - + = , ~ only (it names a "
+            "folder)");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["cases"][1]["name"] = j["cases"][0]["name"]; }),
+            "out/cases.json: cases[1].name: expected a name no other case has");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["cases"][0]["overrides"] = nullptr; }),
+            "out/cases.json: cases[0].overrides: expected an object");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["cases"][0]["writes_forces"] = "yes"; }),
+            "out/cases.json: cases[0].writes_forces: expected true or false");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["swept"][0] = 1; }), "out/cases.json: swept[0]: expected a field path");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j["scenario"] = ""; }),
+            "out/cases.json: scenario: expected the base scenario's path");
+  EXPECT_EQ(changed([](nlohmann::json& j) { j.erase("cases"); }),
+            "out/cases.json: file.cases: expected a value (missing)");
+}
+
+// A status file reads back as written; one that is not a status file of a
+// finished run reads as none, so its case is run again.
+TEST(SweepCaseStatus, AStatusFileThatIsNotOneReadsAsNone) {
+  CaseStatus s;
+  s.state = CaseState::Failed;
+  s.exit_code = 5;
+  s.error = "organsim: error: blow-up";
+  s.wall_seconds = 1.5;
+  s.scenario_hash = "abc";
+  s.meta = {{"samples", 3}};
+  const nlohmann::json written = to_json(s);
+  const std::optional<CaseStatus> read = parse_case_status(written.dump());
+  ASSERT_TRUE(read);
+  EXPECT_EQ(to_json(*read), written);
+  for (auto change : std::vector<void (*)(nlohmann::json&)>{
+           [](nlohmann::json& j) { j["status"] = "pending"; },
+           [](nlohmann::json& j) { j["exit_code"] = 1e30; },
+           [](nlohmann::json& j) { j["exit_code"] = 1.5; },
+           [](nlohmann::json& j) { j["wall_seconds"] = "inf"; },
+           [](nlohmann::json& j) { j["wall_seconds"] = -1; },
+           [](nlohmann::json& j) { j.erase("scenario_hash"); },
+           [](nlohmann::json& j) { j = nlohmann::json::array(); },
+       }) {
+    nlohmann::json j = written;
+    change(j);
+    EXPECT_FALSE(parse_case_status(j.dump())) << j.dump();
+  }
+  EXPECT_FALSE(parse_case_status("{\"status\": \"done\""));
 }
 
 // A run that exited 0 is done only with a complete force log.

@@ -9,29 +9,33 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "core/fit/measured_curve.h"
+#include "core/live/client_command.h"
+#include "core/live/client_frame.h"
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/mesh_io_detail.h"
 #include "core/mesh/mesh_stats.h"
 #include "core/mesh/tet_mesh.h"
-#include "core/scenario/scenario.h"
 #include "core/run/run.h"
+#include "core/scenario/scenario.h"
 #include "core/stability/critical_step.h"
 #include "core/stability/study_files.h"
 #include "core/sweep/case_names.h"
+#include "core/sweep/case_status.h"
+#include "core/sweep/sweep_plan.h"
+#include "core/sweep/sweep_results.h"
 #include "core/sweep/sweep_spec.h"
-#include "core/live/client_command.h"
-#include "core/live/client_frame.h"
 #include "igtl/igtl_stream.h"
 #include "meshing/label_image.h"
 #include "meshing/surface_check.h"
@@ -245,6 +249,51 @@ inline size_t measured_curve_input(std::string_view text, const std::string& sou
     for (double f : c.force[k]) require(std::isfinite(f), "curve accepted with a non-finite force");
   }
   return c.x.size();
+}
+
+// kind sweep_files: the files `organsim sweep --collect` (and a shard) read
+// back from a sweep's folder, told apart as the collection does not need
+// to: an object with "cases" is OUTDIR/cases.json (parse_plan), one with
+// "status" a case's status.json (parse_case_status), anything else a case's
+// forces.json (force_log_summary). An accepted plan or status survives a
+// write and read back unchanged (shards and reruns read what was written);
+// an accepted force log has one force of three numbers or nulls per time
+// and gives a row whose sample count is its times' and whose forces are
+// magnitudes (not negative, or null). Returns the cases, 1
+// for a status (0 when refused: the case is run again), or the samples.
+inline size_t sweep_files_input(std::string_view text, const std::string& source) {
+  const std::string s(text);
+  const nlohmann::json j = nlohmann::json::parse(s, nullptr, false);
+  if (j.is_object() && j.contains("cases")) {
+    const Sweep plan = parse_plan(s, source);
+    require(plan_json(parse_plan(plan_json(plan).dump(), "again.json")) == plan_json(plan),
+            "plan round trip changed the plan");
+    return plan.cases.size();
+  }
+  if (j.is_object() && j.contains("status")) {
+    const std::optional<CaseStatus> status = parse_case_status(s);
+    if (!status) return 0;
+    const std::optional<CaseStatus> again = parse_case_status(to_json(*status).dump());
+    require(again && to_json(*again) == to_json(*status), "status round trip changed the status");
+    return 1;
+  }
+  const std::vector<double> at_times = {0.0, 0.05, 1.0};
+  const ForceLogSummary log = force_log_summary(s, source, at_times);
+  const nlohmann::json& forces = j["samples"]["force"];
+  const size_t samples = j["samples"]["t"].size();
+  require(forces.size() == samples, "force log accepted with another count of forces than of times");
+  for (const nlohmann::json& f : forces) {
+    require(f.is_array() && f.size() == 3, "force log accepted with a force that is not three values");
+    for (const nlohmann::json& v : f) require(v.is_number() || v.is_null(), "force log accepted with a force value " + v.dump());
+  }
+  require(log.figures["samples"] == samples, "force log row with another sample count");
+  std::vector<std::string> magnitudes = {"peak_force"};
+  for (double t : at_times) magnitudes.push_back(force_at_name(t));
+  for (const std::string& f : magnitudes) {
+    const nlohmann::json& v = log.figures[f];
+    require(v.is_null() || (v.is_number() && v.get<double>() >= 0), "force log row with " + f + " " + v.dump());
+  }
+  return samples;
 }
 
 // kind client_transform: the JSON matrix of `organsim serve

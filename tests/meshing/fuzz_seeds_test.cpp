@@ -94,6 +94,7 @@ size_t run_harness(const Row& row, const std::string& text, const std::string& s
   if (row.kind == "igtl") return fuzz::igtl_input(text).size();
   if (row.kind == "measured_curve") return fuzz::measured_curve_input(text, source);
   if (row.kind == "client_transform") return fuzz::client_transform_input(text, source);
+  if (row.kind == "sweep_files") return fuzz::sweep_files_input(text, source);
   if (row.kind == "label_image") return static_cast<size_t>(fuzz::label_image_input(text, source).voxel_count());
   ADD_FAILURE() << "harnesses.txt: row " << row.name << " has an unknown kind " << row.kind;
   return 0;
