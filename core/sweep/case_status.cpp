@@ -5,6 +5,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "core/sweep/sweep_results.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
 #include "core/util/json_fields.h"
@@ -110,13 +111,17 @@ CaseStatus judge_run(const SweepCase& c, const fs::path& case_dir, int exit_code
   std::string log_problem;
   const fs::path log_path = case_dir / "forces.json";
   if (fs::exists(log_path)) {
+    // Read as --collect reads it: a log it would refuse is no complete log.
     try {
-      const nlohmann::json log = nlohmann::json::parse(read_text_file(log_path));
+      const std::string source = "forces.json";
+      const nlohmann::json log = JsonFields(source).parse(read_text_file(log_path));
+      const ForceLogSummary summary = force_log_summary_json(log, source, {});
       s.meta = meta_summary(log.at("meta"));
-      if (!log.at("meta").value("completed", false))
-        log_problem = "forces.json: the run stopped early: " + log.at("meta").value("stop_reason", std::string("?"));
-    } catch (const std::exception& e) {
-      log_problem = "forces.json: unreadable: " + std::string(e.what());
+      const std::string reason = summary.figures["stop_reason"];
+      if (!summary.figures["completed"].get<bool>())
+        log_problem = "forces.json: the run stopped early: " + (reason.empty() ? std::string("?") : reason);
+    } catch (const Error& e) {
+      log_problem = e.what();
     }
   } else if (c.writes_forces) {
     log_problem = "forces.json was not written";

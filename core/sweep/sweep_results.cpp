@@ -36,8 +36,12 @@ nlohmann::json meta_entry(const JsonFields& r, const nlohmann::json& meta, const
 
 ForceLogSummary force_log_summary(const std::string& text, const std::string& source,
                                   const std::vector<double>& at_times) {
+  return force_log_summary_json(JsonFields(source).parse(text), source, at_times);
+}
+
+ForceLogSummary force_log_summary_json(const nlohmann::json& log, const std::string& source,
+                                       const std::vector<double>& at_times) {
   const JsonFields r(source);
-  const nlohmann::json log = r.parse(text);
   const nlohmann::json& meta = r.object(log, "meta", "file");
   const nlohmann::json& samples = r.object(log, "samples", "file");
   const nlohmann::json& tj = r.array(samples, "t", "samples");

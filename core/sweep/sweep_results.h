@@ -30,6 +30,9 @@ struct ForceLogSummary {
 // a meta entry read here of another type.
 ForceLogSummary force_log_summary(const std::string& text, const std::string& source,
                                   const std::vector<double>& at_times);
+// The same for a log already parsed.
+ForceLogSummary force_log_summary_json(const nlohmann::json& log, const std::string& source,
+                                       const std::vector<double>& at_times);
 
 // "force_at_0.1" for t = 0.1: the column name of a force_at figure.
 std::string force_at_name(double t);

@@ -258,7 +258,7 @@ TEST(SweepCaseStatus, AStatusFileThatIsNotOneReadsAsNone) {
   EXPECT_FALSE(parse_case_status("{\"status\": \"done\""));
 }
 
-// A run that exited 0 is done only with a complete force log.
+// A run that exited 0 is done only with a complete force log that --collect can read.
 TEST(SweepCaseStatus, JudgeRunNeedsACompleteForceLog) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "sweep_judge";
   fs::remove_all(dir);
@@ -279,6 +279,14 @@ TEST(SweepCaseStatus, JudgeRunNeedsACompleteForceLog) {
   EXPECT_EQ(s.state, CaseState::Failed);
   EXPECT_EQ(s.error, "organsim: error: t = 0.1: blow-up");
   EXPECT_EQ(s.exit_code, 5);
+
+  // A log that --collect would refuse is no complete log either.
+  nlohmann::json broken = force_log(true);
+  broken["samples"]["force"][1] = {3.0, 4.0};
+  std::ofstream(dir / "forces.json") << broken.dump();
+  s = judge_run(c, dir, 0, 0, 1.0, "");
+  EXPECT_EQ(s.state, CaseState::Failed);
+  EXPECT_EQ(s.error, "exited 0, but forces.json: samples.force[1]: expected three numbers or nulls (N)");
 
   std::ofstream(dir / "forces.json") << force_log(true).dump();
   s = judge_run(c, dir, 0, 0, 1.0, "");
