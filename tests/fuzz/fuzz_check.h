@@ -14,11 +14,6 @@
 
 namespace organsim::fuzz {
 
-#ifdef ORGANSIM_FUZZ_EXTENSION
-// The file name every harness reads its input as: "fuzz" + the row's extension.
-inline const std::string kSource = std::string("fuzz") + ORGANSIM_FUZZ_EXTENSION;
-#endif
-
 inline std::string_view as_text(const uint8_t* data, size_t size) {
   return {reinterpret_cast<const char*>(data), size};
 }
@@ -37,6 +32,23 @@ inline void require_names_file(const Error& e, const std::string& source) {
   const std::string message = e.what();
   require(message.rfind(source + ": ", 0) == 0, "error message does not start with the file name: " + message);
 }
+
+#ifdef ORGANSIM_FUZZ_EXTENSION
+// The file name every harness reads its input as: "fuzz" + the row's extension.
+inline const std::string kSource = std::string("fuzz") + ORGANSIM_FUZZ_EXTENSION;
+
+// The body of most harnesses: `read` (a fuzz_inputs.h function) either takes
+// the input, checking what it read, or throws an Error naming the file.
+template <class Read>
+int read_as_file(const uint8_t* data, size_t size, Read read) {
+  try {
+    read(as_text(data, size), kSource);
+  } catch (const Error& e) {
+    require_names_file(e, kSource);
+  }
+  return 0;
+}
+#endif
 
 inline void require_valid_surface(const TriangleMesh& mesh) {
   const auto n = static_cast<int64_t>(mesh.points.size());

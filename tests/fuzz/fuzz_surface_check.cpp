@@ -4,11 +4,5 @@
 #include "tests/fuzz/fuzz_inputs.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  using namespace organsim;
-  try {
-    fuzz::surface_check_input(fuzz::as_text(data, size), fuzz::kSource);
-  } catch (const Error& e) {
-    fuzz::require_names_file(e, fuzz::kSource);
-  }
-  return 0;
+  return organsim::fuzz::read_as_file(data, size, organsim::fuzz::surface_check_input);
 }
