@@ -10,6 +10,7 @@
 #include "core/mesh/mesh_io.h"
 #include "core/scenario/scenario.h"
 #include "core/stability/critical_step.h"
+#include "core/sweep/sweep_results.h"
 #include "core/util/atomic_file.h"
 #include "mesh_io_test_util.h"
 
@@ -35,11 +36,16 @@ const Regression kCases[] = {
     // back from a double past the uint64 range (UBSan).
     {"vtu/huge_byte_count.vtu", "<Cells> DataArray \"offsets\": header declares 1.845e+19 bytes, only 171 present"},
     {"scenario/number_overflow.json", "invalid JSON: number overflow parsing '4223372036854E7580' (too large for a number)"},
+    // A force of two values: --collect read past the JSON array (ASan).
+    {"sweep_files/two_value_force.json", "samples.force[0]: expected three numbers or nulls (N)"},
 };
 
-// Reads the input the way its harness does (the extension picks the reader).
-void parse(const std::string& bytes, const std::string& source) {
-  if (is_surface_path(source)) {
+// Reads the input the way its harness does (the harness's folder, then the
+// extension, picks the reader).
+void parse(const std::string& harness, const std::string& bytes, const std::string& source) {
+  if (harness == "sweep_files") {
+    force_log_summary(bytes, source, {});
+  } else if (is_surface_path(source)) {
     parse_surface(bytes, source);
   } else if (is_tet_mesh_path(source)) {
     parse_tet_mesh(bytes, source);
@@ -52,7 +58,8 @@ TEST(FuzzRegressions, EachSavedInputGetsItsCleanError) {
   for (const Regression& r : kCases) {
     const fs::path path = kRegressions / r.file;
     const std::string source = path.filename().string();
-    const std::string msg = testing::error_message([&] { parse(read_text_file(path), source); });
+    const std::string harness = path.parent_path().filename().string();
+    const std::string msg = testing::error_message([&] { parse(harness, read_text_file(path), source); });
     EXPECT_EQ(msg.rfind(source + ": ", 0), 0u) << r.file << ": " << msg;
     EXPECT_NE(msg.find(r.expected), std::string::npos) << r.file << ": " << msg;
   }
