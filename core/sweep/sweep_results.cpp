@@ -108,9 +108,15 @@ nlohmann::json results_json(const Sweep& plan, const std::vector<CaseRecord>& re
                           {"figures", nullptr}, {"timing", nullptr},     {"error", m.value("error", std::string())}};
     const fs::path log_path = case_dir(outdir, c) / "forces.json";
     if (m["status"] != "pending" && fs::exists(log_path)) {
-      ForceLogSummary log = force_log_summary(read_text_file(log_path), log_path.string(), at_times);
-      row["figures"] = std::move(log.figures);
-      row["timing"] = std::move(log.timing);
+      try {
+        ForceLogSummary log = force_log_summary(read_text_file(log_path), log_path.string(), at_times);
+        row["figures"] = std::move(log.figures);
+        row["timing"] = std::move(log.timing);
+      } catch (const Error&) {
+        // A failed case's log may be why it failed (judge_run), and its row
+        // says so; a done case's log was read when it was judged: it changed since.
+        if (m["status"] == "done") throw;
+      }
     }
     rows.push_back(std::move(row));
   }

@@ -41,7 +41,8 @@ std::string force_at_name(double t);
 std::string figure_label(const std::string& figure);
 
 // One entry per case of the plan (with its record): name, status,
-// overrides, figures, timing, error.
+// overrides, figures, timing, error. A done case's force log that is not
+// one throws (force_log_summary); a failed case's leaves its figures null.
 nlohmann::json results_json(const Sweep& plan, const std::vector<CaseRecord>& records,
                             const std::filesystem::path& outdir, const std::vector<double>& at_times);
 

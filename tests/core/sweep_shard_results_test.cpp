@@ -228,6 +228,43 @@ TEST(SweepPlanFile, ReadBackEqualsWrittenAndBadPlansAreRefusedNamingTheEntry) {
             "out/cases.json: file.cases: expected a value (missing)");
 }
 
+// A failed case's log may be why it failed: its row keeps the error and has
+// no figures, and the other rows are collected. A done case's log that is
+// not one stops the collection naming it.
+TEST(SweepResults, AFailedCasesBrokenLogLeavesItsRowWithoutFiguresADoneCasesStopsTheCollection) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "sweep_results_broken_log";
+  fs::remove_all(out);
+  const Sweep plan = two_case_plan();
+  nlohmann::json broken = force_log(true);
+  broken["samples"]["force"][1] = {3.0, 4.0};
+  std::vector<CaseRecord> records(2);
+  for (int i = 0; i < 2; ++i) {
+    CaseStatus s;
+    s.state = records[i].state = i == 0 ? CaseState::Failed : CaseState::Done;
+    s.scenario_hash = plan.cases[i].scenario_hash;
+    if (i == 0) s.error = "exited 0, but forces.json: samples.force[1]: ...";
+    records[i].status = s;
+  }
+  for (int i = 0; i < 2; ++i) {
+    fs::create_directories(case_dir(out, plan.cases[i]));
+    std::ofstream(case_dir(out, plan.cases[i]) / "forces.json") << (i == 0 ? broken : force_log(true)).dump();
+  }
+  const nlohmann::json rows = results_json(plan, records, out, {});
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_TRUE(rows[0]["figures"].is_null());
+  EXPECT_EQ(rows[0]["error"], "exited 0, but forces.json: samples.force[1]: ...");
+  EXPECT_EQ(rows[1]["figures"]["peak_force"], 13.0);
+
+  std::ofstream(case_dir(out, plan.cases[1]) / "forces.json") << broken.dump();
+  try {
+    results_json(plan, records, out, {});
+    ADD_FAILURE() << "a done case's broken log was collected";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), (case_dir(out, plan.cases[1]) / "forces.json").string() +
+                                         ": samples.force[1]: expected three numbers or nulls (N)");
+  }
+}
+
 // A status file reads back as written; one that is not a status file of a
 // finished run reads as none, so its case is run again.
 TEST(SweepCaseStatus, AStatusFileThatIsNotOneReadsAsNone) {
