@@ -47,22 +47,21 @@ ForceLogSummary force_log_summary_json(const nlohmann::json& log, const std::str
   const nlohmann::json& tj = r.array(samples, "t", "samples");
   const nlohmann::json& fj = r.array(samples, "force", "samples");
   if (fj.size() != tj.size()) throw r.error("samples.force", "one force per time (" + std::to_string(tj.size()) + ")");
+  const auto is_number = [](const nlohmann::json& v) { return v.is_number(); };
+  const auto is_number_or_null = [](const nlohmann::json& v) { return v.is_number() || v.is_null(); };
   std::vector<double> t(tj.size()), magnitude(tj.size());
   for (size_t i = 0; i < t.size(); ++i) {
     const std::string index = std::to_string(i);
     if (!tj[i].is_number()) throw r.error("samples.t[" + index + "]", "a time in s");
     t[i] = tj[i].get<double>();
     const nlohmann::json& f = fj[i];
-    if (!f.is_array() || f.size() != 3 ||
-        !std::all_of(f.begin(), f.end(), [](const nlohmann::json& v) { return v.is_number() || v.is_null(); }))
+    if (!f.is_array() || f.size() != 3 || !std::all_of(f.begin(), f.end(), is_number_or_null))
       throw r.error("samples.force[" + index + "]", "three numbers or nulls (N)");
     magnitude[i] = f[0].is_null() || f[1].is_null() || f[2].is_null()
                        ? std::numeric_limits<double>::quiet_NaN()
                        : std::sqrt(f[0].get<double>() * f[0].get<double>() + f[1].get<double>() * f[1].get<double>() +
                                    f[2].get<double>() * f[2].get<double>());
   }
-  const auto is_number = [](const nlohmann::json& v) { return v.is_number(); };
-  const auto is_number_or_null = [](const nlohmann::json& v) { return v.is_number() || v.is_null(); };
   const double tick = meta_entry(r, meta, "tick", is_number, "a tick in s", 0.0).get<double>();
 
   ForceLogSummary s;
