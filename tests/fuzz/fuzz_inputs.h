@@ -252,15 +252,16 @@ inline size_t measured_curve_input(std::string_view text, const std::string& sou
 }
 
 // kind sweep_files: the files `organsim sweep --collect` (and a shard) read
-// back from a sweep's folder, told apart as the collection does not need
-// to: an object with "cases" is OUTDIR/cases.json (parse_plan), one with
-// "status" a case's status.json (parse_case_status), anything else a case's
-// forces.json (force_log_summary). An accepted plan or status survives a
-// write and read back unchanged (shards and reruns read what was written);
-// an accepted force log has one force of three numbers or nulls per time
-// and gives a row whose sample count is its times' and whose forces are
-// magnitudes (not negative, or null). Returns the cases, 1
-// for a status (0 when refused: the case is run again), or the samples.
+// back from a sweep's folder, one harness for all three, told apart by
+// content: an object with "cases" is OUTDIR/cases.json (parse_plan), one
+// with "status" a case's status.json (parse_case_status), anything else a
+// case's forces.json (force_log_summary). An accepted plan or status
+// survives a write and read back unchanged (shards and reruns read what was
+// written); an accepted force log has one force of three numbers or nulls
+// per time (checked here on the JSON itself) and gives a row whose sample
+// count is its times' and whose forces are magnitudes (not negative, or
+// null). Returns the cases, 1 for a status (0 when refused: the case is run
+// again), or the samples.
 inline size_t sweep_files_input(std::string_view text, const std::string& source) {
   const std::string s(text);
   const nlohmann::json j = nlohmann::json::parse(s, nullptr, false);
@@ -284,7 +285,8 @@ inline size_t sweep_files_input(std::string_view text, const std::string& source
   require(forces.size() == samples, "force log accepted with another count of forces than of times");
   for (const nlohmann::json& f : forces) {
     require(f.is_array() && f.size() == 3, "force log accepted with a force that is not three values");
-    for (const nlohmann::json& v : f) require(v.is_number() || v.is_null(), "force log accepted with a force value " + v.dump());
+    for (const nlohmann::json& v : f)
+      require(v.is_number() || v.is_null(), "force log accepted with a force value " + v.dump());
   }
   require(log.figures["samples"] == samples, "force log row with another sample count");
   std::vector<std::string> magnitudes = {"peak_force"};
