@@ -254,8 +254,10 @@ class CpuBackend final : public Backend {
                                     " per batch, ";
     switch (pass) {
       case Pass::NodalPressure:
-        return t_.fast ? tet_batches + "6 V_t into their vertices' nodal volumes (2 fixed slices), a barrier, "
-                                       "the pressures per point, a barrier (avx512 kernel)"
+        return t_.fast ? std::to_string(m.ntet()) + " tets' 6 V_t read in pairs that share a face, " +
+                             std::to_string(kLanes) +
+                             " pairs per batch (2 fixed slices), a barrier, each point's "
+                             "nodal volume and pressure, a barrier (avx512 kernel)"
                        : "nodal volumes and pressures, " + tets_per_vertex + ", then a barrier";
       case Pass::ShearSmoothing:
         return "every point's stress on its node-averaged deformation gradient, " +

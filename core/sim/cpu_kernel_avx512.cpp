@@ -6,6 +6,7 @@
 
 #include "core/model/shear_element.h"
 #include "core/sim/tet_batches.h"
+#include "core/sim/tet_pairs.h"
 #include "core/util/aligned_vector.h"
 
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
@@ -92,14 +93,20 @@ struct Avx512KernelData {
   // -p_t / 6, its force factor), node_rest = S at rest as the kernel computes
   // it (npad); else empty.
   AlignedVector<Real> node_k, node_rest;
-  // Nodal term: 6 V_t of every batch lane (the first pass writes it; the
-  // entries past the lanes stay zero), and per point its tets' lanes in the
-  // layout's tet slots (padding slots: the first zero entry), so that each
-  // point sums its tets' volumes with loads instead of every tet scattering
-  // into its four points.
-  AlignedVector<Real> lane_det6;
-  AlignedVector<int32_t> node_tet_lane;
-  std::vector<int32_t> node_tet_offset, node_tet_width;  // as spring_offset and spring_width
+  // Nodal term: its volume pass reads tets in pairs that share a face
+  // (tet_pairs.h), kLanes pairs per batch: points (a, b, c, d, e) of each
+  // lane (4 x vertex; padding lanes 4 npad) and the pass's output per batch,
+  // kLanes entries each of 6 (V_1 + V_2), 6 V_1 and 6 V_2 (the entries past
+  // the batches stay zero); each slice a run of batches.
+  AlignedVector<int32_t> pair_v[5];
+  AlignedVector<Real> pair_det6;
+  int32_t pair_slice_begin[kSlices + 1] = {};
+  // Per point the entries its nodal volume sums (the shared face's points
+  // the pair's sum, d and e their own tet's), in the springs' slot layout
+  // (padding slots: the first zero entry), so that each point sums its tets'
+  // volumes with loads instead of every tet scattering into its four points.
+  AlignedVector<int32_t> node_entry;
+  std::vector<int32_t> node_entry_offset, node_entry_width;  // as spring_offset and spring_width
   AlignedVector<Real> node_stress;               // smoothed shear: P(Fbar_p) records (kStressRecord (npad + 1), the last zero); else empty
   int32_t slice_begin[kSlices + 1] = {};         // batches of each slice
   // (x, y, z, 0) per point, zero between steps (4 (npad + kLanes)): the tet
@@ -140,7 +147,8 @@ size_t Avx512Kernel<Real>::bytes() const {
   for (int k = 0; k < 9; ++k) add(D.tet_g[k]);
   add(D.node_stress);
   add(D.tet_k36), add(D.tet_det_rest), add(D.tet_shear_k), add(D.node_k), add(D.node_rest);
-  add(D.lane_det6), add(D.node_tet_lane);
+  for (int k = 0; k < 5; ++k) add(D.pair_v[k]);
+  add(D.pair_det6), add(D.node_entry);
   for (const auto& f : D.tet_force) add(f);
   return n;
 }
@@ -355,23 +363,30 @@ void chunk_step(Data<Real>& D, const KernelStepInputs<Real>& in, int32_t c, Chun
   }
 }
 
-// The nodal term's first pass over one slice's tets: 6 V_t of each into
-// lane_det6, from the records at `rec`. pack() runs it on the rest records
-// for node_rest, so the rest state gives exactly q = 0.
+// The nodal term's first pass over one slice's tet pairs: 6 V of both tets
+// of each and their sum into pair_det6, from the records at `rec`. pack()
+// runs it on the rest records for node_rest, so the rest state gives
+// exactly q = 0.
 template <class Real>
 void nodal_volume_slice(Data<Real>& D, const Real* rec, int slice) {
   constexpr int32_t kLanes = Data<Real>::kLanes, kScale = Data<Real>::kRecord / 4;
-  const int32_t end = D.slice_begin[slice + 1];
-  for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
+  const int32_t end = D.pair_slice_begin[slice + 1];
+  for (int32_t b = D.pair_slice_begin[slice]; b < end; ++b) {
     const size_t e = static_cast<size_t>(b) * kLanes;
-    const int32_t* const q[4] = {D.tet_v[0].data() + e, D.tet_v[1].data() + e, D.tet_v[2].data() + e,
-                                 D.tet_v[3].data() + e};
-    V3<Real> x[4];
-    for (int i = 0; i < 4; ++i) gather_x<kScale>(rec, q[i], x[i]);
-    V3<Real> ev[3];
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < 3; ++k) ev[i][k] = x[i + 1][k] - x[0][k];
-    store(D.lane_det6.data() + e, det6(ev[0], ev[1], ev[2]));
+    V3<Real> x[5];
+    for (int i = 0; i < 5; ++i) gather_x<kScale>(rec, D.pair_v[i].data() + e, x[i]);
+    V3<Real> ab, ac, ad, ae, n;
+    for (int k = 0; k < 3; ++k) {
+      ab[k] = x[1][k] - x[0][k], ac[k] = x[2][k] - x[0][k];
+      ad[k] = x[3][k] - x[0][k], ae[k] = x[4][k] - x[0][k];
+    }
+    cross_scaled(splat(Real(1)), ab, ac, n);
+    const V<Real> first = fmadd(n[2], ad[2], fmadd(n[1], ad[1], n[0] * ad[0]));
+    const V<Real> second = zero<Real>() - fmadd(n[2], ae[2], fmadd(n[1], ae[1], n[0] * ae[0]));
+    Real* const out = D.pair_det6.data() + 3 * e;
+    store(out, first + second);
+    store(out + kLanes, first);
+    store(out + 2 * kLanes, second);
   }
 }
 
@@ -381,9 +396,9 @@ template <class Real>
 [[gnu::always_inline]] inline V<Real> nodal_volume_sum(const Data<Real>& D, int32_t c, int32_t g) {
   constexpr int32_t kLanes = Data<Real>::kLanes;
   V<Real> s = zero<Real>();
-  const int32_t width = D.node_tet_width[c * D.groups + g];
-  for (int32_t j = 0, e = D.node_tet_offset[c] + g * kLanes; j < width; ++j, e += D.chunk)
-    s = s + gather_at(D.lane_det6.data(), D.node_tet_lane.data() + e);
+  const int32_t width = D.node_entry_width[c * D.groups + g];
+  for (int32_t j = 0, e = D.node_entry_offset[c] + g * kLanes; j < width; ++j, e += D.chunk)
+    s = s + gather_at(D.pair_det6.data(), D.node_entry.data() + e);
   return s;
 }
 
@@ -624,6 +639,46 @@ void pack_rest_lengths(Data<Real>& D, const GatherLayout& L, const Real* rec) {
   }
 }
 
+// The nodal term's tet pairs in batches of kLanes, cut into kSlices runs,
+// and each point's entries of their output (Data::node_entry).
+template <class Real>
+void pack_nodal_entries(Data<Real>& D, const Model& model) {
+  constexpr int32_t kLanes = Data<Real>::kLanes;
+  const std::vector<TetPair> pairs = pair_model_tets(model);
+  const int32_t nbatch = static_cast<int32_t>((pairs.size() + kLanes - 1) / kLanes);
+  const size_t lanes = static_cast<size_t>(nbatch) * kLanes;
+  for (int sl = 0; sl <= kSlices; ++sl) D.pair_slice_begin[sl] = nbatch * sl / kSlices;
+  for (auto& v : D.pair_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
+  D.pair_det6.assign(3 * lanes + kLanes, 0);
+  const int32_t zero_entry = static_cast<int32_t>(3 * lanes);
+  std::vector<std::vector<int32_t>> entries(static_cast<size_t>(D.npoint));
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const TetPair& pair = pairs[i];
+    for (int k = 0; k < 5; ++k) D.pair_v[k][i] = 4 * pair.v[k];
+    const int32_t sum = static_cast<int32_t>(3 * (i - i % kLanes) + i % kLanes);
+    for (int k = 0; k < 3; ++k) entries[pair.v[k]].push_back(sum);
+    entries[pair.v[3]].push_back(sum + kLanes);
+    if (pair.second >= 0) entries[pair.v[4]].push_back(sum + 2 * kLanes);
+  }
+  // The springs' layout: chunk c's slot j of point p at offset[c] + j chunk + (p - c chunk).
+  D.node_entry_offset.assign(static_cast<size_t>(D.nchunk) + 1, 0);
+  D.node_entry_width.assign(static_cast<size_t>(D.nchunk) * D.groups, 0);
+  for (int32_t p = 0; p < D.npoint; ++p) {
+    int32_t& width = D.node_entry_width[static_cast<size_t>(p / D.chunk) * D.groups + (p % D.chunk) / kLanes];
+    width = std::max(width, static_cast<int32_t>(entries[p].size()));
+  }
+  for (int32_t c = 0; c < D.nchunk; ++c) {
+    const auto first = D.node_entry_width.begin() + static_cast<size_t>(c) * D.groups;
+    D.node_entry_offset[c + 1] = D.node_entry_offset[c] + *std::max_element(first, first + D.groups) * D.chunk;
+  }
+  D.node_entry.assign(static_cast<size_t>(D.node_entry_offset[D.nchunk]), zero_entry);
+  for (int32_t p = 0; p < D.npoint; ++p) {
+    const int32_t c = p / D.chunk;
+    for (size_t j = 0; j < entries[p].size(); ++j)
+      D.node_entry[D.node_entry_offset[c] + j * D.chunk + (p - c * D.chunk)] = entries[p][j];
+  }
+}
+
 // 6 V_r of each batch lane's tet, as the tet pass computes it.
 template <class Real>
 void pack_rest_volumes(Data<Real>& D, const Real* rec) {
@@ -764,21 +819,9 @@ void Avx512Kernel<Real>::pack(const Model& model, const StepPlan& plan) {
   const bool nodal = D.element == ElementTerm::NodalVolume;
   D.node_k.assign(nodal ? n : 0, 0);
   D.node_rest.assign(D.node_k.size(), 0);
-  D.lane_det6.assign(nodal ? lanes + kLanes : 0, 0);
-  D.node_tet_lane.assign(nodal ? L.tets.item.size() : 0, static_cast<int32_t>(lanes));
-  D.node_tet_offset.assign(L.tets.chunk_offset.begin(), L.tets.chunk_offset.end());
-  D.node_tet_width.assign(static_cast<size_t>(D.nchunk) * D.groups, 0);
   if (nodal) {
-    std::vector<int32_t> lane_of(static_cast<size_t>(model.ntet()), -1);
-    for (size_t e = 0; e < lanes; ++e)
-      if (batches.lane_tet[e] >= 0) lane_of[batches.lane_tet[e]] = static_cast<int32_t>(e);
-    for (size_t e = 0; e < L.tets.item.size(); ++e)
-      if (L.tets.item[e] >= 0) D.node_tet_lane[e] = lane_of[L.tets.item[e]];
-    for (int32_t p = 0; p < D.npoint; ++p) {
-      const size_t g = static_cast<size_t>(p / D.chunk) * D.groups + (p % D.chunk) / kLanes;
-      D.node_tet_width[g] = std::max(D.node_tet_width[g], L.tets.count[p]);
-      D.node_k[p] = static_cast<Real>(-model.point_volume_k[p] / 576);
-    }
+    pack_nodal_entries(D, model);
+    for (int32_t p = 0; p < D.npoint; ++p) D.node_k[p] = static_cast<Real>(-model.point_volume_k[p] / 576);
     // S at rest by the step's own passes, so that q is exactly 0 there.
     for (int sl = 0; sl < kSlices; ++sl) nodal_volume_slice(D, rec, sl);
     for (int32_t c = 0; c < D.nchunk; ++c)
