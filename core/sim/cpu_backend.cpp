@@ -270,8 +270,10 @@ class CpuBackend final : public Backend {
         return t_.fast ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex;
       case Pass::ShearElement:
         return std::string(t_.plan.element == ElementTerm::SmoothedShear ? "smoothed " : "") +
-               "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") +
-               "), " + (t_.fast ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex);
+               "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") + "), " +
+               (t_.fast ? std::to_string(m.ntet()) + " tets in pairs that share a face, " + std::to_string(kLanes) +
+                              " pairs per batch, into 2 fixed force slices (avx512 kernel)"
+                        : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
       case Pass::SurfaceContact:
         return std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +

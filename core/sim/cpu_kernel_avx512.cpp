@@ -87,7 +87,12 @@ struct Avx512KernelData {
   // (batch_tets()); each slice is a run of tets by lowest vertex.
   AlignedVector<int32_t> tet_v[4];               // 4 x vertex per batch lane; padding lanes: 4 npad
   AlignedVector<Real> tet_k36, tet_det_rest;     // per-tet volume: k_v / 36 and 6 V_r as the kernel computes it; else empty
-  AlignedVector<Real> tet_g[9], tet_shear_k;     // shear element: g_1, g_2, g_3 (x, y, z each) and k_t per lane; else empty
+  // Shear element: tets in pairs (pair_v below), batches of kLanes pairs
+  // sharing no point; per lane the shape gradients of b, c, d in the first
+  // tet and of c, b, e in the second (x, y, z each) and each tet's k_t
+  // (tet2_*: zero for a lone tet); else empty.
+  AlignedVector<Real> tet_g[9], tet_shear_k, tet2_g[9], tet2_shear_k;
+  int32_t shear_slice_begin[kSlices + 1] = {};
   // Nodal term: q = node_k (S - node_rest) per point, S the sum of 6 V_t over
   // its tets, node_k = -k_a / 576 (so that a tet's four q add up to
   // -p_t / 6, its force factor), node_rest = S at rest as the kernel computes
@@ -144,7 +149,8 @@ size_t Avx512Kernel<Real>::bytes() const {
   }
   add(D.spring_other), add(D.spring_rest), add(D.spring_k), add(D.spring_d);
   for (int k = 0; k < 4; ++k) add(D.tet_v[k]);
-  for (int k = 0; k < 9; ++k) add(D.tet_g[k]);
+  for (int k = 0; k < 9; ++k) add(D.tet_g[k]), add(D.tet2_g[k]);
+  add(D.tet2_shear_k);
   add(D.node_stress);
   add(D.tet_k36), add(D.tet_det_rest), add(D.tet_shear_k), add(D.node_k), add(D.node_rest);
   for (int k = 0; k < 5; ++k) add(D.pair_v[k]);
@@ -455,98 +461,155 @@ void shear_stress_chunk(Data<Real>& D, int32_t c) {
   }
 }
 
-// The tet forces of one slice's tets into its force array.
-// Volume terms: with V = e1 . (e2 x e3) / 6, e_i = x_i - x_0, dV/dx_1 =
-// e2 x e3 / 6 (and cyclically) and f_0 = -(f_1 + f_2 + f_3). Per tet f_i =
-// k_v (V_r - V) dV/dx_i; nodal f_i = -p_t dV/dx_i, p_t the mean of its
-// vertices' pressures, whose scaled q the records carry.
-// Shear element (core/model/shear_element.h): f_i = -A g_i with A = k_t
-// [(1 - s) P(F_t) + s Pbar_t + (tau / (dt J_d)) (G cof^T + cof G^T) cof],
-// F_t = I + sum_i (u_i - u_0) g_i^T, G = sum_i (d_i - d_0) g_i^T = dt Fdot,
-// Pbar_t the mean of the corners' smoothed stresses (s = 0 unsmoothed).
+// The shear element's forces on corners 1..3 of one tet (core/model/
+// shear_element.h): f_i = -A g_i k_t with A = (1 - s) P(F_t) + s Pbar_t +
+// (tau / (dt J_d)) (G cof^T + cof G^T) cof, F_t = I + sum_i (u_i - u_0) g_i^T,
+// G = sum_i (d_i - d_0) g_i^T = dt Fdot, Pbar_t the mean of the corners'
+// smoothed stresses (`corners`: their sum, P_22 last; s = 0 unsmoothed).
+// Corner 0's force is minus the sum of the three.
 template <class Real, ElementTerm Element>
-void tet_slice(Data<Real>& D, const KernelStepInputs<Real>& in, int slice) {
+[[gnu::always_inline]] inline void shear_tet_forces(const Data<Real>& D, const KernelStepInputs<Real>& in,
+                                                    const V3<Real>* const (&u)[4], const V3<Real>* const (&d)[4],
+                                                    const V3<Real> (&g)[3], V<Real> kt, const V<Real> (&corners)[9],
+                                                    V3<Real> (&f)[3]) {
+  V33<Real> H, P, C, A;
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k)
+      H[r][k] = fmadd((*u[3])[r] - (*u[0])[r], g[2][k],
+                      fmadd((*u[2])[r] - (*u[0])[r], g[1][k], ((*u[1])[r] - (*u[0])[r]) * g[0][k]));
+  V<Real> inv_j;
+  shear_stress(H, P, C, inv_j);
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) A[r][k] = splat(D.shear_per_tet) * P[r][k];
+  if constexpr (Element == ElementTerm::SmoothedShear) {
+    const V<Real> share = splat(D.shear_corners);
+    for (int j = 0; j < 9; ++j) A[j / 3][j % 3] = fmadd(share, corners[j], A[j / 3][j % 3]);
+  }
+  if (D.damped) {
+    V33<Real> G, GC;  // G and G cof^T + cof G^T
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k)
+        G[r][k] = fmadd((*d[3])[r] - (*d[0])[r], g[2][k],
+                        fmadd((*d[2])[r] - (*d[0])[r], g[1][k], ((*d[1])[r] - (*d[0])[r]) * g[0][k]));
+    // Symmetric: the upper triangle, mirrored (the same products, so the
+    // same bits as computing both).
+    for (int r = 0; r < 3; ++r)
+      for (int k = r; k < 3; ++k)
+        GC[k][r] = GC[r][k] = fmadd(G[r][2], C[k][2], fmadd(G[r][1], C[k][1], G[r][0] * C[k][0])) +
+                              fmadd(C[r][2], G[k][2], fmadd(C[r][1], G[k][1], C[r][0] * G[k][0]));
+    const V<Real> damper = splat(in.shear_damping) * inv_j;
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k)
+        A[r][k] = fmadd(damper, fmadd(GC[r][2], C[2][k], fmadd(GC[r][1], C[1][k], GC[r][0] * C[0][k])), A[r][k]);
+  }
+  const V<Real> minus_kt = zero<Real>() - kt;
+  for (int i = 0; i < 3; ++i)
+    for (int r = 0; r < 3; ++r)
+      f[i][r] = minus_kt * fmadd(A[r][2], g[i][2], fmadd(A[r][1], g[i][1], A[r][0] * g[i][0]));
+}
+
+// The shear element over one slice's tet pairs (tet_pairs.h), into its
+// force array: per lane the tets (a, b, c, d) and (a, c, b, e), five
+// points' displacements, increments and smoothed stresses for two tets, and
+// five forces added back where two separate tets would take eight. Both
+// tets use a as corner 0, with the shape gradients packed for that order
+// (a lone tet has k_t = 0 and g = 0 in its second place: no force).
+template <class Real, ElementTerm Element>
+void shear_pair_slice(Data<Real>& D, const KernelStepInputs<Real>& in, int slice) {
   constexpr int32_t kLanes = Data<Real>::kLanes, kScale = Data<Real>::kRecord / 4;
-  constexpr bool kShear = Element == ElementTerm::ShearElement || Element == ElementTerm::SmoothedShear;
-  const Real* const rec = kShear ? D.urec[D.cur].data() : D.positions(D.cur);
+  constexpr bool kSmoothed = Element == ElementTerm::SmoothedShear;
+  const Real* const rec = D.urec[D.cur].data();
   const Real* const inc = D.inc[D.cur].data();
+  Real* const force = D.tet_force[slice].data();
+  const int32_t end = D.shear_slice_begin[slice + 1];
+  for (int32_t b = D.shear_slice_begin[slice]; b < end; ++b) {
+    const size_t e = static_cast<size_t>(b) * kLanes;
+    const int32_t* const q[5] = {D.pair_v[0].data() + e, D.pair_v[1].data() + e, D.pair_v[2].data() + e,
+                                 D.pair_v[3].data() + e, D.pair_v[4].data() + e};
+    V3<Real> u[5], d[5];
+    V<Real> p22[5];  // the corners' smoothed P_22 (avx512_records.h: the increment's 4th value)
+    for (int i = 0; i < 5; ++i) {
+      if (D.damped || kSmoothed)
+        gather_xd<kScale>(rec, inc, q[i], u[i], d[i], p22[i]);
+      else
+        gather_x<kScale>(rec, q[i], u[i]);
+    }
+    // The smoothed stresses of the shared face's corners, then each tet's sum.
+    V<Real> face[9], first[9], second[9];
+    if constexpr (kSmoothed) {
+      V<Real> row[kStressRecord];
+      gather_8<kStressRecord / 4>(D.node_stress.data(), q[0], row);
+      for (int j = 0; j < kStressRecord; ++j) face[j] = row[j];
+      for (int i = 1; i < 3; ++i) {
+        gather_8<kStressRecord / 4>(D.node_stress.data(), q[i], row);
+        for (int j = 0; j < kStressRecord; ++j) face[j] = face[j] + row[j];
+      }
+      face[8] = p22[0] + p22[1] + p22[2];
+      gather_8<kStressRecord / 4>(D.node_stress.data(), q[3], row);
+      for (int j = 0; j < kStressRecord; ++j) first[j] = face[j] + row[j];
+      first[8] = face[8] + p22[3];
+      gather_8<kStressRecord / 4>(D.node_stress.data(), q[4], row);
+      for (int j = 0; j < kStressRecord; ++j) second[j] = face[j] + row[j];
+      second[8] = face[8] + p22[4];
+    }
+    V3<Real> g[3], f1[3], f2[3];
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) g[i][k] = load(D.tet_g[3 * i + k].data() + e);
+    shear_tet_forces<Real, Element>(D, in, {&u[0], &u[1], &u[2], &u[3]}, {&d[0], &d[1], &d[2], &d[3]}, g,
+                                    load(D.tet_shear_k.data() + e), first, f1);  // (a, b, c, d): on b, c, d
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) g[i][k] = load(D.tet2_g[3 * i + k].data() + e);
+    shear_tet_forces<Real, Element>(D, in, {&u[0], &u[2], &u[1], &u[4]}, {&d[0], &d[2], &d[1], &d[4]}, g,
+                                    load(D.tet2_shear_k.data() + e), second, f2);  // (a, c, b, e): on c, b, e
+    V3<Real> fa;
+    for (int k = 0; k < 3; ++k) {
+      fa[k] = zero<Real>() - (f1[0][k] + f1[1][k] + f1[2][k] + f2[0][k] + f2[1][k] + f2[2][k]);
+      f1[0][k] = f1[0][k] + f2[1][k];  // b
+      f1[1][k] = f1[1][k] + f2[0][k];  // c
+    }
+    scatter_add(force, q[0], fa);
+    scatter_add(force, q[1], f1[0]);
+    scatter_add(force, q[2], f1[1]);
+    scatter_add(force, q[3], f1[2]);
+    scatter_add(force, q[4], f2[2]);
+  }
+}
+
+// The volume terms over one slice's tets into its force array. With V =
+// e1 . (e2 x e3) / 6, e_i = x_i - x_0, dV/dx_1 = e2 x e3 / 6 (and
+// cyclically) and f_0 = -(f_1 + f_2 + f_3). Per tet f_i = k_v (V_r - V)
+// dV/dx_i; nodal f_i = -p_t dV/dx_i, p_t the mean of its vertices'
+// pressures, whose scaled q the records carry.
+template <class Real, ElementTerm Element>
+void tet_slice(Data<Real>& D, int slice) {
+  constexpr int32_t kLanes = Data<Real>::kLanes, kScale = Data<Real>::kRecord / 4;
+  const Real* const rec = D.positions(D.cur);
   Real* const force = D.tet_force[slice].data();
   const int32_t end = D.slice_begin[slice + 1];
   for (int32_t b = D.slice_begin[slice]; b < end; ++b) {
     const size_t e = static_cast<size_t>(b) * kLanes;
     const int32_t* const q[4] = {D.tet_v[0].data() + e, D.tet_v[1].data() + e, D.tet_v[2].data() + e,
                                  D.tet_v[3].data() + e};
-    V3<Real> f[4];
-    if constexpr (kShear) {
-      V3<Real> u[4], d[4];
-      V<Real> p22[4];  // the corners' smoothed P_22 (avx512_records.h: the increment's 4th value)
-      for (int i = 0; i < 4; ++i) {
-        if (D.damped || Element == ElementTerm::SmoothedShear) gather_xd<kScale>(rec, inc, q[i], u[i], d[i], p22[i]);
-        else gather_x<kScale>(rec, q[i], u[i]);
+    V3<Real> f[4], x0, ev[3];
+    V<Real> s;
+    if constexpr (Element == ElementTerm::NodalVolume) {
+      V<Real> w;
+      gather_xw<kScale>(rec, q[0], x0, s);
+      for (int i = 0; i < 3; ++i) {
+        gather_xw<kScale>(rec, q[i + 1], ev[i], w);
+        s = s + w;  // the sum of the four q: -p_t / 6
       }
-      V3<Real> g[3];
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) g[i][k] = load(D.tet_g[3 * i + k].data() + e);
-      V33<Real> H, P, C, A;
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k)
-          H[r][k] = fmadd(u[3][r] - u[0][r], g[2][k], fmadd(u[2][r] - u[0][r], g[1][k], (u[1][r] - u[0][r]) * g[0][k]));
-      V<Real> inv_j;
-      shear_stress(H, P, C, inv_j);
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) A[r][k] = splat(D.shear_per_tet) * P[r][k];
-      if constexpr (Element == ElementTerm::SmoothedShear) {
-        const V<Real> corners = splat(D.shear_corners);
-        V<Real> sum[kStressRecord], row[kStressRecord];
-        gather_8<kStressRecord / 4>(D.node_stress.data(), q[0], sum);
-        for (int i = 1; i < 4; ++i) {
-          gather_8<kStressRecord / 4>(D.node_stress.data(), q[i], row);
-          for (int j = 0; j < kStressRecord; ++j) sum[j] = sum[j] + row[j];
-        }
-        for (int j = 0; j < kStressRecord; ++j) A[j / 3][j % 3] = fmadd(corners, sum[j], A[j / 3][j % 3]);
-        A[2][2] = fmadd(corners, p22[0] + p22[1] + p22[2] + p22[3], A[2][2]);
-      }
-      if (D.damped) {
-        V33<Real> G, GC;  // G and G cof^T + cof G^T
-        for (int r = 0; r < 3; ++r)
-          for (int k = 0; k < 3; ++k)
-            G[r][k] = fmadd(d[3][r] - d[0][r], g[2][k], fmadd(d[2][r] - d[0][r], g[1][k], (d[1][r] - d[0][r]) * g[0][k]));
-        // Symmetric: the upper triangle, mirrored (the same products, so
-        // the same bits as computing both).
-        for (int r = 0; r < 3; ++r)
-          for (int k = r; k < 3; ++k)
-            GC[k][r] = GC[r][k] = fmadd(G[r][2], C[k][2], fmadd(G[r][1], C[k][1], G[r][0] * C[k][0])) +
-                                  fmadd(C[r][2], G[k][2], fmadd(C[r][1], G[k][1], C[r][0] * G[k][0]));
-        const V<Real> damper = splat(in.shear_damping) * inv_j;
-        for (int r = 0; r < 3; ++r)
-          for (int k = 0; k < 3; ++k)
-            A[r][k] = fmadd(damper, fmadd(GC[r][2], C[2][k], fmadd(GC[r][1], C[1][k], GC[r][0] * C[0][k])), A[r][k]);
-      }
-      const V<Real> kt = zero<Real>() - load(D.tet_shear_k.data() + e);  // -k_t: f_i = -k_t A g_i
-      for (int i = 0; i < 3; ++i)
-        for (int r = 0; r < 3; ++r) f[i + 1][r] = kt * fmadd(A[r][2], g[i][2], fmadd(A[r][1], g[i][1], A[r][0] * g[i][0]));
     } else {
-      V3<Real> x0, ev[3];
-      V<Real> s;
-      if constexpr (Element == ElementTerm::NodalVolume) {
-        V<Real> w;
-        gather_xw<kScale>(rec, q[0], x0, s);
-        for (int i = 0; i < 3; ++i) {
-          gather_xw<kScale>(rec, q[i + 1], ev[i], w);
-          s = s + w;  // the sum of the four q: -p_t / 6
-        }
-      } else {
-        gather_x<kScale>(rec, q[0], x0);
-        for (int i = 0; i < 3; ++i) gather_x<kScale>(rec, q[i + 1], ev[i]);
-      }
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) ev[i][k] = ev[i][k] - x0[k];
-      if constexpr (Element == ElementTerm::TetVolume)
-        s = load(D.tet_k36.data() + e) * (load(D.tet_det_rest.data() + e) - det6(ev[0], ev[1], ev[2]));
-      cross_scaled(s, ev[1], ev[2], f[1]);  // e2 x e3
-      cross_scaled(s, ev[2], ev[0], f[2]);  // e3 x e1
-      cross_scaled(s, ev[0], ev[1], f[3]);  // e1 x e2
+      gather_x<kScale>(rec, q[0], x0);
+      for (int i = 0; i < 3; ++i) gather_x<kScale>(rec, q[i + 1], ev[i]);
     }
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) ev[i][k] = ev[i][k] - x0[k];
+    if constexpr (Element == ElementTerm::TetVolume)
+      s = load(D.tet_k36.data() + e) * (load(D.tet_det_rest.data() + e) - det6(ev[0], ev[1], ev[2]));
+    cross_scaled(s, ev[1], ev[2], f[1]);  // e2 x e3
+    cross_scaled(s, ev[2], ev[0], f[2]);  // e3 x e1
+    cross_scaled(s, ev[0], ev[1], f[3]);  // e1 x e2
     scatter_tet(force, q, f);
   }
 }
@@ -568,9 +631,12 @@ void step_all(Data<Real>& D, const KernelStepInputs<Real>& in, int threads, std:
 #pragma omp for schedule(static)
       for (int32_t c = 0; c < nchunk; ++c) shear_stress_chunk(D, c);
     }
-    if constexpr (Element != ElementTerm::None) {
+    if constexpr (Element == ElementTerm::ShearElement || Element == ElementTerm::SmoothedShear) {
 #pragma omp for schedule(static)
-      for (int sl = 0; sl < kSlices; ++sl) tet_slice<Real, Element>(D, in, sl);
+      for (int sl = 0; sl < kSlices; ++sl) shear_pair_slice<Real, Element>(D, in, sl);
+    } else if constexpr (Element != ElementTerm::None) {
+#pragma omp for schedule(static)
+      for (int sl = 0; sl < kSlices; ++sl) tet_slice<Real, Element>(D, sl);
     }
 #pragma omp for schedule(static)
     for (int32_t c = 0; c < nchunk; ++c) {
@@ -636,6 +702,37 @@ void pack_rest_lengths(Data<Real>& D, const GatherLayout& L, const Real* rec) {
     for (int k = 0; k < 3; ++k) l[k] = q[k] - load(&D.rest[k][p0]);
     const V<Real> len2 = fmadd(l[2], l[2], fmadd(l[1], l[1], l[0] * l[0]));
     store(&D.spring_rest[e0], len2 * inv_length(len2));
+  }
+}
+
+// The shear element's tet pairs in batches of kLanes sharing no point, and
+// their shape gradients and k_t (Data::tet_g); empty without it.
+template <class Real>
+void pack_shear_pairs(Data<Real>& D, const Model& model, bool shear) {
+  constexpr int32_t kLanes = Data<Real>::kLanes;
+  const std::vector<TetPair> pairs = shear ? pair_model_tets(model) : std::vector<TetPair>{};
+  const TetBatches batches = batch_tet_pairs(pairs, model.npoint(), kLanes, kSlices);
+  std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.shear_slice_begin);
+  const size_t lanes = batches.lane_tet.size();
+  if (shear)
+    for (auto& v : D.pair_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
+  for (int j = 0; j < 9; ++j) D.tet_g[j].assign(lanes, 0), D.tet2_g[j].assign(lanes, 0);
+  D.tet_shear_k.assign(lanes, 0);
+  D.tet2_shear_k.assign(lanes, 0);
+  // Tet t's gradients of `corners` (its points other than a) into g at lane e.
+  auto put = [&](AlignedVector<Real>(&g)[9], int32_t t, std::array<int32_t, 3> corners, size_t e) {
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) g[3 * i + k][e] = static_cast<Real>(shape_gradient_of(model, t, corners[i])[k]);
+  };
+  for (size_t e = 0; e < lanes; ++e) {
+    if (batches.lane_tet[e] < 0) continue;
+    const TetPair& pair = pairs[batches.lane_tet[e]];
+    for (int k = 0; k < 5; ++k) D.pair_v[k][e] = 4 * pair.v[k];
+    put(D.tet_g, pair.first, {pair.v[1], pair.v[2], pair.v[3]}, e);
+    D.tet_shear_k[e] = static_cast<Real>(model.tet_shear_k[pair.first]);
+    if (pair.second < 0) continue;
+    put(D.tet2_g, pair.second, {pair.v[2], pair.v[1], pair.v[4]}, e);
+    D.tet2_shear_k[e] = static_cast<Real>(model.tet_shear_k[pair.second]);
   }
 }
 
@@ -792,28 +889,23 @@ void Avx512Kernel<Real>::pack(const Model& model, const StepPlan& plan) {
   }
   pack_rest_lengths(D, L, rec);
 
-  // Tets in batches of kLanes (see Data and tet_batches.h).
-  const TetBatches batches = batch_model_tets(model, kLanes, kSlices);
+  // Tets in batches of kLanes (see Data and tet_batches.h); the shear
+  // element reads them in pairs instead (pack_shear_pairs).
+  const TetBatches batches =
+      shear ? TetBatches{{}, std::vector<int32_t>(kSlices + 1, 0)} : batch_model_tets(model, kLanes, kSlices);
   std::copy(batches.slice_begin.begin(), batches.slice_begin.end(), D.slice_begin);
   const size_t lanes = batches.lane_tet.size();
   for (auto& v : D.tet_v) v.assign(lanes, 4 * D.npad);  // padding lanes: the zero record at npad
   const size_t per_tet = D.element == ElementTerm::TetVolume ? lanes : 0;
   D.tet_k36.assign(per_tet, 0);
   D.tet_det_rest.assign(per_tet, 0);
-  for (auto& g : D.tet_g) g.assign(shear ? lanes : 0, 0);
-  D.tet_shear_k.assign(shear ? lanes : 0, 0);
   for (size_t e = 0; e < lanes; ++e) {
     const int32_t t = batches.lane_tet[e];
     if (t < 0) continue;
     for (int k = 0; k < 4; ++k) D.tet_v[k][e] = 4 * model.tet_points[t][k];
     if (per_tet) D.tet_k36[e] = static_cast<Real>(model.tet_k[t] / 36);
-    if (shear) {
-      D.tet_shear_k[e] = static_cast<Real>(model.tet_shear_k[t]);
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k)
-          D.tet_g[3 * i + k][e] = static_cast<Real>(shape_gradient_of(model, t, model.tet_points[t][i + 1])[k]);
-    }
   }
+  pack_shear_pairs(D, model, shear);
   pack_rest_volumes(D, rec);
   for (auto& f : D.tet_force) f.assign(4 * (n + kLanes), 0);
   const bool nodal = D.element == ElementTerm::NodalVolume;

@@ -16,7 +16,8 @@ namespace {
 // locality keeps a batch's records and forces in cache (lanes from distant
 // parts of the mesh, the first version, made the tet pass memory bound at
 // Bunny7 size). Returns the tet of each lane, -1 for padding.
-std::vector<int32_t> batch_tets(const std::vector<int32_t>& run, const std::vector<std::array<int32_t, 4>>& tets,
+template <size_t N>
+std::vector<int32_t> batch_tets(const std::vector<int32_t>& run, const std::vector<std::array<int32_t, N>>& tets,
                                 int32_t npoint, int32_t lanes) {
   constexpr int32_t kOpenBatches = 32;  // one bit each in a point's mask
   std::vector<int32_t> lane_tet, fill;  // fill: lanes used per batch
@@ -47,6 +48,24 @@ std::vector<int32_t> batch_tets(const std::vector<int32_t>& run, const std::vect
   return lane_tet;
 }
 
+// `order` (elements by lowest vertex) cut into `slices` equal runs, each
+// dealt out to batches by batch_tets().
+template <size_t N>
+TetBatches batch_in_slices(const std::vector<int32_t>& order, const std::vector<std::array<int32_t, N>>& elements,
+                           int32_t npoint, int32_t lanes, int32_t slices) {
+  const int32_t nt = static_cast<int32_t>(order.size());
+  TetBatches out;
+  out.slice_begin.push_back(0);
+  for (int32_t sl = 0; sl < slices; ++sl) {
+    const int32_t first = (nt * sl) / slices, last = (nt * (sl + 1)) / slices;
+    const std::vector<int32_t> run(order.begin() + first, order.begin() + last);
+    const std::vector<int32_t> slice = batch_tets(run, elements, npoint, lanes);
+    out.lane_tet.insert(out.lane_tet.end(), slice.begin(), slice.end());
+    out.slice_begin.push_back(static_cast<int32_t>(out.lane_tet.size() / lanes));
+  }
+  return out;
+}
+
 }  // namespace
 
 TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices) {
@@ -57,17 +76,17 @@ TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices) {
     auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
     std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
   }
-  const int32_t nt = static_cast<int32_t>(order.size());
-  TetBatches out;
-  out.slice_begin.push_back(0);
-  for (int32_t sl = 0; sl < slices; ++sl) {
-    const int32_t first = (nt * sl) / slices, last = (nt * (sl + 1)) / slices;
-    const std::vector<int32_t> run(order.begin() + first, order.begin() + last);
-    const std::vector<int32_t> slice = batch_tets(run, model.tet_points, model.npoint(), lanes);
-    out.lane_tet.insert(out.lane_tet.end(), slice.begin(), slice.end());
-    out.slice_begin.push_back(static_cast<int32_t>(out.lane_tet.size() / lanes));
+  return batch_in_slices(order, model.tet_points, model.npoint(), lanes, slices);
+}
+
+TetBatches batch_tet_pairs(const std::vector<TetPair>& pairs, int32_t npoint, int32_t lanes, int32_t slices) {
+  std::vector<std::array<int32_t, 5>> points(pairs.size());
+  std::vector<int32_t> order(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    points[i] = pairs[i].v;
+    order[i] = static_cast<int32_t>(i);
   }
-  return out;
+  return batch_in_slices(order, points, npoint, lanes, slices);
 }
 
 }  // namespace organsim

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/sim/tet_pairs.h"
 
 namespace organsim {
 
@@ -17,5 +18,9 @@ struct TetBatches {
 // The model's tets sorted by lowest vertex, cut into `slices` equal runs,
 // each run dealt out to batches of `lanes` by batch_tets() (tet_batches.cpp).
 TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices);
+
+// The same for tet pairs (in their order, by lowest vertex), no two pairs
+// of a batch sharing a point; lane_tet holds pair indices.
+TetBatches batch_tet_pairs(const std::vector<TetPair>& pairs, int32_t npoint, int32_t lanes, int32_t slices);
 
 }  // namespace organsim

@@ -1,12 +1,14 @@
-// The nodal volume pass's tet pairs (core/sim/tet_pairs.h): every tet once,
-// the two tets of a pair sharing a face, and each volume the pair's formula
-// gives equal to 6 V in the model's own vertex order.
+// The AVX-512 kernels' tet pairs (core/sim/tet_pairs.h): every tet once,
+// the two tets of a pair sharing a face, each volume the pair's formula
+// gives equal to 6 V in the model's own vertex order, and batches of pairs
+// sharing no point.
 #include "core/sim/tet_pairs.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
+#include "core/sim/tet_batches.h"
 #include "tests/core/test_models.h"
 
 namespace organsim {
@@ -66,6 +68,33 @@ TEST(TetPairs, EveryTetOnceTwoPerLaneSharingAFaceWithTheVolumesOfTheModelsOrder)
     // matching pairs most tets; a box's corner tets may stay alone.
     std::cout << "seed " << seed << ": " << 2 * paired << " of " << m.ntet() << " tets paired\n";
     EXPECT_GT(2.0 * paired / m.ntet(), 0.9);
+  }
+}
+
+TEST(TetPairs, BatchesHoldEveryPairOnceAndNoTwoPairsOfABatchShareAPoint) {
+  // The shear element's pass adds each lane's five forces without a
+  // conflict check: two lanes of a batch on one point would lose a force.
+  const Model m = jittered_model(6, 5);
+  const std::vector<TetPair> pairs = pair_model_tets(m);
+  for (const int32_t lanes : {8, 16}) {
+    const TetBatches batches = batch_tet_pairs(pairs, m.npoint(), lanes, 2);
+    ASSERT_EQ(batches.slice_begin.size(), 3u);
+    EXPECT_EQ(batches.slice_begin.back() * static_cast<size_t>(lanes), batches.lane_tet.size());
+    std::vector<int> seen(pairs.size(), 0);
+    for (size_t b = 0; b * lanes < batches.lane_tet.size(); ++b) {
+      std::vector<int32_t> points;
+      for (int32_t l = 0; l < lanes; ++l) {
+        const int32_t i = batches.lane_tet[b * lanes + l];
+        if (i < 0) continue;
+        ++seen[i];
+        std::array<int32_t, 5> v = pairs[i].v;
+        std::sort(v.begin(), v.end());
+        points.insert(points.end(), v.begin(), std::unique(v.begin(), v.end()));  // a lone tet repeats a
+      }
+      std::sort(points.begin(), points.end());
+      EXPECT_EQ(std::adjacent_find(points.begin(), points.end()), points.end()) << "batch " << b;
+    }
+    for (size_t i = 0; i < pairs.size(); ++i) EXPECT_EQ(seen[i], 1) << "pair " << i;
   }
 }
 
