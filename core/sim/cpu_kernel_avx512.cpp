@@ -83,14 +83,14 @@ struct Avx512KernelData {
   // slot (x, y, z), so that Fbar_p - I = sum over p's slots of
   // (u_q - u_p) b^T; else empty.
   AlignedVector<Real> spring_b[3];
-  // Tets, each evaluated once, kLanes per batch sharing no vertex
-  // (batch_tets()); each slice is a run of tets by lowest vertex.
+  // The volume terms' tets, each evaluated once, kLanes per batch sharing no
+  // vertex (batch_tets()); each slice is a run of tets by lowest vertex.
   AlignedVector<int32_t> tet_v[4];               // 4 x vertex per batch lane; padding lanes: 4 npad
   AlignedVector<Real> tet_k36, tet_det_rest;     // per-tet volume: k_v / 36 and 6 V_r as the kernel computes it; else empty
   // Shear element: tets in pairs (pair_v below), batches of kLanes pairs
-  // sharing no point; per lane the shape gradients of b, c, d in the first
-  // tet and of c, b, e in the second (x, y, z each) and each tet's k_t
-  // (tet2_*: zero for a lone tet); else empty.
+  // sharing no point (shear_slice_begin); per lane the shape gradients of
+  // b, c, d in the first tet and of c, b, e in the second (x, y, z each) and
+  // each tet's k_t (tet2_*: zero for a lone tet); else empty.
   AlignedVector<Real> tet_g[9], tet_shear_k, tet2_g[9], tet2_shear_k;
   int32_t shear_slice_begin[kSlices + 1] = {};
   // Nodal term: q = node_k (S - node_rest) per point, S the sum of 6 V_t over
@@ -98,12 +98,13 @@ struct Avx512KernelData {
   // -p_t / 6, its force factor), node_rest = S at rest as the kernel computes
   // it (npad); else empty.
   AlignedVector<Real> node_k, node_rest;
-  // Nodal term: its volume pass reads tets in pairs that share a face
-  // (tet_pairs.h), kLanes pairs per batch: points (a, b, c, d, e) of each
-  // lane (4 x vertex; padding lanes 4 npad) and the pass's output per batch,
-  // kLanes entries each of 6 (V_1 + V_2), 6 V_1 and 6 V_2 (the entries past
-  // the batches stay zero); each slice a run of batches.
+  // Tets in pairs that share a face (tet_pairs.h), kLanes pairs per batch,
+  // for the nodal term's volume pass or the shear element's pass: points
+  // (a, b, c, d, e) of each lane (4 x vertex; padding lanes 4 npad).
   AlignedVector<int32_t> pair_v[5];
+  // Nodal term: the volume pass's output per batch, kLanes entries each of
+  // 6 (V_1 + V_2), 6 V_1 and 6 V_2 (the entries past the batches stay zero);
+  // each slice a run of batches.
   AlignedVector<Real> pair_det6;
   int32_t pair_slice_begin[kSlices + 1] = {};
   // Per point the entries its nodal volume sums (the shared face's points
