@@ -68,14 +68,17 @@ TetBatches batch_in_slices(const std::vector<int32_t>& order, const std::vector<
 
 }  // namespace
 
+std::vector<int32_t> tets_by_lowest_vertex(const Model& model) {
+  std::vector<int32_t> order(model.ntet());
+  for (int32_t t = 0; t < model.ntet(); ++t) order[t] = t;
+  auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
+  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
+  return order;
+}
+
 TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices) {
-  std::vector<int32_t> order;
-  if (model.has_volume() || model.has_shear_element()) {
-    order.resize(model.ntet());
-    for (int32_t t = 0; t < model.ntet(); ++t) order[t] = t;
-    auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
-    std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
-  }
+  const std::vector<int32_t> order =
+      model.has_volume() || model.has_shear_element() ? tets_by_lowest_vertex(model) : std::vector<int32_t>{};
   return batch_in_slices(order, model.tet_points, model.npoint(), lanes, slices);
 }
 

@@ -15,6 +15,10 @@ struct TetBatches {
   std::vector<int32_t> slice_begin;  // first batch of each slice (nslice + 1)
 };
 
+// The model's tets in order of their lowest vertex (stable): the batches'
+// locality order.
+std::vector<int32_t> tets_by_lowest_vertex(const Model& model);
+
 // The model's tets sorted by lowest vertex, cut into `slices` equal runs,
 // each run dealt out to batches of `lanes` by batch_tets() (tet_batches.cpp).
 TetBatches batch_model_tets(const Model& model, int32_t lanes, int32_t slices);

@@ -1,7 +1,8 @@
 #include "core/sim/tet_pairs.h"
 
 #include <algorithm>
-#include <numeric>
+
+#include "core/sim/tet_batches.h"
 
 namespace organsim {
 
@@ -25,20 +26,10 @@ int position_in(const Tet& t, int32_t p) {
 }  // namespace
 
 std::vector<TetPair> pair_model_tets(const Model& model) {
-  const int32_t nt = model.ntet(), np = model.npoint();
-  // Tets of each point (CSR), to find a face's other tet.
-  std::vector<int32_t> offset(static_cast<size_t>(np) + 1, 0), item(4 * static_cast<size_t>(nt));
-  for (const Tet& t : model.tet_points)
-    for (int32_t p : t) ++offset[p + 1];
-  std::partial_sum(offset.begin(), offset.end(), offset.begin());
-  std::vector<int32_t> fill(offset.begin(), offset.end() - 1);
-  for (int32_t t = 0; t < nt; ++t)
-    for (int32_t p : model.tet_points[t]) item[fill[p]++] = t;
-
-  std::vector<int32_t> order(nt);
-  std::iota(order.begin(), order.end(), 0);
-  auto lowest = [&](int32_t t) { return *std::min_element(model.tet_points[t].begin(), model.tet_points[t].end()); };
-  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return lowest(a) < lowest(b); });
+  const int32_t nt = model.ntet();
+  const GatherTable& tets_of = model.layout.tets;  // each point's tets (layout.h)
+  const int32_t C = model.layout.chunk_size;
+  const std::vector<int32_t> order = tets_by_lowest_vertex(model);
 
   std::vector<char> taken(static_cast<size_t>(nt), 0);
   std::vector<TetPair> pairs;
@@ -59,8 +50,9 @@ std::vector<TetPair> pair_model_tets(const Model& model) {
       pos[3] = k;
       if (!even(pos)) std::swap(pos[0], pos[1]);
       const int32_t a = v[pos[0]], b = v[pos[1]], c = v[pos[2]], d = v[pos[3]];
-      for (int32_t i = offset[a]; i < offset[a + 1]; ++i) {
-        const int32_t u = item[i];
+      const int32_t first_slot = tets_of.chunk_offset[a / C] + a % C;
+      for (int32_t j = 0; j < tets_of.count[a]; ++j) {
+        const int32_t u = tets_of.item[first_slot + j * C];
         if (taken[u]) continue;
         const Tet& w = model.tet_points[u];
         const int pb = position_in(w, b), pc = position_in(w, c);
