@@ -37,14 +37,15 @@ Material bench_material(double poisson_ratio) {
   return m;
 }
 
-// "avx512" or "generic" from a CPU backend's device line ("..., avx512 kernel").
+// "simd (avx2)", "generic", ... from a CPU backend's device line ("...,
+// simd (avx2) kernel"): what follows its last ", " up to " kernel".
 std::string kernel_of(const std::string& device) {
   const std::string suffix = " kernel";
   if (device.size() < suffix.size() || device.compare(device.size() - suffix.size(), suffix.size(), suffix) != 0)
     return "?";
   const std::string head = device.substr(0, device.size() - suffix.size());
-  const size_t space = head.find_last_of(' ');
-  return space == std::string::npos ? head : head.substr(space + 1);
+  const size_t comma = head.rfind(", ");
+  return comma == std::string::npos ? head : head.substr(comma + 2);
 }
 
 // Keeps the Model versions a run makes: the last one without sutures and the
@@ -221,7 +222,7 @@ void print_materials(std::ostream& out, const MaterialComparison& c) {
   for (const MaterialBenchRow& r : c.rows) {
     out << "  " << std::left << std::setw(15) << r.name << std::right << std::setw(7) << r.points << std::setw(8)
         << r.springs << std::setw(8) << r.sutures << std::setw(8) << fixed(1e6 * r.dt, 1) << "  " << std::left
-        << std::setw(8) << r.kernel << std::right << std::setw(10) << fixed(r.timing.median_ms, 4) << std::setw(21)
+        << std::setw(13) << r.kernel << std::right << std::setw(10) << fixed(r.timing.median_ms, 4) << std::setw(21)
         << ("(" + fixed(r.timing.min_ms, 4) + ".." + fixed(r.timing.max_ms, 4) + ")") << "  " << r.material
         << "\n";
   }

@@ -25,6 +25,8 @@
 #include "core/model/model.h"
 #include "core/model/stiffness.h"
 #include "core/render/frame_cost.h"
+#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/scatter_step.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
@@ -65,6 +67,7 @@ struct BenchArgs {
   std::vector<int32_t> sizes{1617, 6792, 7750, 28292};
   std::vector<std::string> backends;    // empty: cpu, and gl when it can be created
   std::vector<std::string> precisions;  // empty: double and float on cpu, float on gl
+  std::vector<std::string> simd;        // cpu kernels by target name; empty: every target this CPU runs
   int32_t threads = 0;
   int32_t gl_threads_per_point = 0;
   BenchSteps steps;           // warm-up, repetitions, steps per repetition (bench_timing.h)
@@ -157,6 +160,7 @@ struct Row {
   double mesh_seconds = 0;
   double dt = 0, dt_crit = 0;  // s: the step used and the model's critical step
   std::string backend, precision, device;
+  std::string kernel;   // cpu: the kernel's target ("avx2", ...), "avx512" or "generic"; gl: empty
   BenchTiming timing;
   BenchTiming scatter;  // the plain scatter step, same model and precision, 1 thread
   Plan plan;
@@ -170,13 +174,34 @@ struct FrameRow {
   FrameCost cost;
 };
 
-std::vector<std::pair<std::string, std::string>> configurations(const BenchArgs& args) {
+// One row's backend, precision and (cpu) kernel.
+struct Configuration {
+  std::string backend, precision, kernel;
+};
+
+// The cpu kernels a bench times side by side: every simd target this CPU
+// runs (best first), and the hand-written AVX-512 kernel where built.
+std::vector<std::string> cpu_kernels(const BenchArgs& args) {
+  if (!args.simd.empty()) return args.simd;
+  std::vector<std::string> out;
+  for (const SimdTarget& t : simd_targets_supported()) out.push_back(t.name);
+  if (avx512_kernel_compiled()) out.push_back("avx512");
+  return out;
+}
+
+std::vector<Configuration> configurations(const BenchArgs& args) {
   const std::vector<std::string> backends = args.backends.empty() ? backend_names() : args.backends;
-  std::vector<std::pair<std::string, std::string>> out;
+  std::vector<Configuration> out;
   for (const std::string& b : backends) {
     std::vector<std::string> precisions = args.precisions;
     if (precisions.empty()) precisions = b == "cpu" ? std::vector<std::string>{"double", "float"} : std::vector<std::string>{"float"};
-    for (const std::string& p : precisions) out.emplace_back(b, p);
+    for (const std::string& p : precisions) {
+      if (b != "cpu") {
+        out.push_back({b, p, ""});
+        continue;
+      }
+      for (const std::string& k : cpu_kernels(args)) out.push_back({b, p, k});
+    }
   }
   return out;
 }
@@ -260,10 +285,11 @@ Results measure(const BenchArgs& args) {
       std::cerr << "bench: " << target << " points asked, " << model.npoint() << " meshed in "
                 << fixed(report.seconds, 2) << " s; dt_crit " << dt_crit << " s, dt " << dt << " s\n";
     }
-    for (const auto& [name, precision] : configurations(args)) {
+    for (const auto& [name, precision, kernel] : configurations(args)) {
       BackendSelection sel;
       sel.name = name;
       sel.precision = precision;
+      sel.cpu_kernel = kernel;
       sel.threads = args.threads;
       sel.gl_threads_per_point = args.gl_threads_per_point;
       std::unique_ptr<Backend> backend;
@@ -273,7 +299,7 @@ Results measure(const BenchArgs& args) {
         // Asked for by name: fail. Tried by default (gl, or a precision it
         // does not offer): report why there is no row.
         if (explicit_backends) throw;
-        const std::string what = name + " " + precision;
+        const std::string what = name + " " + precision + (kernel.empty() ? "" : " " + kernel);
         if (std::none_of(unavailable.begin(), unavailable.end(), [&](const auto& u) { return u.first == what; })) {
           unavailable.emplace_back(what, e.what());
         }
@@ -287,6 +313,7 @@ Results measure(const BenchArgs& args) {
       row.mesh_seconds = report.seconds;
       row.backend = backend->name();
       row.precision = backend->precision();
+      row.kernel = kernel;
       row.plan = backend->plan();
       row.dt = dt;
       row.dt_crit = dt_crit;
@@ -330,6 +357,7 @@ nlohmann::json to_json(const Results& res, const BenchArgs& args) {
     nlohmann::json jr = {{"target_points", r.target}, {"points", r.points}, {"springs", r.springs},
                          {"tets", r.tets}, {"dt", r.dt}, {"dt_crit", r.dt_crit},
                          {"backend", r.backend}, {"precision", r.precision},
+                         {"kernel", r.kernel.empty() ? nlohmann::json() : nlohmann::json(r.kernel)},
                          {"device", r.device}, {"median_ms", r.timing.median_ms},
                          {"min_ms", r.timing.min_ms}, {"max_ms", r.timing.max_ms},
                          {"steps_per_second", 1e3 / r.timing.median_ms},
@@ -421,15 +449,15 @@ void print_table(const Results& res, const BenchArgs& args) {
   std::cout << std::left << std::setw(8) << "paper" << std::right << std::setw(7) << "points" << std::setw(8)
             << "springs" << std::setw(8) << "tets" << std::setw(8) << "dt us" << "  " << std::left << std::setw(8)
             << "backend" << std::setw(7)
-            << "prec" << std::right << std::setw(10) << "median ms" << std::setw(21) << "(min..max)"
+            << "prec" << std::setw(8) << "kernel" << std::right << std::setw(10) << "median ms" << std::setw(21) << "(min..max)"
             << "  | paper ms: " << "QuadroFX3450 GeForceGo7900 Xeon3GHz\n";
   for (const Row& r : rows) {
     const PaperRow* p = paper_row(r.target);
     std::cout << std::left << std::setw(8) << (p ? p->model : "-") << std::right << std::setw(7) << r.points
               << std::setw(8) << r.springs << std::setw(8) << r.tets << std::setw(8) << fixed(1e6 * r.dt, 1) << "  "
               << std::left << std::setw(8)
-              << r.backend << std::setw(7) << r.precision << std::right << std::setw(10)
-              << fixed(r.timing.median_ms, 4) << std::setw(21)
+              << r.backend << std::setw(7) << r.precision << std::setw(8) << (r.kernel.empty() ? "-" : r.kernel)
+              << std::right << std::setw(10) << fixed(r.timing.median_ms, 4) << std::setw(21)
               << ("(" + fixed(r.timing.min_ms, 4) + ".." + fixed(r.timing.max_ms, 4) + ")") << "  | ";
     if (p) {
       std::cout << std::setw(12) << fixed(p->quadro_fx_3450, 3) << std::setw(14) << fixed(p->geforce_go_7900, 3)
@@ -457,8 +485,8 @@ void print_table(const Results& res, const BenchArgs& args) {
                "precision and dt, timed in this run), median ms per step:\n";
   for (const Row& r : rows)
     std::cout << "  " << std::setw(7) << r.points << " points  " << std::left << std::setw(4) << r.backend
-              << std::setw(7) << r.precision << std::right << std::setw(9) << fixed(r.timing.median_ms, 4)
-              << "  scatter " << std::setw(8) << fixed(r.scatter.median_ms, 4) << "  speedup "
+              << std::setw(7) << r.precision << std::setw(8) << (r.kernel.empty() ? "-" : r.kernel) << std::right
+              << std::setw(9) << fixed(r.timing.median_ms, 4) << "  scatter " << std::setw(8) << fixed(r.scatter.median_ms, 4) << "  speedup "
               << fixed(r.scatter.median_ms / r.timing.median_ms, 2) << "x\n";
 
   std::cout << "\nblow-up check (non-finite, energy, strain, inversion; positions read back), ms per check:\n";
@@ -547,6 +575,10 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_option("--backend", *backends, "Comma-separated backends (default: cpu, and gl when it can be created)");
   cmd->add_option("--precision", *precisions, "Comma-separated precisions (default: double,float on cpu; float on gl)");
   cmd->add_option("--threads", args->threads, "CPU threads (0: the backend's choice)")->check(CLI::NonNegativeNumber);
+  auto simd = std::make_shared<std::string>();
+  cmd->add_option("--simd", *simd,
+                  "Comma-separated cpu kernels to time side by side: SIMD targets (e.g. avx3,avx2,sse4,scalar), "
+                  "avx512 (the hand-written kernel) or generic (default: every target this CPU runs)");
   cmd->add_option("--gl-threads-per-point", args->gl_threads_per_point,
                   "GL invocations sharing one point's gathers, 1 to 16 (0: 1 on a software renderer, 8 on a GPU)")
       ->check(CLI::Range(0, 16));
@@ -582,8 +614,11 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
                   "instead of the table")
       ->type_name("FILE");
   CLI::Option* sizes_option = cmd->get_option("--sizes");
-  cmd->callback([args, backends, precisions, sizes_option] {
+  cmd->callback([args, backends, precisions, sizes_option, simd] {
     args->backends = split_list(*backends);
+    args->simd = split_list(*simd);
+    for (const std::string& k : args->simd)
+      if (k != "avx512" && k != "generic") simd_target_named(k, "bench --simd");
     if (args->materials) {
       if (sizes_option->count() == 0) args->sizes = {7750};  // the paper's liver
       if (args->backends.size() > 1) {

@@ -6,6 +6,8 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   libcgal-dev libeigen3-dev libcli11-dev nlohmann-json3-dev
+  # Google Highway: the CPU kernel's SIMD for every instruction set.
+  libhwy-dev
   # Labelled images (segmentations) for `organsim mesh`: NIfTI-1 through
   # libniftiio (libnifti2-dev brings it, its nifti1.h and znzlib), NRRD
   # through teem; CGAL ImageIO (in libcgal-dev) reads .inr.

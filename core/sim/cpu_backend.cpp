@@ -16,6 +16,7 @@
 #include "core/model/shear_element.h"
 #include "core/physics/force_law.h"
 #include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/kernel_inputs.h"
 #include "core/sim/step_plan.h"
 #include "core/sim/surface_contact.h"
@@ -39,6 +40,29 @@ std::string avx512_refusal(const StepPlan& plan, const Model& model) {
   if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
   return avx512_kernel_unsupported(plan, model.layout.chunk_size);
 }
+
+// The hand-written AVX-512 kernel behind the simd kernel's interface, kept
+// beside it until the two have been compared (bench).
+template <class Real>
+class HandAvx512 final : public SimdKernel<Real> {
+ public:
+  void pack(const Model& model, const StepPlan& plan) override { k_.pack(model, plan); }
+  void get_point(int32_t p, Real u[3], Real d[3]) const override { k_.get_point(p, u, d); }
+  void set_point(int32_t p, const Real u[3], const Real d[3]) override { k_.set_point(p, u, d); }
+  const Real* displacement(int k) const override { return k_.displacement(k); }
+  void set_spring_rest(int32_t e, Real rest) override { k_.set_spring_rest(e, rest); }
+  void step(const KernelStepInputs<Real>& in, int threads, std::vector<ChunkReaction>& partial) override {
+    k_.step(in, threads, partial);
+  }
+  int32_t nchunk() const override { return k_.nchunk(); }
+  size_t bytes() const override { return k_.bytes(); }
+  int32_t lanes() const override { return 64 / static_cast<int32_t>(sizeof(Real)); }
+  const SimdTarget& target() const override { return target_; }
+
+ private:
+  Avx512Kernel<Real> k_;
+  SimdTarget target_{0, "avx512 (hand-written)"};
+};
 
 // What the springs pass does with sutures, if the model has any.
 std::string sutures_detail(const Model& m) {
@@ -80,7 +104,7 @@ template <class Real>
 struct CpuTables {
   const Model* model = nullptr;  // the version they were packed from
   StepPlan plan;                 // the passes of its step
-  std::unique_ptr<Avx512Kernel<Real>> fast;  // set when the AVX-512 kernel runs this version
+  std::unique_ptr<SimdKernel<Real>> fast;  // set when the simd (or AVX-512) kernel runs this version
   std::vector<ChunkReaction> fast_partial;   // its tool reaction per chunk
   Soa3<Real> rest;                   // X, rest positions (npoint)
   Soa3<Real> pos;                    // x = X + u of the current step (npoint)
@@ -114,13 +138,12 @@ template <class Real>
 class CpuBackend final : public Backend {
   // Lanes evaluated together: one 512-bit register of Real.
   static constexpr int32_t kLanes = 64 / static_cast<int32_t>(sizeof(Real));
-  // The AVX-512 kernel of this precision.
-  using FastKernel = Avx512Kernel<Real>;
   using Tables = CpuTables<Real>;
 
  public:
   CpuBackend(const Model& model, const BackendTool& tool, const CpuBackendOptions& options, StepTiming timing)
       : tool_(tool), kernel_choice_(options.kernel),
+        simd_target_(options.simd.empty() ? default_simd_target() : simd_target_named(options.simd, "cpu backend")),
         threads_(options.threads > 0 ? options.threads : 1), timing_(std::move(timing)) {
     // State is the displacement u = x - X from rest and the last step's
     // increment d = u_t - u_{t-1}. In float, x itself would round away the
@@ -195,9 +218,15 @@ class CpuBackend final : public Backend {
                 (choice_->probes() > 1 ? "s" : "") + ", " + std::to_string(choice_->switches()) + " switch" +
                 (choice_->switches() == 1 ? "" : "es") + ", now " + threads_text(choice_->chosen());
     }
-    return device_ + retimed + ", " + (t_.fast ? "avx512" : "generic") + " kernel";
+    return device_ + retimed + ", " + kernel_name() + " kernel";
   }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
+  // "simd (avx2)", "avx512", "generic".
+  std::string kernel_name() const {
+    if (!t_.fast) return "generic";
+    if (t_.fast->target().bits == 0) return "avx512";
+    return "simd (" + t_.fast->target().name + ")";
+  }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
 
@@ -211,7 +240,7 @@ class CpuBackend final : public Backend {
     const auto& m = *t_.model;
     const size_t real = sizeof(Real), n = static_cast<size_t>(m.npoint());
     if (t_.fast) {
-      plan.buffers.push_back({"avx512 kernel: point records, state, spring slots, tet batches, tet force slices",
+      plan.buffers.push_back({kernel_name() + " kernel: point records, state, spring slots, tet batches, tet force slices",
                               t_.fast->bytes()});
     } else {
       plan.buffers.push_back({"X, u_t, d_t, u_{t+1}, d_{t+1}", 5 * n * 3 * real});
@@ -247,32 +276,34 @@ class CpuBackend final : public Backend {
   // What this backend's kernel does for one pass of the step plan.
   std::string pass_detail(Pass pass) const {
     const auto& m = *t_.model;
-    const std::string lanes = std::to_string(kLanes) + " " + precision() + " lanes";
+    const int32_t nlanes = t_.fast ? t_.fast->lanes() : kLanes;
+    const std::string lanes = std::to_string(nlanes) + " " + precision() + " lanes";
+    const std::string kernel = " (" + kernel_name() + " kernel)";
     const std::string tets_per_vertex = std::to_string(m.ntet()) + " tets gathered per vertex (" +
                                         std::to_string(m.layout.tets.item.size()) + " slots)";
-    const std::string tet_batches = std::to_string(m.ntet()) + " tets evaluated once, " + std::to_string(kLanes) +
+    const std::string tet_batches = std::to_string(m.ntet()) + " tets evaluated once, " + std::to_string(nlanes) +
                                     " per batch, ";
     switch (pass) {
       case Pass::NodalPressure:
         return t_.fast ? std::to_string(m.ntet()) + " tets' 6 V_t read in pairs that share a face, " +
-                             std::to_string(kLanes) +
+                             std::to_string(nlanes) +
                              " pairs per batch (2 fixed slices), a barrier, each point's "
-                             "nodal volume and pressure, a barrier (avx512 kernel)"
+                             "nodal volume and pressure, a barrier" + kernel
                        : "nodal volumes and pressures, " + tets_per_vertex + ", then a barrier";
       case Pass::ShearSmoothing:
         return "every point's stress on its node-averaged deformation gradient, " +
-               (t_.fast ? "gathered over its spring slots, then a barrier (avx512 kernel)"
+               (t_.fast ? "gathered over its spring slots, then a barrier" + kernel
                         : tets_per_vertex + ", then a barrier");
       case Pass::Springs:
         return std::to_string(m.nspring()) + " springs gathered from both ends (" +
                std::to_string(m.layout.springs.item.size()) + " slots)" + sutures_detail(m);
       case Pass::Volume:
-        return t_.fast ? tet_batches + "into 2 fixed force slices (avx512 kernel)" : tets_per_vertex;
+        return t_.fast ? tet_batches + "into 2 fixed force slices" + kernel : tets_per_vertex;
       case Pass::ShearElement:
         return std::string(t_.plan.element == ElementTerm::SmoothedShear ? "smoothed " : "") +
                "shear element (neo-Hookean, no lambda" + (m.shear_damping_time > 0 ? ", with its damper" : "") + "), " +
-               (t_.fast ? std::to_string(m.ntet()) + " tets in pairs that share a face, " + std::to_string(kLanes) +
-                              " pairs per batch, into 2 fixed force slices (avx512 kernel)"
+               (t_.fast ? std::to_string(m.ntet()) + " tets in pairs that share a face, " + std::to_string(nlanes) +
+                              " pairs per batch, into 2 fixed force slices" + kernel
                         : tets_per_vertex);
       case Pass::Gravity: return "m g on every free point";
       case Pass::SurfaceContact:
@@ -286,8 +317,8 @@ class CpuBackend final : public Backend {
                : t_.plan.tool == ToolTerm::Surface ? "the surface contact's forces on the touched points"
                                                    : "grasp attachment springs";
       case Pass::Integrate:
-        return "position Verlet with drag, fused with the force passes (" + lanes +
-               (t_.fast ? ", avx512 kernel)" : ", generic kernel)");
+        return "position Verlet with drag, fused with the force passes (" + lanes + ", " + kernel_name() +
+               " kernel)";
     }
     return "";
   }
@@ -537,11 +568,19 @@ class CpuBackend final : public Backend {
   // runs, it holds the state (u_, d_ are filled from it only for a rebuild;
   // install() puts the state in).
   void pack_fast(Tables& t) const {
-    const std::string refusal = avx512_refusal(t.plan, *t.model);
-    if (kernel_choice_ == CpuKernel::Avx512 && !refusal.empty())
-      throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
-    if (kernel_choice_ == CpuKernel::Generic || !refusal.empty()) return;
-    t.fast = std::make_unique<FastKernel>();
+    if (kernel_choice_ == CpuKernel::Generic) return;
+    if (kernel_choice_ == CpuKernel::Avx512) {
+      const std::string refusal = avx512_refusal(t.plan, *t.model);
+      if (!refusal.empty())
+        throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
+      t.fast = std::make_unique<HandAvx512<Real>>();
+    } else {
+      const std::string refusal = simd_kernel_unsupported(t.plan, t.model->layout.chunk_size, simd_target_);
+      if (!refusal.empty() && kernel_choice_ == CpuKernel::Simd)
+        throw Error(ErrorKind::Backend, "cpu backend: the simd kernel cannot run this model: " + refusal);
+      if (!refusal.empty()) return;
+      t.fast = make_simd_kernel<Real>(simd_target_);
+    }
     t.fast->pack(*t.model, t.plan);
     t.fast_partial.resize(t.fast->nchunk());
     // Padding lanes (at the origin, no mass) may fall inside a push tool: scale 0.
@@ -1035,6 +1074,7 @@ class CpuBackend final : public Backend {
 
   BackendTool tool_;
   CpuKernel kernel_choice_;
+  SimdTarget simd_target_;  // the simd kernel's target
   int threads_;
   StepTiming timing_;                     // stands in for the clock in tests (thread choice)
   std::optional<ThreadChoice> choice_;    // set when the thread count is chosen by timing

@@ -4,15 +4,18 @@
 // the Model's layout (no atomics, deterministic for any thread count) and
 // force evaluation is fused with Verlet integration.
 //
-// Two kernels, chosen at construction (and again at every rebuild):
+// Kernels, chosen at construction (and again at every rebuild):
+// - simd: one source on Google Highway for every instruction set
+//   (cpu_kernel_simd.h), the best this CPU has unless `simd` names a lower
+//   one; several times faster than generic;
 // - generic: portable C++ the compiler vectorises, any precision, any layout;
 //   the double-precision reference;
-// - avx512: in builds for AVX-512, one template for float (16 lanes) and
-//   double (8 lanes) (cpu_kernel_avx512.h), for the layouts that
-//   avx512_kernel_unsupported() accepts; several times faster.
-// `Auto` takes avx512 where it can and says so in device() and plan().
+// - avx512: the hand-written AVX-512 kernel (cpu_kernel_avx512.h), in
+//   builds for AVX-512, kept beside simd until their comparison is measured.
+// `Auto` takes simd where it can and says so in device() and plan().
 #include <functional>
 #include <memory>
+#include <string>
 
 #include "core/sim/backend.h"
 
@@ -20,7 +23,7 @@ namespace organsim {
 
 enum class Precision { Double, Float };
 
-enum class CpuKernel { Auto, Generic, Avx512 };
+enum class CpuKernel { Auto, Generic, Simd, Avx512 };
 
 struct CpuBackendOptions {
   Precision precision = Precision::Double;
@@ -29,9 +32,12 @@ struct CpuBackendOptions {
   // now and then, one step on the other count (thread_choice.h). Results are
   // bit-identical for any count.
   int32_t threads = 0;
-  // Avx512 when it cannot run here (a build without AVX-512, an unsupported
+  // Simd or Avx512 when it cannot run here (a build without AVX-512, an unsupported
   // model) is an Error(Backend) naming why; Auto never fails.
   CpuKernel kernel = CpuKernel::Auto;
+  // The simd kernel's target by name (simd_targets_compiled()); empty: the
+  // default (ORGANSIM_SIMD, else the best this CPU runs).
+  std::string simd = "";
   // A live loop's share of the clock (organsim serve; 0: not live). With
   // threads 0 it steps on fewer than all hardware threads, leaving a core
   // to the network and the client (on two, one without timing; on more, the

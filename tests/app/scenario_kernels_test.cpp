@@ -16,7 +16,6 @@
 #include <sstream>
 #include <string>
 
-#include "core/sim/cpu_kernel_avx512.h"
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
@@ -26,36 +25,39 @@ namespace fs = std::filesystem;
 
 // Every scenario in scenarios/ (not stress/ or sweeps/), the kernel it runs
 // on before its topology events and after them (the same for a scenario
-// without events), in a build with the AVX-512 kernels (a build without
-// them runs everything on "generic"). Every plan runs on the AVX-512
-// kernels (avx512_kernel_unsupported in core/sim/cpu_kernel_avx512.cpp),
-// sutures and the shear element included.
+// without events), whatever the CPU: the simd kernel (on the CPU's best
+// target, which the device line names beside it) runs every plan
+// (simd_kernel_unsupported in core/sim/cpu_kernel_simd.cpp), sutures and the
+// shear element included.
 struct ScenarioKernel {
   const char* scenario;
   const char* before;  // --plan and the run's `run:` line
   const char* after;   // the kernel at the end of the run, after every event
 };
 constexpr ScenarioKernel kExpectedKernels[] = {
-    {"default", "avx512", "avx512"},
-    {"liver_push", "avx512", "avx512"},
-    {"liver_probe", "avx512", "avx512"},
-    {"liver_grasp", "avx512", "avx512"},
-    {"liver_pull", "avx512", "avx512"},
-    {"liver7750_push", "avx512", "avx512"},
-    {"liver7750_realtime", "avx512", "avx512"},
-    {"liver_cut", "avx512", "avx512"},
-    {"liver_suture", "avx512", "avx512"},
-    {"bar_tear", "avx512", "avx512"},
-    {"palpation", "avx512", "avx512"},
+    {"default", "simd", "simd"},
+    {"liver_push", "simd", "simd"},
+    {"liver_probe", "simd", "simd"},
+    {"liver_grasp", "simd", "simd"},
+    {"liver_pull", "simd", "simd"},
+    {"liver7750_push", "simd", "simd"},
+    {"liver7750_realtime", "simd", "simd"},
+    {"liver_cut", "simd", "simd"},
+    {"liver_suture", "simd", "simd"},
+    {"bar_tear", "simd", "simd"},
+    {"palpation", "simd", "simd"},
 };
 
-// "avx512" from "..., avx512 kernel)" or "..., avx512 kernel (at the end)": the
-// word before " kernel" on `line`; "" when the line names no kernel.
+// "simd" from "..., simd (avx2) kernel)" or "..., generic kernel (at the
+// end)": the first word after the last ", " before " kernel" on `line` (the
+// kernel, not its target); "" when the line names no kernel.
 std::string kernel_on(const std::string& line) {
   const size_t at = line.rfind(" kernel");
   if (at == std::string::npos) return "";
-  const size_t from = line.rfind(' ', at - 1);
-  return line.substr(from + 1, at - from - 1);
+  const size_t comma = line.rfind(", ", at);
+  const size_t from = comma == std::string::npos ? 0 : comma + 2;
+  const std::string name = line.substr(from, at - from);
+  return name.substr(0, name.find(' '));
 }
 
 // The first line of `text` that starts with `prefix` and names a kernel.
@@ -123,8 +125,7 @@ class ScenarioKernels : public ::testing::TestWithParam<ScenarioKernel> {};
 
 TEST_P(ScenarioKernels, PlanAndRunNameTheExpectedKernelBeforeAndAfterTheEvents) {
   const ScenarioKernel& expected = GetParam();
-  const std::string before = avx512_kernel_compiled() ? expected.before : "generic";
-  const std::string after = avx512_kernel_compiled() ? expected.after : "generic";
+  const std::string before = expected.before, after = expected.after;
   const std::string name = expected.scenario;
   const fs::path dir = kDir / name;
   fs::remove_all(dir);

@@ -11,7 +11,7 @@
 
 #include "core/physics/force_law.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/reference_forces.h"
 #include "tests/core/contact_test_util.h"
 
@@ -188,9 +188,8 @@ TEST(CapsuleContact, CpuKernelsApplyTheReferenceForcesAndReportMinusTheirSum) {
   const double dt = 1e-4;
   for (const ToolContact contact : {ToolContact::Surface, ToolContact::Points})
     for (const Precision precision : {Precision::Double, Precision::Float})
-      for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Avx512}) {
-        if (kernel == CpuKernel::Avx512 && !avx512_kernel_compiled()) continue;
-        const BackendTool tool = capsule(0.006, contact);
+      for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Simd}) {
+          const BackendTool tool = capsule(0.006, contact);
         auto backend = make_cpu_backend(m, tool, {precision, 1, kernel});
         SCOPED_TRACE(backend->device() + (contact == ToolContact::Surface ? ", surface" : ", points"));
         const Reaction got = backend->tick(testing::one_step_at(dt, origin, turn));

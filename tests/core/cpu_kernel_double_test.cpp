@@ -15,7 +15,7 @@
 #include "core/model/nodal_volume.h"
 #include "core/model/shear_element.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/util/error.h"
 #include "tests/core/cpu_kernel_test_util.h"
 
@@ -26,11 +26,14 @@ using testing::kSize;
 using testing::random_model;
 using testing::VolumeTerm;
 
-CpuBackendOptions fast() { return {Precision::Double, 1, CpuKernel::Avx512}; }
+// Each fast kernel (every simd target this CPU runs, and the hand-written
+// AVX-512 kernel where built) is its own test case.
+class CpuKernelDouble : public ::testing::TestWithParam<std::string> {
+ protected:
+  CpuBackendOptions fast() const { return testing::fast_kernel(GetParam(), Precision::Double); }
+};
+INSTANTIATE_TEST_SUITE_P(Kernels, CpuKernelDouble, ::testing::ValuesIn(testing::fast_kernels()), testing::kernel_test_name);
 CpuBackendOptions reference() { return {Precision::Double, 1, CpuKernel::Generic}; }
-
-#define SKIP_WITHOUT_AVX512() \
-  if (!avx512_kernel_compiled()) GTEST_SKIP() << "this build has no AVX-512 kernel"
 
 // Per point, the sum of the magnitudes its force is summed from, before any
 // cancellation: per spring k max(L, r) (the stretch k (L - r) is the
@@ -84,8 +87,7 @@ std::vector<double> force_term_magnitudes(const Model& m, const std::vector<Vec3
   return sum;
 }
 
-TEST(CpuKernelDouble, OneStepForcesMatchTheReferenceOnRandomMeshesToRounding) {
-  SKIP_WITHOUT_AVX512();
+TEST_P(CpuKernelDouble, OneStepForcesMatchTheReferenceOnRandomMeshesToRounding) {
   constexpr double kEps = std::numeric_limits<double>::epsilon();
   testing::for_each_one_step_against_the_reference(
       fast(), [](const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev, double dt,
@@ -106,8 +108,7 @@ TEST(CpuKernelDouble, OneStepForcesMatchTheReferenceOnRandomMeshesToRounding) {
       });
 }
 
-TEST(CpuKernelDouble, ThousandStepTrajectoriesTrackTheReferenceInEverySceneVariant) {
-  SKIP_WITHOUT_AVX512();
+TEST_P(CpuKernelDouble, ThousandStepTrajectoriesTrackTheReferenceInEverySceneVariant) {
   // Rounding differences of a few ulps per step, carried by a damped
   // stable system over 1000 steps: measured up to 7.6e-17 m (about 10 ulps
   // of a 5 cm coordinate) with the per-tet term, 1.0e-17 m with the nodal
@@ -118,43 +119,40 @@ TEST(CpuKernelDouble, ThousandStepTrajectoriesTrackTheReferenceInEverySceneVaria
     testing::expect_scenes_track_the_reference(fast(), 1e-12 * kSize, 1e-12, volume);
 }
 
-TEST(CpuKernelDouble, TwoThreadsGiveBitIdenticalResultsToOne) {
-  SKIP_WITHOUT_AVX512();
-  testing::expect_two_threads_bit_identical_to_one(Precision::Double);
+TEST_P(CpuKernelDouble, TwoThreadsGiveBitIdenticalResultsToOne) {
+  testing::expect_two_threads_bit_identical_to_one(fast());
 }
 
-TEST(CpuKernelDouble, RestStateStaysPutWithoutGravity) {
-  SKIP_WITHOUT_AVX512();
-  testing::expect_rest_state_stays_put(Precision::Double);
+TEST_P(CpuKernelDouble, RestStateStaysPutWithoutGravity) {
+  testing::expect_rest_state_stays_put(fast());
 }
 
-TEST(CpuKernelDouble, KeepsTrackingTheReferenceAfterACut) {
-  SKIP_WITHOUT_AVX512();
+TEST_P(CpuKernelDouble, KeepsTrackingTheReferenceAfterACut) {
   // As for the trajectories above (600 steps; measured 2e-17 m per tet, 3.3e-17 m nodal).
   testing::expect_cut_run_tracks_the_reference(fast(), 1e-12 * kSize);
 }
 
-TEST(CpuKernelDouble, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
+TEST(CpuKernelDoubleChoice, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
   const Model wide = random_model(1, 3, VolumeTerm::PerTet, true);
-  const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 8);  // chunks of 8: not whole groups of 16
+  const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 2);  // chunks of 2: no target has 2 float lanes
   const Model nodal = random_model(1, 3, VolumeTerm::Nodal, true);
-  // Auto: the avx512 kernel where it can run, the generic one otherwise, and device() says which.
+  const SimdTarget best = simd_targets_supported().front();
+  // Auto: the simd kernel where it can run, the generic one otherwise, and device() says which.
   const std::string auto_wide = make_cpu_backend(wide, {}, {Precision::Double, 1})->device();
   const std::string auto_nodal = make_cpu_backend(nodal, {}, {Precision::Double, 1})->device();
   const std::string auto_narrow = make_cpu_backend(narrow, {}, {Precision::Double, 1})->device();
   EXPECT_NE(auto_narrow.find("generic kernel"), std::string::npos) << auto_narrow;
-  EXPECT_THROW(make_cpu_backend(narrow, {}, fast()), Error);
-  if (avx512_kernel_compiled()) {
-    EXPECT_NE(auto_wide.find("avx512 kernel"), std::string::npos) << auto_wide;
-    EXPECT_NE(auto_nodal.find("avx512 kernel"), std::string::npos) << auto_nodal;
-    const Plan plan = make_cpu_backend(wide, {}, fast())->plan();
-    EXPECT_NE(plan.passes.back().detail.find("8 double lanes"), std::string::npos) << plan.passes.back().detail;
-  } else {
-    EXPECT_NE(auto_wide.find("generic kernel"), std::string::npos) << auto_wide;
-    EXPECT_NE(auto_nodal.find("generic kernel"), std::string::npos) << auto_nodal;
-    EXPECT_THROW(make_cpu_backend(wide, {}, fast()), Error);
+  EXPECT_THROW(make_cpu_backend(narrow, {}, testing::fast_kernel(best.name, Precision::Double)), Error);
+  EXPECT_NE(auto_wide.find("simd (" + best.name + ") kernel"), std::string::npos) << auto_wide;
+  EXPECT_NE(auto_nodal.find("simd (" + best.name + ") kernel"), std::string::npos) << auto_nodal;
+  // Each target's lanes: the register's width over a double's.
+  for (const SimdTarget& target : simd_targets_supported()) {
+    const Plan plan = make_cpu_backend(wide, {}, testing::fast_kernel(target.name, Precision::Double))->plan();
+    const int lanes = target.name == "avx3" ? 8 : target.name == "avx2" ? 4 : target.name == "scalar" ? 1 : 2;
+    EXPECT_NE(plan.passes.back().detail.find(std::to_string(lanes) + " double lanes"), std::string::npos)
+        << target.name << ": " << plan.passes.back().detail;
   }
-  // Asked for by name, the generic kernel runs even where avx512 could.
+  // Asked for by name, the generic kernel runs even where simd could.
   EXPECT_NE(make_cpu_backend(wide, {}, reference())->device().find("generic kernel"), std::string::npos);
 }
 

@@ -8,10 +8,12 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <random>
 
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
+#include "core/sim/step_plan.h"
 #include "core/run/run.h"
 #include "core/util/error.h"
 #include "tests/core/cpu_kernel_test_util.h"
@@ -24,13 +26,15 @@ using testing::kSize;
 using testing::random_model;
 using testing::VolumeTerm;
 
-CpuBackendOptions fast(int threads = 1) { return {Precision::Float, threads, CpuKernel::Avx512}; }
+// Each fast kernel (every simd target this CPU runs, and the hand-written
+// AVX-512 kernel where built) is its own test case.
+class CpuKernel : public ::testing::TestWithParam<std::string> {
+ protected:
+  CpuBackendOptions fast(int threads = 1) const { return testing::fast_kernel(GetParam(), Precision::Float, threads); }
+};
+INSTANTIATE_TEST_SUITE_P(Kernels, CpuKernel, ::testing::ValuesIn(testing::fast_kernels()), testing::kernel_test_name);
 
-#define SKIP_WITHOUT_AVX512() \
-  if (!avx512_kernel_compiled()) GTEST_SKIP() << "this build has no AVX-512 kernel"
-
-TEST(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
-  SKIP_WITHOUT_AVX512();
+TEST_P(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
   testing::for_each_one_step_against_the_reference(
       fast(), [](const Model& model, const std::vector<Vec3>& x, const std::vector<Vec3>&, double,
                  const std::vector<Vec3>& ref, const std::vector<Vec3>& got) {
@@ -50,8 +54,7 @@ TEST(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
       });
 }
 
-TEST(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVariant) {
-  SKIP_WITHOUT_AVX512();
+TEST_P(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVariant) {
   // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
   // contact amplifies it); the generic float kernel shows the same drift
   // (Gather.FloatTracksDoubleReference). Measured 1.2e-7 to 5.5e-7 of the
@@ -64,53 +67,58 @@ TEST(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVaria
     testing::expect_scenes_track_the_reference(fast(), 1e-5 * kSize, 1e-4, volume);
 }
 
-TEST(CpuKernel, TwoThreadsGiveBitIdenticalResultsToOne) {
-  SKIP_WITHOUT_AVX512();
-  testing::expect_two_threads_bit_identical_to_one(Precision::Float);
+TEST_P(CpuKernel, TwoThreadsGiveBitIdenticalResultsToOne) {
+  testing::expect_two_threads_bit_identical_to_one(fast());
 }
 
-TEST(CpuKernel, RestStateStaysPutWithoutGravity) {
-  SKIP_WITHOUT_AVX512();
-  testing::expect_rest_state_stays_put(Precision::Float);
+TEST_P(CpuKernel, RestStateStaysPutWithoutGravity) {
+  testing::expect_rest_state_stays_put(fast());
 }
 
-TEST(CpuKernel, KeepsTrackingTheReferenceAfterACut) {
-  SKIP_WITHOUT_AVX512();
+TEST_P(CpuKernel, KeepsTrackingTheReferenceAfterACut) {
   // As for the trajectories above (600 steps; measured 6.3e-8 m per tet,
   // 3.3e-8 m nodal, against sides 2 cm apart).
   testing::expect_cut_run_tracks_the_reference(fast(), 1e-5 * kSize);
 }
 
-TEST(CpuKernel, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
+TEST(CpuKernelChoice, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
   const Model wide = random_model(1, 3, VolumeTerm::PerTet, true);
   const Model nodal = random_model(1, 3, VolumeTerm::Nodal, true);
-  const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 8);  // chunks of 8: not whole groups of 16
-  EXPECT_NE(avx512_kernel_unsupported(narrow), "");
-  EXPECT_EQ(avx512_kernel_unsupported(wide), "");
-  EXPECT_EQ(avx512_kernel_unsupported(nodal), "");
+  const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 2);  // chunks of 2: no target has 2 float lanes
+  const SimdTarget best = simd_targets_supported().front();
+  EXPECT_NE(simd_kernel_unsupported(make_step_plan(narrow, {}), narrow.layout.chunk_size, best), "");
+  EXPECT_EQ(simd_kernel_unsupported(make_step_plan(wide, {}), wide.layout.chunk_size, best), "");
+  EXPECT_EQ(simd_kernel_unsupported(make_step_plan(nodal, {}), nodal.layout.chunk_size, best), "");
 
   // Float on an unsupported layout falls back to the generic kernel, and says so.
   EXPECT_NE(make_cpu_backend(narrow, {}, {Precision::Float, 1})->device().find("generic kernel"), std::string::npos);
   // Asked for by name where it cannot run: an error naming why, never a quiet fallback.
-  EXPECT_THROW(make_cpu_backend(narrow, {}, fast()), Error);
+  EXPECT_THROW(make_cpu_backend(narrow, {}, testing::fast_kernel(best.name, Precision::Float)), Error);
   for (const Model* model : {&wide, &nodal}) {
     const std::string auto_float = make_cpu_backend(*model, {}, {Precision::Float, 1})->device();
-    if (avx512_kernel_compiled()) {
-      EXPECT_NE(auto_float.find("avx512 kernel"), std::string::npos) << auto_float;
-    } else {
-      EXPECT_NE(auto_float.find("generic kernel"), std::string::npos) << auto_float;
-      EXPECT_THROW(make_cpu_backend(*model, {}, fast()), Error);
-    }
+    EXPECT_NE(auto_float.find("simd (" + best.name + ") kernel"), std::string::npos) << auto_float;
   }
-  if (avx512_kernel_compiled()) {
-    // The plan says what the nodal term's extra passes are.
-    const Plan plan = make_cpu_backend(nodal, {}, fast())->plan();
-    ASSERT_EQ(plan.passes[0].name, "nodal-pressure");
-    EXPECT_NE(plan.passes[0].detail.find("avx512 kernel"), std::string::npos) << plan.passes[0].detail;
-  }
+  // The plan says what the nodal term's extra passes are, and on which kernel.
+  const Plan plan = make_cpu_backend(nodal, {}, testing::fast_kernel(best.name, Precision::Float))->plan();
+  ASSERT_EQ(plan.passes[0].name, "nodal-pressure");
+  EXPECT_NE(plan.passes[0].detail.find("simd (" + best.name + ") kernel"), std::string::npos) << plan.passes[0].detail;
 }
 
-TEST(CpuKernel, ThreadCountIsChosenByTimingAndReported) {
+TEST(CpuKernelChoice, APlanWithAPassTheKernelDoesNotRunIsRefusedByName) {
+  const Model model = random_model(1, 3, VolumeTerm::PerTet, true);
+  const SimdTarget best = simd_targets_supported().front();
+  StepPlan plan = make_step_plan(model, {});
+  ASSERT_EQ(simd_kernel_unsupported(plan, model.layout.chunk_size, best), "");
+  // A shear element pass on a model whose term is the volume term.
+  plan.passes.insert(plan.passes.begin() + 1, Pass::ShearElement);
+  EXPECT_NE(simd_kernel_unsupported(plan, model.layout.chunk_size, best).find("shear-element"), std::string::npos);
+  // A plan without the pass its gravity needs.
+  plan = make_step_plan(model, {});
+  plan.passes.erase(std::find(plan.passes.begin(), plan.passes.end(), Pass::Gravity));
+  EXPECT_NE(simd_kernel_unsupported(plan, model.layout.chunk_size, best).find("gravity"), std::string::npos);
+}
+
+TEST(CpuKernelChoice, ThreadCountIsChosenByTimingAndReported) {
   const Model model = random_model(2, 3, VolumeTerm::PerTet, true);
   const std::string device = make_cpu_backend(model, {}, {Precision::Float, 0})->device();
   // With one hardware thread there is nothing to choose.

@@ -10,12 +10,36 @@
 #include <vector>
 
 #include "core/sim/cpu_backend.h"
+#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/run/run.h"
 #include "tests/core/test_models.h"
 
 namespace organsim::testing {
 
 constexpr double kSize = 0.05;  // m, edge of the test box
+
+// The fast kernels a test runs on, each its own test case: the simd kernel
+// on every target compiled in that this CPU runs (the portable fallback
+// included), and the hand-written AVX-512 kernel ("avx512") where built.
+inline std::vector<std::string> fast_kernels() {
+  std::vector<std::string> out;
+  for (const SimdTarget& t : simd_targets_supported()) out.push_back(t.name);
+  if (avx512_kernel_compiled()) out.push_back("avx512");
+  return out;
+}
+inline CpuBackendOptions fast_kernel(const std::string& kernel, Precision precision, int threads = 1) {
+  if (kernel == "avx512") return {precision, threads, CpuKernel::Avx512};
+  return {precision, threads, CpuKernel::Simd, kernel};
+}
+// What device() says of that kernel.
+inline std::string kernel_label(const CpuBackendOptions& options) {
+  if (options.kernel == CpuKernel::Avx512) return "avx512 kernel";
+  if (options.kernel == CpuKernel::Generic) return "generic kernel";
+  return "simd (" + options.simd + ") kernel";
+}
+// gtest's name for a kernel's test case.
+inline std::string kernel_test_name(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
 
 // Which per-tet term a test model has: none, a volume term per tet
 // (volume_modulus 30 kPa) or averaged nodal (poisson_ratio 0.45, where the
@@ -221,18 +245,20 @@ inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, 
   }
 }
 
-// The avx512 kernel of `precision` on two threads against one, bitwise, in
-// the scenes with volume, push and pull, for each term. 200 steps:
-// enough for contact and motion (a loaded machine makes every two-thread
-// step slow, and bitwise equality needs no more).
-inline void expect_two_threads_bit_identical_to_one(Precision precision) {
+// A fast kernel on two threads against one, bitwise, in the scenes with
+// volume, push and pull, for each term. 200 steps: enough for contact and
+// motion (a loaded machine makes every two-thread step slow, and bitwise
+// equality needs no more).
+inline void expect_two_threads_bit_identical_to_one(const CpuBackendOptions& options) {
+  CpuBackendOptions two = options;
+  two.threads = 2;
   for (VolumeTerm volume : kEveryTerm) {
     const Model model = random_model(3, 6, volume, true);
     for (Scene scene : {Scene::Full, Scene::Push, Scene::PushPoints, Scene::Capsule, Scene::Pull}) {
       SCOPED_TRACE(volume_term_name(volume));
       Reaction r1, r2;
-      const auto x1 = run_scene(model, scene, {precision, 1, CpuKernel::Avx512}, r1, 10);
-      const auto x2 = run_scene(model, scene, {precision, 2, CpuKernel::Avx512}, r2, 10);
+      const auto x1 = run_scene(model, scene, options, r1, 10);
+      const auto x2 = run_scene(model, scene, two, r2, 10);
       EXPECT_EQ(r1.force, r2.force) << scene_name(scene);  // bitwise: per-chunk partials summed in order
       EXPECT_EQ(r1.torque, r2.torque) << scene_name(scene);
       for (size_t i = 0; i < x1.size(); ++i) ASSERT_EQ(x1[i], x2[i]) << scene_name(scene) << ", point " << i;
@@ -240,14 +266,13 @@ inline void expect_two_threads_bit_identical_to_one(Precision precision) {
   }
 }
 
-// The avx512 kernel of `precision` from rest without gravity, 100 steps,
+// A fast kernel from rest without gravity, 100 steps,
 // for each term and, with the nodal term and the smoothed shear element,
 // after a cut (a rebuild): rest lengths, tet volumes and nodal volumes come
 // from the kernel's own arithmetic on the rounded rest positions, and the
 // shear element reads displacements (F = I exactly), so there is no force
 // at rest and nothing may move at all.
-inline void expect_rest_state_stays_put(Precision precision) {
-  const CpuBackendOptions options{precision, 1, CpuKernel::Avx512};
+inline void expect_rest_state_stays_put(const CpuBackendOptions& options) {
   for (VolumeTerm volume : kEveryTerm) {
     const Model model = random_model(5, 4, volume, false);
     auto backend = make_cpu_backend(model, {}, options);
@@ -296,7 +321,7 @@ inline void expect_cut_run_tracks_the_reference(const CpuBackendOptions& options
       auto backend = make_cpu_backend(model, tool, run_options[k]);
       for (int i = 0; i < 10; ++i) backend->tick(request);
       backend->rebuild(cut);
-      EXPECT_NE(backend->device().find(k ? "avx512 kernel" : "generic kernel"), std::string::npos)
+      EXPECT_NE(backend->device().find(kernel_label(run_options[k])), std::string::npos)
           << backend->device();
       // The tool pushes into the cut's top edge, so the sides part.
       request.tool_to = Vec3(0.025, 0.025, kSize - 0.01);

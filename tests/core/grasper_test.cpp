@@ -12,7 +12,7 @@
 #include "core/model/model_rebuild.h"
 #include "core/physics/force_law.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/reference_forces.h"
 #include "tests/core/contact_test_util.h"
 
@@ -187,8 +187,7 @@ TEST(Grasper, JawsPressAsTheReferenceAndTheReactionIsMinusWhatTheTissueReceives)
   const Model m = testing::contact_box(4);
   const double dt = 1e-4;
   for (const Precision precision : {Precision::Double, Precision::Float})
-    for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Avx512}) {
-      if (kernel == CpuKernel::Avx512 && !avx512_kernel_compiled()) continue;
+    for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Simd}) {
       const BackendTool tool = grasper(0.5, 0.5);
       auto backend = make_cpu_backend(m, tool, {precision, 1, kernel});
       SCOPED_TRACE(backend->device());
@@ -240,10 +239,9 @@ TEST(Grasper, KernelsPrecisionsAndThreadsFollowTheDoubleReference) {
   const double peak = peak_pull(reference);
   ASSERT_GT(peak, 0.05);
   for (const Precision precision : {Precision::Double, Precision::Float})
-    for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Avx512}) {
-      if (kernel == CpuKernel::Avx512 && !avx512_kernel_compiled()) continue;
+    for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Simd}) {
       SCOPED_TRACE(std::string(precision == Precision::Float ? "float" : "double") +
-                   (kernel == CpuKernel::Generic ? ", generic" : ", avx512"));
+                   (kernel == CpuKernel::Generic ? ", generic" : ", simd"));
       const std::vector<Reaction> one = log({precision, 1, kernel});
       double worst = 0, mean = 0;
       for (size_t n = 0; n < one.size(); ++n) {
@@ -262,7 +260,7 @@ TEST(Grasper, KernelsPrecisionsAndThreadsFollowTheDoubleReference) {
       }
     }
   // Threads on the fast path, through the first slips (400 ticks).
-  const CpuKernel fast = avx512_kernel_compiled() ? CpuKernel::Avx512 : CpuKernel::Generic;
+  const CpuKernel fast = CpuKernel::Simd;
   const std::vector<Reaction> one = log({Precision::Float, 1, fast}, 400), two = log({Precision::Float, 2, fast}, 400);
   bool same = true;
   for (size_t n = 0; n < one.size(); ++n)

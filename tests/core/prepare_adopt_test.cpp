@@ -9,7 +9,7 @@
 
 #include "core/model/model_rebuild.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/util/error.h"
 #include "tests/core/cpu_kernel_test_util.h"
 
@@ -53,9 +53,9 @@ Trajectory cut_run(const Model& model, const Model& cut, const CpuBackendOptions
 TEST(PrepareAdopt, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
   std::vector<CpuBackendOptions> kernels = {{Precision::Double, 1, CpuKernel::Generic},
                                             {Precision::Float, 1, CpuKernel::Generic}};
-  if (avx512_kernel_compiled()) {
-    kernels.push_back({Precision::Double, 1, CpuKernel::Avx512});
-    kernels.push_back({Precision::Float, 1, CpuKernel::Avx512});
+  for (const SimdTarget& target : simd_targets_supported()) {
+    kernels.push_back({Precision::Double, 1, CpuKernel::Simd, target.name});
+    kernels.push_back({Precision::Float, 1, CpuKernel::Simd, target.name});
   }
   for (testing::VolumeTerm volume : testing::kEveryTerm) {
     // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
@@ -63,10 +63,9 @@ TEST(PrepareAdopt, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
     const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.025));
     ASSERT_GT(cut.npoint(), model.npoint());
     for (const CpuBackendOptions& options : kernels) {
-      if (options.kernel == CpuKernel::Avx512 && !avx512_kernel_unsupported(model).empty()) continue;
       SCOPED_TRACE(std::string(testing::volume_term_name(volume)) +
                    (options.precision == Precision::Double ? ", double" : ", float") +
-                   (options.kernel == CpuKernel::Avx512 ? ", avx512" : ", generic"));
+                   (options.kernel == CpuKernel::Simd ? ", simd " + options.simd : std::string(", generic")));
       const Trajectory rebuilt = cut_run(model, cut, options, false);
       const Trajectory adopted = cut_run(model, cut, options, true);
       // The same arithmetic on the same state: nothing may differ in any bit.

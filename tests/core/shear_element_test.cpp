@@ -17,7 +17,7 @@
 #include "core/model/shear_element.h"
 #include "core/model/stiffness.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/reference_forces.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
@@ -450,13 +450,13 @@ TEST(ShearElement, CriticalStepIsTheIntegratorsThreshold) {
 
 // Both formulations; the plan names the smoothing pass (before the force
 // pass, like the nodal volume term's) only for the smoothed one.
-TEST(ShearElement, ModelsWithItRunOnTheAvx512KernelWhereItIsBuilt) {
+TEST(ShearElement, ModelsWithItRunOnTheSimdKernel) {
   for (ShearFormulation formulation : kFormulations) {
     SCOPED_TRACE(shear_formulation_name(formulation));
     const Model model = shear_model(1, 3, 0.1, kDefaultChunkSize, Vec3::Zero(), formulation);
-    EXPECT_EQ(avx512_kernel_unsupported(model), "");
+    EXPECT_EQ(simd_kernel_unsupported(model), "");
     auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Auto});
-    const char* kernel = avx512_kernel_compiled() ? "avx512 kernel" : "generic kernel";
+    const std::string kernel = "simd (" + default_simd_target().name + ") kernel";
     EXPECT_NE(backend->device().find(kernel), std::string::npos) << backend->device();
     const Plan plan = backend->plan();
     const bool smoothed = formulation == ShearFormulation::Smoothed;

@@ -5,7 +5,7 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model_rebuild.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/step_plan.h"
 #include "tests/core/test_models.h"
 
@@ -104,9 +104,9 @@ TEST(StepPlan, RebuildWithSuturesRecomputesThePlan) {
   backend->rebuild(sutured);
   EXPECT_EQ(backend->step_plan().sutures, 1);
   EXPECT_EQ(names(backend->plan()), names(scene.expected));
-  // Sutures run on the AVX-512 kernel: the rebuilt plan keeps it where it is built.
-  EXPECT_EQ(avx512_kernel_unsupported(backend->step_plan(), sutured.layout.chunk_size), "");
-  const char* kernel = avx512_kernel_compiled() ? "avx512 kernel" : "generic kernel";
+  // Sutures run on the simd kernel: the rebuilt plan keeps it.
+  EXPECT_EQ(simd_kernel_unsupported(backend->step_plan(), sutured.layout.chunk_size, default_simd_target()), "");
+  const std::string kernel = "simd (" + default_simd_target().name + ") kernel";
   EXPECT_NE(backend->device().find(kernel), std::string::npos) << backend->device();
   ASSERT_EQ(backend->plan().per_tick.size(), 1u);
   EXPECT_EQ(backend->plan().per_tick[0].name, "suture-rest");

@@ -11,7 +11,7 @@
 
 #include "core/model/model_rebuild.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/reference_forces.h"
 #include "core/stability/step_after_change.h"
 #include "core/util/error.h"
@@ -209,14 +209,11 @@ TEST(Suture, CpuKernelsMatchTheReferenceWithTighteningSutures) {
     want[i] = x[i] + d;
     largest = std::max(largest, d.norm());
   }
-  // Every CPU kernel: the generic one and, where built, the AVX-512 one, in
-  // both precisions. Double: the same sums in another order, 1e-9 of the
+  // Every CPU kernel: the generic one and the simd one, in both precisions. Double: the same sums in another order, 1e-9 of the
   // step's largest increment. Float: positions of ~8 cm round at 4e-9 m,
   // against increments of ~1e-3 m here: 1e-4 of the increment.
-  std::vector<CpuKernel> kernels = {CpuKernel::Generic};
-  if (avx512_kernel_compiled()) kernels.push_back(CpuKernel::Avx512);
-  for (CpuKernel kernel : kernels) {
-    SCOPED_TRACE(kernel == CpuKernel::Generic ? "generic kernel" : "avx512 kernel");
+  for (CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Simd}) {
+    SCOPED_TRACE(kernel == CpuKernel::Generic ? "generic kernel" : "simd kernel");
     const auto got_d = one_step(model, {Precision::Double, 1, kernel}, x, x_prev);
     const auto got_f = one_step(model, {Precision::Float, 1, kernel}, x, x_prev);
     double err_d = 0, err_f = 0;
@@ -280,10 +277,10 @@ TEST(Suture, AddingSuturesKeepsMassAndInvariantsAndALaterCutKeepsThem) {
   EXPECT_THROW(add_sutures(c.plain, {no_k}), Error);
 }
 
-TEST(Suture, ModelsWithSuturesRunOnTheAvx512KernelWhereItIsBuilt) {
+TEST(Suture, ModelsWithSuturesRunOnTheSimdKernel) {
   const SutureCase c = one_suture(0.5);
-  EXPECT_EQ(avx512_kernel_unsupported(c.sutured), "");
-  const char* kernel = avx512_kernel_compiled() ? "avx512 kernel" : "generic kernel";
+  EXPECT_EQ(simd_kernel_unsupported(c.sutured), "");
+  const std::string kernel = "simd (" + default_simd_target().name + ") kernel";
   for (Precision precision : {Precision::Float, Precision::Double}) {
     const auto backend = make_cpu_backend(c.sutured, {}, {precision, 1});
     EXPECT_NE(backend->device().find(kernel), std::string::npos) << backend->device();
