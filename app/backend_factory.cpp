@@ -25,9 +25,7 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
   }
   o.threads = s.threads;
   o.live_share = s.cpu_live_share;
-  if (s.cpu_kernel == "avx512") {
-    o.kernel = CpuKernel::Avx512;
-  } else if (s.cpu_kernel == "generic") {
+  if (s.cpu_kernel == "generic") {
     o.kernel = CpuKernel::Generic;
   } else if (!s.cpu_kernel.empty()) {
     o.kernel = CpuKernel::Simd;

@@ -19,8 +19,8 @@ struct BackendSelection {
   int32_t gl_threads_per_point = 0;      // gl: invocations per point, 0 = the backend's choice
   bool gl_keep_reaction_positions = false;  // gl: GlBackendOptions::keep_reaction_positions (organsim serve)
   double cpu_live_share = 0;             // cpu: CpuBackendOptions::live_share (organsim serve)
-  // cpu: the kernel by name: a simd target ("avx2", ...: CpuBackendOptions::simd),
-  // "avx512" (the hand-written kernel) or "generic"; empty: the default.
+  // cpu: the kernel by name: a simd target ("avx2", ...: CpuBackendOptions::simd)
+  // or "generic"; empty: the default.
   std::string cpu_kernel;
 };
 

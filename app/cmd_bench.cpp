@@ -25,7 +25,6 @@
 #include "core/model/model.h"
 #include "core/model/stiffness.h"
 #include "core/render/frame_cost.h"
-#include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/scatter_step.h"
 #include "core/stability/blowup_monitor.h"
@@ -160,7 +159,7 @@ struct Row {
   double mesh_seconds = 0;
   double dt = 0, dt_crit = 0;  // s: the step used and the model's critical step
   std::string backend, precision, device;
-  std::string kernel;   // cpu: the kernel's target ("avx2", ...), "avx512" or "generic"; gl: empty
+  std::string kernel;   // cpu: the kernel's target ("avx2", ...) or "generic"; gl: empty
   BenchTiming timing;
   BenchTiming scatter;  // the plain scatter step, same model and precision, 1 thread
   Plan plan;
@@ -180,12 +179,11 @@ struct Configuration {
 };
 
 // The cpu kernels a bench times side by side: every simd target this CPU
-// runs (best first), and the hand-written AVX-512 kernel where built.
+// runs (best first).
 std::vector<std::string> cpu_kernels(const BenchArgs& args) {
   if (!args.simd.empty()) return args.simd;
   std::vector<std::string> out;
   for (const SimdTarget& t : simd_targets_supported()) out.push_back(t.name);
-  if (avx512_kernel_compiled()) out.push_back("avx512");
   return out;
 }
 
@@ -578,7 +576,7 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   auto simd = std::make_shared<std::string>();
   cmd->add_option("--simd", *simd,
                   "Comma-separated cpu kernels to time side by side: SIMD targets (e.g. avx3,avx2,sse4,scalar), "
-                  "avx512 (the hand-written kernel) or generic (default: every target this CPU runs)");
+                  "or generic (default: every target this CPU runs)");
   cmd->add_option("--gl-threads-per-point", args->gl_threads_per_point,
                   "GL invocations sharing one point's gathers, 1 to 16 (0: 1 on a software renderer, 8 on a GPU)")
       ->check(CLI::Range(0, 16));
@@ -618,7 +616,7 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
     args->backends = split_list(*backends);
     args->simd = split_list(*simd);
     for (const std::string& k : args->simd)
-      if (k != "avx512" && k != "generic") simd_target_named(k, "bench --simd");
+      if (k != "generic") simd_target_named(k, "bench --simd");
     if (args->materials) {
       if (sizes_option->count() == 0) args->sizes = {7750};  // the paper's liver
       if (args->backends.size() > 1) {

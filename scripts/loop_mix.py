@@ -8,7 +8,7 @@ arithmetic, loads, stores, integer and mask work. On a machine without
 hardware counters this is how one sees what a loop spends its issue slots
 on; compare the counts with scripts/simd_throughput.cpp's rates.
 
-    python3 scripts/loop_mix.py build/core/CMakeFiles/organsim_core.dir/sim/cpu_kernel_avx512.cpp.o
+    python3 scripts/loop_mix.py build/core/CMakeFiles/organsim_core.dir/sim/cpu_kernel_simd.cpp.o --function N_AVX3
 """
 import argparse
 import collections

@@ -1,7 +1,7 @@
 // How many vector instructions of each kind one core retires per cycle,
 // measured with 12 independent chains each (so latency does not limit it).
 // It answers whether a machine runs 512-bit instructions at full width or
-// as two 256-bit halves, which decides how fast the AVX-512 kernels can be
+// as two 256-bit halves, which decides how fast the simd kernel's AVX3 target can be
 // (docs/bench.md, "Looking inside the step"). Build and run (one core, idle):
 //
 //   g++ -O2 -march=native scripts/simd_throughput.cpp -o /tmp/simd && /tmp/simd

@@ -6,8 +6,8 @@
 // generic CPU kernel and the scatter step in their precision, the energy of
 // the blow-up monitor, the shear element's reference and energy, and every
 // output that reports a force (the ParaView series' tool force). The
-// AVX-512 kernels evaluate the same formulas on 8 or 16 lanes and are tested
-// against the generic kernel lane by lane; the GLSL twin of this file is
+// simd kernel evaluates the same formulas on 1 to 16 lanes and is tested
+// against the generic kernel point by point; the GLSL twin of this file is
 // shaders/force_law.glsl (step.comp and its companions include it).
 // docs/physics.md derives each formula. SI units: m, N, Pa, s.
 //

@@ -15,7 +15,6 @@
 
 #include "core/model/shear_element.h"
 #include "core/physics/force_law.h"
-#include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/cpu_kernel_simd.h"
 #include "core/sim/kernel_inputs.h"
 #include "core/sim/step_plan.h"
@@ -34,35 +33,6 @@ std::string cpu_model_name() {
     if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
   return "unknown CPU";
 }
-
-// Why the AVX-512 kernels cannot run this step plan here ("" if they can).
-std::string avx512_refusal(const StepPlan& plan, const Model& model) {
-  if (!avx512_kernel_compiled()) return "this build has no AVX-512 kernel (ORGANSIM_NATIVE=OFF or no AVX-512 CPU)";
-  return avx512_kernel_unsupported(plan, model.layout.chunk_size);
-}
-
-// The hand-written AVX-512 kernel behind the simd kernel's interface, kept
-// beside it until the two have been compared (bench).
-template <class Real>
-class HandAvx512 final : public SimdKernel<Real> {
- public:
-  void pack(const Model& model, const StepPlan& plan) override { k_.pack(model, plan); }
-  void get_point(int32_t p, Real u[3], Real d[3]) const override { k_.get_point(p, u, d); }
-  void set_point(int32_t p, const Real u[3], const Real d[3]) override { k_.set_point(p, u, d); }
-  const Real* displacement(int k) const override { return k_.displacement(k); }
-  void set_spring_rest(int32_t e, Real rest) override { k_.set_spring_rest(e, rest); }
-  void step(const KernelStepInputs<Real>& in, int threads, std::vector<ChunkReaction>& partial) override {
-    k_.step(in, threads, partial);
-  }
-  int32_t nchunk() const override { return k_.nchunk(); }
-  size_t bytes() const override { return k_.bytes(); }
-  int32_t lanes() const override { return 64 / static_cast<int32_t>(sizeof(Real)); }
-  const SimdTarget& target() const override { return target_; }
-
- private:
-  Avx512Kernel<Real> k_;
-  SimdTarget target_{0, "avx512 (hand-written)"};
-};
 
 // What the springs pass does with sutures, if the model has any.
 std::string sutures_detail(const Model& m) {
@@ -104,7 +74,7 @@ template <class Real>
 struct CpuTables {
   const Model* model = nullptr;  // the version they were packed from
   StepPlan plan;                 // the passes of its step
-  std::unique_ptr<SimdKernel<Real>> fast;  // set when the simd (or AVX-512) kernel runs this version
+  std::unique_ptr<SimdKernel<Real>> fast;  // set when the simd kernel runs this version
   std::vector<ChunkReaction> fast_partial;   // its tool reaction per chunk
   Soa3<Real> rest;                   // X, rest positions (npoint)
   Soa3<Real> pos;                    // x = X + u of the current step (npoint)
@@ -122,7 +92,7 @@ struct CpuTables {
   std::vector<int32_t> spring_width, tet_width;  // slots per lane group (nchunk x groups)
   int32_t groups_per_chunk = 1;
   std::vector<Real> mass, inv_mass;
-  std::vector<Real> tool_scale;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint; npad for the AVX-512 kernel, 0 for padding)
+  std::vector<Real> tool_scale;   // tool stiffness multiplier per point, Model::tool_k_scale (npoint; npad for the simd kernel, 0 for padding)
   std::vector<ChunkReaction> partial;   // tool reaction per chunk (nchunk)
   SurfaceContact<Real> surface;         // the surface-contact pass (a pushing tool on the surface)
 };
@@ -221,12 +191,8 @@ class CpuBackend final : public Backend {
     return device_ + retimed + ", " + kernel_name() + " kernel";
   }
   std::string precision() const override { return sizeof(Real) == 8 ? "double" : "float"; }
-  // "simd (avx2)", "avx512", "generic".
-  std::string kernel_name() const {
-    if (!t_.fast) return "generic";
-    if (t_.fast->target().bits == 0) return "avx512";
-    return "simd (" + t_.fast->target().name + ")";
-  }
+  // "simd (avx2)", ..., or "generic".
+  std::string kernel_name() const { return t_.fast ? "simd (" + t_.fast->target().name + ")" : "generic"; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
 
@@ -564,29 +530,22 @@ class CpuBackend final : public Backend {
     }
   }
 
-  // The AVX-512 kernel packs its own streams from the same Model; while it
+  // The simd kernel packs its own streams from the same Model; while it
   // runs, it holds the state (u_, d_ are filled from it only for a rebuild;
   // install() puts the state in).
   void pack_fast(Tables& t) const {
     if (kernel_choice_ == CpuKernel::Generic) return;
-    if (kernel_choice_ == CpuKernel::Avx512) {
-      const std::string refusal = avx512_refusal(t.plan, *t.model);
-      if (!refusal.empty())
-        throw Error(ErrorKind::Backend, "cpu backend: the avx512 kernel cannot run this model: " + refusal);
-      t.fast = std::make_unique<HandAvx512<Real>>();
-    } else {
-      const std::string refusal = simd_kernel_unsupported(t.plan, t.model->layout.chunk_size, simd_target_);
-      if (!refusal.empty() && kernel_choice_ == CpuKernel::Simd)
-        throw Error(ErrorKind::Backend, "cpu backend: the simd kernel cannot run this model: " + refusal);
-      if (!refusal.empty()) return;
-      t.fast = make_simd_kernel<Real>(simd_target_);
-    }
+    const std::string refusal = simd_kernel_unsupported(t.plan, t.model->layout.chunk_size, simd_target_);
+    if (!refusal.empty() && kernel_choice_ == CpuKernel::Simd)
+      throw Error(ErrorKind::Backend, "cpu backend: the simd kernel cannot run this model: " + refusal);
+    if (!refusal.empty()) return;
+    t.fast = make_simd_kernel<Real>(simd_target_);
     t.fast->pack(*t.model, t.plan);
     t.fast_partial.resize(t.fast->nchunk());
     // Padding lanes (at the origin, no mass) may fall inside a push tool: scale 0.
     t.tool_scale.resize(std::max(t.tool_scale.size(), npad_of(t)), 0);
   }
-  // Points the AVX-512 kernel reads a register at a time, padding included (0 without it).
+  // Points the simd kernel reads a register at a time, padding included (0 without it).
   static size_t npad_of(const Tables& t) {
     return t.fast ? static_cast<size_t>(t.fast->nchunk()) * t.model->layout.chunk_size : 0;
   }
@@ -1081,11 +1040,11 @@ class CpuBackend final : public Backend {
   double live_share_ = 0;                 // CpuBackendOptions::live_share
   std::string device_;
   double time_ = 0;
-  // The state: with the AVX-512 kernel it lives in t_.fast, and these hold
+  // The state: with the simd kernel it lives in t_.fast, and these hold
   // it only across a rebuild.
   Soa3<Real> u_;  // displacements from rest at t (npoint)
   Soa3<Real> d_;  // step increments u_t - u_{t-1} (npoint)
-  std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint; npad for the AVX-512 kernel)
+  std::vector<int32_t> attached_;  // attachment index per point or -1 (npoint; npad for the simd kernel)
   std::vector<int32_t> attached_points_;
   std::vector<Real> attach_offset_;  // pull: x_i - c at grasp time, 3 per attachment
   Tables t_;                         // the current version's

@@ -9,9 +9,7 @@
 //   (cpu_kernel_simd.h), the best this CPU has unless `simd` names a lower
 //   one; several times faster than generic;
 // - generic: portable C++ the compiler vectorises, any precision, any layout;
-//   the double-precision reference;
-// - avx512: the hand-written AVX-512 kernel (cpu_kernel_avx512.h), in
-//   builds for AVX-512, kept beside simd until their comparison is measured.
+//   the double-precision reference.
 // `Auto` takes simd where it can and says so in device() and plan().
 #include <functional>
 #include <memory>
@@ -23,7 +21,7 @@ namespace organsim {
 
 enum class Precision { Double, Float };
 
-enum class CpuKernel { Auto, Generic, Simd, Avx512 };
+enum class CpuKernel { Auto, Generic, Simd };
 
 struct CpuBackendOptions {
   Precision precision = Precision::Double;
@@ -32,7 +30,7 @@ struct CpuBackendOptions {
   // now and then, one step on the other count (thread_choice.h). Results are
   // bit-identical for any count.
   int32_t threads = 0;
-  // Simd or Avx512 when it cannot run here (a build without AVX-512, an unsupported
+  // Simd when it cannot run here (an unsupported
   // model) is an Error(Backend) naming why; Auto never fails.
   CpuKernel kernel = CpuKernel::Auto;
   // The simd kernel's target by name (simd_targets_compiled()); empty: the

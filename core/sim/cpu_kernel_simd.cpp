@@ -13,6 +13,10 @@
 #define HWY_DISABLED_TARGETS \
   (HWY_SSSE3 | HWY_AVX3_DL | HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128 | HWY_RVV)
 #endif
+// Every attainable target, below the build's baseline too: the portable
+// fallback is then compiled on arm64 as well (whose baseline, NEON, would
+// otherwise drop it), so that the tests run it wherever they run.
+#define HWY_COMPILE_ALL_ATTAINABLE
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
 #include "hwy/highway.h"
 
@@ -214,7 +218,7 @@ template <class Real, ElementTerm Element, bool Gravity, ToolTerm Tool, bool Sut
 void chunk_step(Data<Real>& D, const KernelStepInputs<Real>& in, int32_t c, ChunkReaction& partial) {
   constexpr int32_t kLanes = Data<Real>::kLanes;
   const int cur = D.cur;
-  // Local pointers: the intrinsic stores may alias anything, so pointers
+  // Local pointers: the vector stores may alias anything, so pointers
   // read through D would be reloaded after every store.
   const Real* const rec = D.positions(cur);
   const Real* const inc = D.inc[cur].data();
@@ -462,7 +466,7 @@ void shear_pair_slice(Data<Real>& D, const KernelStepInputs<Real>& in, int slice
     const int32_t* const q[5] = {D.pair_v[0].data() + e, D.pair_v[1].data() + e, D.pair_v[2].data() + e,
                                  D.pair_v[3].data() + e, D.pair_v[4].data() + e};
     V3<Real> u[5], d[5];
-    V<Real> p22[5];  // the corners' smoothed P_22 (avx512_records.h: the increment's 4th value)
+    V<Real> p22[5];  // the corners' smoothed P_22 (simd_records-inl.h: the increment's 4th value)
     for (int i = 0; i < 5; ++i) {
       if (D.damped || kSmoothed)
         gather_xd<kScale>(rec, inc, q[i], u[i], d[i], p22[i]);

@@ -1,5 +1,5 @@
 #pragma once
-// What the CPU backend hands its kernels (generic, AVX-512 float and double)
+// What the CPU backend hands its kernels (generic and simd, float and double)
 // for one substep, and what each chunk hands back.
 #include <cstdint>
 
@@ -18,7 +18,7 @@ struct KernelStepInputs {
   Real tool_center[3] = {0, 0, 0};           // the tool frame's origin: the torque's reference point
   Real tool_a[3] = {0, 0, 0}, tool_b[3] = {0, 0, 0};  // the shape's segment (a == b == centre: a sphere)
   Real tool_radius = 0, tool_k = 0;
-  Real tool_reach = 0;  // a ball about the centre holding the whole tool (the AVX-512 kernels' point filter)
+  Real tool_reach = 0;  // a ball about the centre holding the whole tool (the simd kernel's point filter)
   ToolTerm tool = ToolTerm::None;       // this substep's tool pass (none while the tool is inactive)
   const int32_t* attached = nullptr;    // pull: attachment index per point or -1
   const Real* attach_offset = nullptr;  // pull: 3 per attachment
@@ -30,8 +30,8 @@ struct KernelStepInputs {
 };
 
 // Per point, >= 0 for the lanes the tool pass may touch: the attachment
-// index (pull) or the surface contact's slot (surface). The AVX-512 kernels
-// find their tool lanes with one compare on it.
+// index (pull) or the surface contact's slot (surface). The simd kernel
+// finds its tool lanes with one compare on it.
 template <ToolTerm Tool, class Real>
 const int32_t* tool_lane_flags(const KernelStepInputs<Real>& in) {
   static_assert(Tool == ToolTerm::Pull || Tool == ToolTerm::Surface);

@@ -1,8 +1,8 @@
 #pragma once
 // The step as one list of named passes, computed once from the Model and the
 // tool (at construction and at every rebuild) and followed by every backend:
-// which compiled variant of the CPU kernels runs and whether the AVX-512
-// kernels can run it, which GL shader variants and dispatches run, and what
+// which compiled variant of the CPU kernels runs and whether the simd
+// kernel can run it, which GL shader variants and dispatches run, and what
 // `organsim run --plan` prints (the same pass names on every backend, each
 // with that backend's own detail). A pass that the scene does not need is
 // not in the list, and no backend executes code or touches data for it.

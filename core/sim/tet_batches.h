@@ -1,5 +1,5 @@
 #pragma once
-// How the AVX-512 kernels group tets: each tet evaluated once, `lanes` per
+// How the simd kernel groups tets: each tet evaluated once, `lanes` per
 // batch (one register), the lanes of a batch sharing no vertex, and the
 // batches cut into fixed slices that each add into their own force array.
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// How the AVX-512 kernels' nodal volume pass reads the tets: two tets that
+// How the simd kernel's nodal volume and shear element passes read the tets: two tets that
 // share a face are one lane, so two volumes cost five points' positions
 // instead of eight, and each point of the shared face sums one entry (the
 // pair's two volumes) instead of two.

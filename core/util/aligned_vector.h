@@ -1,6 +1,6 @@
 #pragma once
 // std::vector on 64-byte aligned storage: whole-register (512-bit) loads
-// and stores of its elements, for the AVX-512 kernels.
+// and stores of its elements, for the simd kernel.
 #include <cstddef>
 #include <new>
 #include <vector>

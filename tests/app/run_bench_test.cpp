@@ -26,7 +26,16 @@ TEST(RunBench, QuickJsonRunHasOneRowPerSizeAndConfigurationWithThePaperFigures) 
       "bench --sizes 300,1617 --backend cpu --precision double --repetitions 3 --steps 5 --warmup 2 --no-exude --json -", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  ASSERT_EQ(j["rows"].size(), 2u);
+  // A row per size and SIMD target this CPU runs, best first, side by side.
+  const std::vector<SimdTarget> targets = simd_targets_supported();
+  ASSERT_EQ(j["rows"].size(), 2 * targets.size());
+  for (size_t i = 0; i < j["rows"].size(); ++i) {
+    const auto& row = j["rows"][i];
+    const std::string kernel = targets[i % targets.size()].name;
+    EXPECT_EQ(row["kernel"], kernel);
+    EXPECT_NE(row["device"].get<std::string>().find("simd (" + kernel + ") kernel"), std::string::npos) << row.dump();
+    EXPECT_EQ(row["points"], j["rows"][i - i % targets.size()]["points"]);  // one mesh per size
+  }
   EXPECT_EQ(j["machine"]["logical_cpus"].get<int>() > 0, true);
   EXPECT_EQ(j["settings"]["repetitions"], 3);
   for (const auto& row : j["rows"]) {
@@ -45,11 +54,12 @@ TEST(RunBench, QuickJsonRunHasOneRowPerSizeAndConfigurationWithThePaperFigures) 
     EXPECT_NE(device.find("kernel"), std::string::npos) << device;
   }
   // Meshed within 10 % of the asked point count (the mesher's promise).
-  EXPECT_NEAR(j["rows"][1]["points"].get<double>(), 1617, 162);
+  const auto& second_size = j["rows"][targets.size()];
+  EXPECT_NEAR(second_size["points"].get<double>(), 1617, 162);
   // The paper's Table 1 sits next to its size, and only there.
   EXPECT_FALSE(j["rows"][0].contains("paper"));
-  EXPECT_EQ(j["rows"][1]["paper"]["model"], "Bunny5");
-  EXPECT_DOUBLE_EQ(j["rows"][1]["paper"]["xeon_3ghz_ms"].get<double>(), 0.99);
+  EXPECT_EQ(second_size["paper"]["model"], "Bunny5");
+  EXPECT_DOUBLE_EQ(second_size["paper"]["xeon_3ghz_ms"].get<double>(), 0.99);
 }
 
 // The CPU model as /proc/cpuinfo names it (what the file must record).
@@ -82,8 +92,11 @@ TEST(RunBench, JsonFileHoldsTheFiguresOfTheTablePrintedInTheSameRun) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_json_file";
   fs::remove_all(dir);
   const fs::path file = dir / "bench.json";
-  const auto r = test::run_organsim("bench --sizes 300 --backend cpu --precision double,float --repetitions 3 "
-                                    "--steps 5 --warmup 2 --no-exude --no-frames --json " + file.string(), dir);
+  const std::string best = simd_targets_supported().front().name;
+  const auto r = test::run_organsim("bench --sizes 300 --backend cpu --precision double,float --simd " + best +
+                                        " --repetitions 3 --steps 5 --warmup 2 --no-exude --no-frames --json " +
+                                        file.string(),
+                                    dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ASSERT_TRUE(fs::exists(file)) << r.out;
   const auto j = nlohmann::json::parse(test::slurp(file));  // throws (and fails) unless it is whole JSON
@@ -111,6 +124,7 @@ TEST(RunBench, JsonFileHoldsTheFiguresOfTheTablePrintedInTheSameRun) {
     bool printed = false;
     while (std::getline(lines, line)) {
       if (line.find(" cpu     " + row["precision"].get<std::string>()) == std::string::npos) continue;
+      if (line.find(field(best)) == std::string::npos) continue;
       if (line.find(field(std::to_string(row["points"].get<int>()))) == std::string::npos) continue;
       if (line.find(field(std::to_string(row["tets"].get<int>()))) == std::string::npos) continue;
       if (line.find(field(fixed4(med))) != std::string::npos) printed = true;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The default build is portable: configured without ORGANSIM_NATIVE, no
-# translation unit is compiled with -march=native (or any -march), so the
+# translation unit is compiled with -march=native, so the
 # binary runs on every CPU of its architecture and the SIMD kernel picks the
 # best target at run time (core/sim/cpu_kernel_simd.h). Reads the build
 # folder's CMake cache and compile_commands.json.
@@ -15,9 +15,8 @@ if [ "$native" != OFF ]; then
 fi
 [ -s "$commands" ] || { echo "FAIL: $commands missing or empty"; exit 1; }
 units=$(grep -c '"file"' "$commands")
-if grep -q -- '-march=' "$commands"; then
-  echo "FAIL: -march in $(grep -c -- '-march=' "$commands") of $units compile commands:"
-  grep -o '"file": "[^"]*"' "$commands" | head -3
+if grep -q -- '-march=native' "$commands"; then
+  echo "FAIL: -march=native in $(grep -c -- '-march=native' "$commands") of $units compile commands"
   exit 1
 fi
-echo "portable: ORGANSIM_NATIVE=OFF, no -march in any of $units compile commands"
+echo "portable: ORGANSIM_NATIVE=OFF, no -march=native in any of $units compile commands"

@@ -179,7 +179,7 @@ TEST(CapsuleContact, PointsContactPushesAwayFromTheSegment) {
 // What the CPU kernels apply: one substep from rest with the capsule
 // pressed in, each point's contact force recovered from its motion (m (x' -
 // x) / dt^2; no internal force at rest without gravity) against the
-// reference's, on the generic and AVX-512 kernels in double (to round-off)
+// reference's, on the generic and simd kernels in double (to round-off)
 // and float, surface and points.
 TEST(CapsuleContact, CpuKernelsApplyTheReferenceForcesAndReportMinusTheirSum) {
   const Model m = box(4);

@@ -1,11 +1,11 @@
-// The AVX-512 double kernel against the reference (the generic kernel in
+// The simd double kernel, on every target compiled in that this CPU runs
+// (each its own test case), against the reference (the generic kernel in
 // double): forces per point on random meshes, 1000-step trajectories for
 // every scene variant, threads, the rest state, a rebuild after a cut, each
-// with every per-tet term (volume per tet or nodal, shear element), and which kernel a
-// model gets. The two sum the same terms in different orders (and the
-// kernel's 1/|l| is two Newton steps from a 14-bit estimate, not a square
-// root and a division), so they agree to rounding, not bit for bit. In a
-// build without AVX-512 the kernel-specific tests are skipped.
+// with every per-tet term (volume per tet or nodal, shear element), and
+// which kernel a model gets. The two sum the same terms in different orders
+// (and the kernel's 1/|l| is Newton steps from an estimate, not a square
+// root and a division), so they agree to rounding, not bit for bit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,8 +26,7 @@ using testing::kSize;
 using testing::random_model;
 using testing::VolumeTerm;
 
-// Each fast kernel (every simd target this CPU runs, and the hand-written
-// AVX-512 kernel where built) is its own test case.
+// Each simd target this CPU runs is its own test case.
 class CpuKernelDouble : public ::testing::TestWithParam<std::string> {
  protected:
   CpuBackendOptions fast() const { return testing::fast_kernel(GetParam(), Precision::Double); }

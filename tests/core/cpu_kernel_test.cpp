@@ -1,9 +1,9 @@
-// The AVX-512 float kernel against the double-precision reference (the
+// The simd float kernel, on every target compiled in that this CPU runs
+// (each its own test case), against the double-precision reference (the
 // generic kernel in double): forces per point on random meshes, 1000-step
 // trajectories for every scene variant, threads, the rest state, a rebuild
-// after a cut, each with every per-tet term (volume per tet or nodal, shear element),
-// and which kernel a model gets. In a build without AVX-512 the kernel-specific tests are skipped and
-// the routing test checks that the fallback is taken and said.
+// after a cut, each with every per-tet term (volume per tet or nodal, shear
+// element); and which kernel a model gets, and a plan the kernel refuses.
 #include <gtest/gtest.h>
 
 #include <omp.h>
@@ -26,8 +26,7 @@ using testing::kSize;
 using testing::random_model;
 using testing::VolumeTerm;
 
-// Each fast kernel (every simd target this CPU runs, and the hand-written
-// AVX-512 kernel where built) is its own test case.
+// Each simd target this CPU runs is its own test case.
 class CpuKernel : public ::testing::TestWithParam<std::string> {
  protected:
   CpuBackendOptions fast(int threads = 1) const { return testing::fast_kernel(GetParam(), Precision::Float, threads); }

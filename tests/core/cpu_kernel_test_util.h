@@ -1,5 +1,5 @@
 #pragma once
-// Models and scenes shared by the AVX-512 kernel tests (float and double):
+// Models and scenes shared by the simd kernel tests (float and double):
 // a jittered box with a fixed base, and 1000-step runs of every scene
 // variant (lean, volume + gravity, push, pull), with each per-tet term the
 // kernels run: the per-tet or the averaged nodal volume term, or the shear
@@ -10,7 +10,6 @@
 #include <vector>
 
 #include "core/sim/cpu_backend.h"
-#include "core/sim/cpu_kernel_avx512.h"
 #include "core/sim/cpu_kernel_simd.h"
 #include "core/run/run.h"
 #include "tests/core/test_models.h"
@@ -19,22 +18,18 @@ namespace organsim::testing {
 
 constexpr double kSize = 0.05;  // m, edge of the test box
 
-// The fast kernels a test runs on, each its own test case: the simd kernel
-// on every target compiled in that this CPU runs (the portable fallback
-// included), and the hand-written AVX-512 kernel ("avx512") where built.
+// The simd kernel's targets a test runs on, each its own test case: every
+// target compiled in that this CPU runs (the portable fallback included).
 inline std::vector<std::string> fast_kernels() {
   std::vector<std::string> out;
   for (const SimdTarget& t : simd_targets_supported()) out.push_back(t.name);
-  if (avx512_kernel_compiled()) out.push_back("avx512");
   return out;
 }
 inline CpuBackendOptions fast_kernel(const std::string& kernel, Precision precision, int threads = 1) {
-  if (kernel == "avx512") return {precision, threads, CpuKernel::Avx512};
   return {precision, threads, CpuKernel::Simd, kernel};
 }
 // What device() says of that kernel.
 inline std::string kernel_label(const CpuBackendOptions& options) {
-  if (options.kernel == CpuKernel::Avx512) return "avx512 kernel";
   if (options.kernel == CpuKernel::Generic) return "generic kernel";
   return "simd (" + options.simd + ") kernel";
 }

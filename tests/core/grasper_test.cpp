@@ -210,7 +210,7 @@ TEST(Grasper, JawsPressAsTheReferenceAndTheReactionIsMinusWhatTheTissueReceives)
     }
 }
 
-// A whole grasp past the slip (700 ticks of 10 steps): the AVX-512 kernel
+// A whole grasp past the slip (700 ticks of 10 steps): the simd kernel
 // in double follows the generic one tick by tick; float follows double in
 // what the grasp does (its peak pull and its mean force), not tick by tick:
 // the pull is the small difference of the jaws' large opposing forces (even

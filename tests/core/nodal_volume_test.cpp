@@ -1,7 +1,7 @@
 // The averaged nodal volume term (Model::point_volume_k, docs/physics.md):
 // its energy and forces, the generic CPU kernel and the scatter step against
 // the double reference, the rest state, topology rebuilds, and dt_crit
-// against the integrator. The AVX-512 kernels' nodal term is tested with
+// against the integrator. The simd kernel's nodal term is tested with
 // the kernels (cpu_kernel_test.cpp, cpu_kernel_double_test.cpp).
 #include <gtest/gtest.h>
 

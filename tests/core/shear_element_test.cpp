@@ -3,7 +3,7 @@
 // energy and forces (finite differences, rotation invariance, small-strain
 // moduli), the generic CPU kernel and the scatter step against the double
 // reference, the rest state, topology rebuilds, dt_crit and its Gershgorin
-// bound against the exact spectrum, and the routing away from AVX-512.
+// bound against the exact spectrum, and the simd kernel running it.
 #include <gtest/gtest.h>
 
 // GCC 12's AVX-512 intrinsics fill unused operands with _mm256_undefined_pd(),

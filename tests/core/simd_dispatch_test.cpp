@@ -45,7 +45,7 @@ TEST_F(SimdDispatch, TheBestSupportedTargetIsTheDefaultAndDeviceNamesIt) {
   EXPECT_EQ(default_simd_target(), supported.front());
 #if defined(__x86_64__) && !defined(__SSE4_1__)
   // The portable build (for the x86-64 baseline) carries the fallback, which
-  // runs everywhere and is last, and SSE4, AVX2 and AVX-512.
+  // runs everywhere and is last, and SSE4, AVX2 and AVX3 (AVX-512).
   EXPECT_TRUE(supported.back().name == "scalar" || supported.back().name == "emu128") << supported.back().name;
   for (const char* name : {"sse4", "avx2", "avx3"})
     EXPECT_NE(std::find_if(compiled.begin(), compiled.end(), [&](const SimdTarget& t) { return t.name == name; }),

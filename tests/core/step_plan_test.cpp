@@ -89,9 +89,8 @@ TEST(StepPlan, EveryCpuKernelNamesThePlansPasses) {
   }
 }
 
-// A rebuild recomputes the plan: sutures appear in it, and a plan with
-// sutures is one the AVX-512 kernels refuse, so the backend moves to the
-// generic kernel with the same passes.
+// A rebuild recomputes the plan: sutures appear in it, and the backend
+// keeps the simd kernel with the same passes.
 TEST(StepPlan, RebuildWithSuturesRecomputesThePlan) {
   const Scene scene = scenes()[2];
   const Model model = scene_model(scene);

