@@ -106,7 +106,8 @@ struct CpuPrepared final : PreparedModel {
 
 template <class Real>
 class CpuBackend final : public Backend {
-  // Lanes evaluated together: one 512-bit register of Real.
+  // The generic kernel's lanes evaluated together: 64 bytes of Real (the
+  // simd kernel has its own target's register width, SimdKernel::lanes()).
   static constexpr int32_t kLanes = 64 / static_cast<int32_t>(sizeof(Real));
   using Tables = CpuTables<Real>;
 
