@@ -2,7 +2,7 @@
 // The CPU backend's step: one SIMD kernel written once on Google Highway
 // (cpu_kernel_simd.cpp, simd_records-inl.h), compiled for several
 // instruction sets into one binary (SSE4, AVX2 and AVX-512 on x86-64, NEON
-// on arm64, and Highway's portable EMU128), the best the CPU has chosen at
+// on arm64, and Highway's portable fallback), the best the CPU has chosen at
 // run time unless a lower one is asked for (ORGANSIM_SIMD, --simd).
 // One register of points at a time (4 to 16 floats, half as many doubles),
 // one template for both precisions (docs/architecture.md, "The CPU

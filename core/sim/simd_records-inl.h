@@ -121,7 +121,7 @@ HWY_INLINE V<float> inv_length(V<float> len2) { return rsqrt_float(Tag<float>(),
 HWY_INLINE V<double> inv_length(V<double> len2) {
   const Tag<double> d;
   const V<double> half_x = splat(0.5) * len2;
-#if HWY_TARGET <= HWY_AVX3 && HWY_ARCH_X86
+#if HWY_TARGET == HWY_AVX3
   // AVX-512 has a 14-bit estimate in double: two steps (14 -> 28 -> 56 bits).
   V<double> y{_mm512_maskz_rsqrt14_pd(_mm512_cmp_pd_mask(len2.raw, _mm512_setzero_pd(), _CMP_GT_OQ), len2.raw)};
   (void)d;
@@ -399,33 +399,43 @@ HWY_INLINE void gather_values(const Real* base, const int32_t* q, V<Real> (&a)[N
 #endif
 }
 
+#if !ORGANSIM_SIMD_NARROW
+// The inverse transpose of gather_values: out[v0 / kPerBlock][l] is the
+// block of values v0.. v0 + kPerBlock - 1 of lane l, from a[j] (value j
+// of every lane).
+template <int R, class Real>
+HWY_INLINE void lane_blocks(const V<Real> (&a)[R], hn::Vec<hn::Full128<Real>> (&out)[R / kPerBlock<Real>][kLanes<Real>]) {
+  constexpr int32_t P = kPerBlock<Real>, B = kLanes<Real> / P;
+  for (int v0 = 0; v0 < R; v0 += P) {
+    V<Real> in[P], r[P];
+    for (int32_t j = 0; j < P; ++j) in[j] = a[v0 + j];
+    transpose_blocks(in, r);
+    for (int32_t i = 0; i < P; ++i) {
+      hn::Vec<hn::Full128<Real>> blocks[B];
+      split_blocks(Tag<Real>(), r[i], blocks);
+      for (int32_t k = 0; k < B; ++k) out[v0 / P][P * k + i] = blocks[k];
+    }
+  }
+}
+#endif
+
 // The inverse for kLanes consecutive points: their records of R values
 // (R a multiple of 4) at out from a[j] (value j of every lane).
 template <int R, class Real>
 HWY_INLINE void store_values(Real* out, const V<Real> (&a)[R]) {
-  constexpr int32_t P = kPerBlock<Real>, N = kLanes<Real>;
+  constexpr int32_t N = kLanes<Real>;
 #if ORGANSIM_SIMD_NARROW
-  (void)P;
   alignas(16) Real lanes[N];
   for (int j = 0; j < R; ++j) {
     store(lanes, a[j]);
     for (int32_t l = 0; l < N; ++l) out[R * l + j] = lanes[l];
   }
 #else
-  {
-    constexpr int32_t B = N / P;
-    using Block = hn::Vec<hn::Full128<Real>>;
-    for (int v0 = 0; v0 < R; v0 += P) {
-      V<Real> in[P], r[P];
-      for (int32_t j = 0; j < P; ++j) in[j] = a[v0 + j];
-      transpose_blocks(in, r);
-      for (int32_t i = 0; i < P; ++i) {
-        Block blocks[B];
-        split_blocks(Tag<Real>(), r[i], blocks);
-        for (int32_t k = 0; k < B; ++k) hn::StoreU(blocks[k], hn::Full128<Real>(), out + R * (P * k + i) + v0);
-      }
-    }
-  }
+  constexpr int32_t P = kPerBlock<Real>;
+  hn::Vec<hn::Full128<Real>> blocks[R / P][N];
+  lane_blocks<R, Real>(a, blocks);
+  for (int v0 = 0; v0 < R; v0 += P)
+    for (int32_t l = 0; l < N; ++l) hn::StoreU(blocks[v0 / P][l], hn::Full128<Real>(), out + R * l + v0);
 #endif
 }
 
@@ -435,39 +445,24 @@ HWY_INLINE void store_values(Real* out, const V<Real> (&a)[R]) {
 // stays zero (they add zero).
 template <class Real>
 HWY_INLINE void scatter_add(Real* force, const int32_t* q, const V<Real> (&f)[3]) {
-  constexpr int32_t P = kPerBlock<Real>, N = kLanes<Real>;
 #if ORGANSIM_SIMD_AVX3
-  (void)P, (void)N;
   avx3_scatter_add(force, q, f);
 #elif ORGANSIM_SIMD_NARROW
-  (void)P;
+  constexpr int32_t N = kLanes<Real>;
   alignas(16) Real lanes[3][N];
   for (int j = 0; j < 3; ++j) store(lanes[j], f[j]);
   for (int32_t l = 0; l < N; ++l)
     for (int j = 0; j < 3; ++j) force[q[l] + j] += lanes[j][l];
 #else
-  {
-    constexpr int32_t B = N / P;
-    const hn::Full128<Real> d128;
-    using Block = hn::Vec<hn::Full128<Real>>;
-    const V<Real> a[4] = {f[0], f[1], f[2], zero<Real>()};
-    Block sum[4 / P][N];  // per block of values, per lane
-    for (int v0 = 0; v0 < 4; v0 += P) {
-      V<Real> in[P], r[P];
-      for (int32_t j = 0; j < P; ++j) in[j] = a[v0 + j];
-      transpose_blocks(in, r);
-      for (int32_t i = 0; i < P; ++i) {
-        Block blocks[B];
-        split_blocks(Tag<Real>(), r[i], blocks);
-        for (int32_t k = 0; k < B; ++k) {
-          const int32_t l = P * k + i;
-          sum[v0 / P][l] = hn::Add(hn::LoadU(d128, force + q[l] + v0), blocks[k]);
-        }
-      }
-    }
-    for (int v0 = 0; v0 < 4; v0 += P)
-      for (int32_t l = 0; l < N; ++l) hn::StoreU(sum[v0 / P][l], d128, force + q[l] + v0);
-  }
+  constexpr int32_t P = kPerBlock<Real>, N = kLanes<Real>;
+  const hn::Full128<Real> d128;
+  const V<Real> a[4] = {f[0], f[1], f[2], zero<Real>()};
+  hn::Vec<hn::Full128<Real>> sum[4 / P][N];  // per block of values, per lane
+  lane_blocks<4, Real>(a, sum);
+  for (int v0 = 0; v0 < 4; v0 += P)
+    for (int32_t l = 0; l < N; ++l) sum[v0 / P][l] = hn::Add(hn::LoadU(d128, force + q[l] + v0), sum[v0 / P][l]);
+  for (int v0 = 0; v0 < 4; v0 += P)
+    for (int32_t l = 0; l < N; ++l) hn::StoreU(sum[v0 / P][l], d128, force + q[l] + v0);
 #endif
 }
 
