@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "core/util/error.h"
+#include "meshing/gzip_stream.h"
 #include "meshing/label_image.h"
 
 namespace organsim::image_io {
@@ -40,6 +41,9 @@ std::vector<int32_t> copy_inr_labels(const _image& im, int64_t count, const std:
 // name: a .inr that is really a PGM reached the PGM reader, which hung on a
 // header the fuzzer made (tests/fuzz/regressions/inr). Only INR is read
 // here: the file, inflated if gzipped, must start with INR's header line.
+// An INR header is one or more blocks of 256 bytes.
+constexpr int64_t kInrHeaderBytes = 256;
+
 void require_inr_header(const std::filesystem::path& path, const std::string& source) {
   constexpr std::string_view kMagic = "#INRIMAGE-4#{";
   gzFile file = gzopen(path.c_str(), "rb");
@@ -70,6 +74,13 @@ LabelImage read_inr(const std::filesystem::path& path, const std::string& source
   const auto file_bytes = static_cast<int64_t>(std::filesystem::file_size(path, ec));
   if (ec) throw input_error(source, "cannot read its size: " + ec.message());
   check_data_size(image.voxel_count(), static_cast<int>(im->wdim), max_data_bytes(file_bytes, im->openMode == OM_GZ), source);
+  if (is_gzip_file(path)) {
+    // ImageIO inflates the data it needs and stops: a missing tail or
+    // trailer would go unseen. The stream is read whole first.
+    require_whole_gzip(path, source, 0, kInrHeaderBytes + image.voxel_count() * im->wdim,
+                       "a header of at least " + std::to_string(kInrHeaderBytes) + " bytes + " + std::to_string(image.voxel_count()) +
+                           " voxels of " + std::to_string(im->wdim) + " bytes");
+  }
   if (_readImageData(im.get()) != 1) {
     throw input_error(source, "the voxel data is shorter than the header says (" + std::to_string(image.voxel_count()) +
                                   " voxels of " + std::to_string(im->wdim) + " bytes)");

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/util/error.h"
+#include "meshing/gzip_stream.h"
 #include "meshing/label_image.h"
 
 namespace organsim::image_io {
@@ -76,6 +77,12 @@ LabelImage read_nifti(const std::filesystem::path& path, const std::string& sour
   }
   const int64_t offset = compressed ? 0 : static_cast<int64_t>(nim->iname_offset);
   check_data_size(image.voxel_count(), nim->nbyper, max_data_bytes(file_bytes - offset, compressed), source);
+  if (compressed) {
+    // libniftiio zero-fills what a short stream lacks: it is read whole first.
+    require_whole_gzip(path, source, 0, nim->iname_offset + image.voxel_count() * nim->nbyper,
+                       "vox_offset " + std::to_string(nim->iname_offset) + " + " + std::to_string(image.voxel_count()) +
+                           " voxels of " + std::to_string(nim->nbyper) + " bytes");
+  }
   if (nifti_image_load(nim.get()) != 0 || nim->data == nullptr) {
     throw input_error(source, "the voxel data is shorter than the header says (" + std::to_string(image.voxel_count()) +
                                   " voxels of " + std::to_string(nim->nbyper) + " bytes)");

@@ -7,10 +7,12 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <string>
 
 #include "core/util/error.h"
+#include "meshing/gzip_stream.h"
 #include "meshing/label_image.h"
 
 namespace organsim::image_io {
@@ -87,6 +89,35 @@ int64_t data_file_bytes(const std::filesystem::path& path, const NrrdIoState& ni
     total += static_cast<int64_t>(bytes);
   }
   return total;
+}
+
+// teem inflates the voxels it needs and stops there: a gzip stream missing
+// its tail or its trailer (CRC-32, length) reads as whole. Each stream is
+// read to its end first. The data follows the header's first empty line in
+// the file itself, or fills the detached data files (without skips).
+constexpr size_t kMaxHeaderBytes = 1 << 20;  // a NRRD header is a few hundred bytes of text
+
+void require_whole_gzip_data(const std::filesystem::path& path, const NrrdIoState& nio, int64_t data_bytes,
+                             const std::string& source) {
+  const std::string what = std::to_string(data_bytes) + " bytes of voxels";
+  if (nio.dataFNArr == nullptr || nio.dataFNArr->len == 0) {
+    std::ifstream in(path, std::ios::binary);
+    std::string text(kMaxHeaderBytes, '\0');
+    in.read(text.data(), static_cast<std::streamsize>(text.size()));
+    text.resize(static_cast<size_t>(in.gcount()));
+    size_t end = text.find("\n\n");
+    size_t crlf = text.find("\r\n\r\n");
+    if (end == std::string::npos && crlf == std::string::npos) {
+      throw input_error(source, "no empty line ends the header within its first MiB");
+    }
+    const int64_t offset = crlf < end ? static_cast<int64_t>(crlf + 4) : static_cast<int64_t>(end + 2);
+    require_whole_gzip(path, source, offset, data_bytes, what);
+    return;
+  }
+  if (nio.dataFNArr->len != 1 || nio.lineSkip != 0 || nio.byteSkip != 0) return;  // teem's own checks only
+  std::filesystem::path file(nio.dataFN[0]);
+  if (file.is_relative()) file = path.parent_path() / file;
+  require_whole_gzip(file, file.string(), 0, data_bytes, what);
 }
 
 // 3D Slicer's .seg.nrrd: "SegmentN_LabelValue" and "SegmentN_Name" for N = 0, 1, ...
@@ -177,6 +208,8 @@ LabelImage read_nrrd(const std::filesystem::path& path, const std::string& sourc
   const bool bzip2 = nio->encoding == nrrdEncodingBzip2;  // no useful bound on its expansion
   const int64_t max_bytes = file_bytes < 0 || bzip2 ? INT64_MAX / 2 : max_data_bytes(file_bytes, nio->encoding->isCompression);
   check_data_size(voxels, static_cast<int>(nrrdTypeSize[header->type]), max_bytes, source);
+
+  if (nio->encoding == nrrdEncodingGzip) require_whole_gzip_data(path, *nio, voxels * nrrdTypeSize[header->type], source);
 
   std::unique_ptr<Nrrd, NrrdFree> nrrd(nrrdNew());
   if (nrrdLoad(nrrd.get(), path.c_str(), nullptr) != 0) {

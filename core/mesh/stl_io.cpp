@@ -48,7 +48,9 @@ TriangleMesh read_stl_ascii(std::string_view text, const std::string& source) {
   Welder welder(mesh);
   if (in.next("'solid'") != "solid") in.fail("expected 'solid'");
   in.skip_line();  // the solid's name
-  while (!in.at_end()) {
+  // Each solid ends with "endsolid": a file cut short ends without it.
+  while (true) {
+    if (in.at_end()) in.fail("the file ends without 'endsolid' (cut short?)");
     const std::string_view word = in.next("'facet' or 'endsolid'");
     if (word == "endsolid") {
       in.skip_line();

@@ -225,6 +225,23 @@ TEST(MeshCli, UsageErrorsExitWithTheUsageCode) {
   EXPECT_EQ(other_files(dir, "sphere.off").size(), 0u);
 }
 
+// The phantom cut short as an interrupted download leaves it, to a third
+// of its bytes and without only its 8-byte gzip trailer (CRC-32 and length):
+// both are refused naming the file, and an existing output is left as it was.
+TEST(MeshImageCli, AGzippedImageCutShortIsRefusedAndTheOldOutputKept) {
+  const auto dir = testing::fresh_test_dir("mesh_image_cli_cut");
+  const std::string phantom = read_text_file(std::string(ORGANSIM_SOURCE_DIR) + "/examples/phantom.nii.gz");
+  write_fixture(dir / "out.vtu", "an earlier mesh");
+  const std::pair<const char*, size_t> cuts[] = {{"third.nii.gz", phantom.size() / 3}, {"no_trailer.nii.gz", phantom.size() - 8}};
+  for (const auto& [name, bytes] : cuts) {
+    write_fixture(dir / name, phantom.substr(0, bytes));
+    const CliRun r = run_organsim("mesh " + (dir / name).string() + " -o " + (dir / "out.vtu").string(), dir);
+    EXPECT_EQ(r.exit_code, 3) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(std::string(name) + ": the gzip stream is cut short"), std::string::npos) << r.err;
+    EXPECT_TRUE(read_text_file(dir / "out.vtu") == "an earlier mesh") << name << ": the earlier output was replaced";
+  }
+}
+
 }  // namespace
 }  // namespace organsim
 
