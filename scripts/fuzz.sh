@@ -1,23 +1,33 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses of tests/fuzz/harnesses.txt with clang-14
 # (ASan + UBSan) into ${ORGANSIM_FUZZ_BUILD_DIR:-build-fuzz} and runs each one.
-#   scripts/fuzz.sh [--seconds S | --runs N] [NAME...]
-# --seconds S: each harness for S seconds (default 10); --runs N: N inputs
-# each. NAMEs pick rows of the table (default: all). ORGANSIM_FUZZ_JOBS
-# harnesses run at once (default 2). The corpus grows in
-# BUILD/corpus/NAME between runs; a crash, hang or sanitizer report leaves
-# its input in BUILD/artifacts/NAME/ and makes the script fail. Prints one
-# line per harness: executions, coverage (edges), corpus size, result.
+#   scripts/fuzz.sh [--seconds S | --runs N] [--seed K] [NAME...]
+# --seconds S: a campaign, each harness for S seconds (default 10), its
+# corpus growing in BUILD/corpus/NAME between campaigns. --runs N: a
+# reproducible pass (what scripts/test.sh runs): each harness replays its
+# seeds, then makes N inputs from them with libFuzzer's seed K (default 1),
+# in a fresh corpus, so the same tree gives the same inputs every time.
+# The seeds: the hand-made files (tests/fuzz/corpus/NAME), the inputs of
+# past findings (tests/fuzz/regressions/NAME), the row's globs, and each of
+# those cut short at k * size / 11 (k = 1..10) and by its last byte, as the
+# truncation test cuts them. NAMEs pick rows of the table (default: all).
+# ORGANSIM_FUZZ_JOBS harnesses run at once (default 2). A crash, hang or
+# sanitizer report leaves its input in BUILD/artifacts/NAME/ and makes the
+# script fail. Prints one line per harness: executions, coverage (edges),
+# corpus size, result.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ORGANSIM_FUZZ_BUILD_DIR:-$root/build-fuzz}
 limit=(-max_total_time=10)
+reproducible=0
+seed=  # libFuzzer's -seed: 1 for --runs, random (0) for a campaign, unless given
 names=()
 while [ $# -gt 0 ]; do
   case $1 in
-    --seconds) limit=(-max_total_time="$2"); shift 2 ;;
-    --runs) limit=(-runs="$2"); shift 2 ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    --seconds) limit=(-max_total_time="$2"); reproducible=0; shift 2 ;;
+    --runs) limit=(-runs="$2"); reproducible=1; shift 2 ;;
+    --seed) seed=$2; shift 2 ;;
+    -h|--help) sed -n '2,18p' "$0"; exit 0 ;;
     *) names+=("$1"); shift ;;
   esac
 done
@@ -32,25 +42,53 @@ CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_T
   -DORGANSIM_FUZZ=ON -DORGANSIM_BUILD_TESTS=OFF -DORGANSIM_WERROR=OFF >/dev/null
 cmake --build "$build" --target organsim_fuzz -j "${ORGANSIM_JOBS:-2}"
 
+seed=${seed:-$reproducible}
+# A reproducible pass also runs without address-space randomisation:
+# libFuzzer learns from compared values, and pointers are among them.
+fixed_layout=(env)
+if [ "$reproducible" = 1 ] && setarch "$(uname -m)" -R true 2>/dev/null; then fixed_layout=(setarch "$(uname -m)" -R); fi
+
 # Leaks are bugs too; a hang is an input taking over 10 s; 2 GB of memory
 # is far more than any input of at most 64 KiB should need.
 options=(-timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1)
 # Leaks inside Debian's image libraries on their error paths, named one by one.
 export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+
+# Writes the cuts of every file in folder $1 beside it: cut_K_FILE holds
+# the first K * size / 11 bytes (K = 1..10), cut_last_FILE all but the last.
+add_cuts() {
+  local file size k
+  for file in "$1"/*; do
+    [ -f "$file" ] || continue
+    size=$(stat -c %s "$file")
+    [ "$size" -ge 2 ] || continue
+    for k in 1 2 3 4 5 6 7 8 9 10; do
+      head -c $((k * size / 11)) "$file" >"$1/cut_${k}_$(basename "$file")"
+    done
+    head -c $((size - 1)) "$file" >"$1/cut_last_$(basename "$file")"
+  done
+}
+
 # Runs harness $1, its log in BUILD/logs/NAME.log and its result line in
-# BUILD/logs/NAME.result. Seeds: the hand-made files and the inputs of past
-# findings (tests/fuzz/regressions), then the row's globs ($2).
+# BUILD/logs/NAME.result, from the seeds of the row (globs $2).
 fuzz_one() {
   local name=$1 seeds=$2
   local corpus=$build/corpus/$name artifacts=$build/artifacts/$name seed_dir=$build/seeds/$name
-  mkdir -p "$corpus" "$artifacts" "$seed_dir" "$build/logs"
+  rm -rf "$seed_dir"
+  mkdir -p "$artifacts" "$seed_dir" "$build/logs"
   cp "$root"/tests/fuzz/corpus/"$name"/* "$root"/tests/fuzz/regressions/"$name"/* "$seed_dir"/ 2>/dev/null || true
   for pattern in $seeds; do
     # shellcheck disable=SC2086  # the pattern is a glob on purpose
     cp $root/$pattern "$seed_dir"/
   done
+  add_cuts "$seed_dir"
+  if [ "$reproducible" = 1 ]; then
+    corpus=$build/corpus_reproducible/$name
+    rm -rf "$corpus"
+  fi
+  mkdir -p "$corpus"
   local log=$build/logs/$name.log result=ok
-  if ! "$build/tests/fuzz/organsim_fuzz_$name" "${limit[@]}" "${options[@]}" -artifact_prefix="$artifacts/" \
+  if ! ORGANSIM_FUZZ_IMAGE_DIR=$build/image_files/$name "${fixed_layout[@]}" "$build/tests/fuzz/organsim_fuzz_$name" "${limit[@]}" -seed="$seed" "${options[@]}" -artifact_prefix="$artifacts/" \
       "$corpus" "$seed_dir" >"$log" 2>&1; then
     result="FAILED: $(ls -t "$artifacts" | head -1 | sed "s|^|$artifacts/|"), log $log"
   fi

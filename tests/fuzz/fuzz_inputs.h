@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -211,8 +212,14 @@ inline size_t sweep_case_bound(std::string_view text) {
 // errors name that path. An accepted image is consistent.
 inline LabelImage label_image_input(std::string_view bytes, const std::string& source,
                                     std::filesystem::path* written = nullptr) {
+  // ORGANSIM_FUZZ_IMAGE_DIR (scripts/fuzz.sh: one per harness) keeps the
+  // path, and so the error messages the fuzzer compares, the same from run
+  // to run; else a folder of this process.
   static const std::filesystem::path dir = [] {
-    const auto d = std::filesystem::temp_directory_path() / ("organsim_fuzz_image_" + std::to_string(getpid()));
+    const char* fixed = std::getenv("ORGANSIM_FUZZ_IMAGE_DIR");
+    const auto d = fixed != nullptr && *fixed != 0
+                       ? std::filesystem::path(fixed)
+                       : std::filesystem::temp_directory_path() / ("organsim_fuzz_image_" + std::to_string(getpid()));
     std::filesystem::create_directories(d);
     return d;
   }();
