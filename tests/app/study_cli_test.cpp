@@ -1,10 +1,13 @@
 // `organsim study` end to end on the small gentle-push box: the reference
 // converges, a dt above dt_crit is reported unstable with its reason, stable
-// runs have small errors that shrink with dt, and the three files are there;
+// runs have small errors that shrink with dt, and the three files are there
+// (the plot read back by its pixels: each run where its numbers say);
 // sharded, collected, it gives the same table.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +15,10 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+#include "tests/app/plot_pixels.h"
+#endif
 
 namespace {
 
@@ -27,6 +34,96 @@ int run(const std::string& args, std::string& output) {
   const int status = pclose(pipe);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
+
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+// study.png read back by its pixels (app/study_tables.cpp draws it): inside
+// the black frame, x is log10 of wall seconds per simulated second and y
+// log10 of the RMS position error, each axis spanning the whole decades
+// around the stable runs (at least one); every stable run is a filled disc
+// of radius 5 in its series' colour (the series in order of first
+// appearance: (200, 80, 30) BGR, then (30, 140, 230)), ringed in black at
+// radius 10 on the Pareto front. Checked: a disc of the run's colour where
+// its two numbers put it (the plot truncates to whole pixels), no disc of a
+// series' colour anywhere else in the frame, and the ring exactly around
+// the Pareto runs. A disc that a later run's disc of another series covers
+// (centres within 11 px) is not looked for.
+void expect_study_plot_shows_the_runs(const fs::path& png, const nlohmann::json& study) {
+  const cv::Mat img = cv::imread(png.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty()) << png;
+  const cv::Scalar black(0, 0, 0), colours[] = {{200, 80, 30}, {30, 140, 230}};
+  const cv::Rect frame = organsim::test::find_frame(img, black);
+  ASSERT_GT(frame.width, 200);
+  ASSERT_GT(frame.height, 200);
+  struct Run {
+    double lx, ly;
+    size_t series;
+    bool pareto;
+    cv::Point2d at;
+  };
+  std::vector<Run> runs;
+  std::vector<std::string> series;
+  for (const auto& r : study["runs"]) {
+    if (!r["stable"].get<bool>() || !(r["position_error_rms"].get<double>() > 0)) continue;
+    const std::string name = r["backend"].get<std::string>() + " " + r["precision"].get<std::string>();
+    const auto it = std::find(series.begin(), series.end(), name);
+    if (it == series.end()) series.push_back(name);
+    runs.push_back({std::log10(r["wall_seconds_per_simulated_second"].get<double>()),
+                    std::log10(r["position_error_rms"].get<double>()),
+                    static_cast<size_t>(std::find(series.begin(), series.end(), name) - series.begin()),
+                    r["pareto"].get<bool>(), {}});
+  }
+  ASSERT_GE(runs.size(), 2u);
+  ASSERT_LE(series.size(), 2u);
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  for (const Run& r : runs) x0 = std::min(x0, r.lx), x1 = std::max(x1, r.lx), y0 = std::min(y0, r.ly), y1 = std::max(y1, r.ly);
+  x0 = std::floor(x0), x1 = std::max(std::ceil(x1), x0 + 1), y0 = std::floor(y0), y1 = std::max(std::ceil(y1), y0 + 1);
+  for (Run& r : runs)
+    r.at = {frame.x + (r.lx - x0) / (x1 - x0) * frame.width, frame.y + frame.height - (r.ly - y0) / (y1 - y0) * frame.height};
+  auto covered = [&](size_t i) {
+    for (size_t j = i + 1; j < runs.size(); ++j)
+      if (runs[j].series != runs[i].series && cv::norm(runs[j].at - runs[i].at) < 11) return true;
+    return false;
+  };
+  for (size_t s = 0; s < series.size(); ++s) {
+    // Every disc of the series' colour (lines and text opened away) is one
+    // of its runs'. Rings, the front's line and the labels drawn over a
+    // disc move its visible part's centre by up to ~4 px, a disc covered by
+    // another series' by up to ~8.
+    const std::vector<cv::Point2d> found =
+        organsim::test::blobs(organsim::test::colour_mask(img, colours[s], 8, frame, 3), 12, 6);
+    EXPECT_FALSE(found.empty()) << series[s];
+    for (const cv::Point2d& b : found) {
+      bool expected = false;
+      for (size_t i = 0; i < runs.size(); ++i)
+        expected |= runs[i].series == s && cv::norm(b - runs[i].at) < (covered(i) ? 10 : 6);
+      EXPECT_TRUE(expected) << series[s] << ": a disc at (" << b.x << ", " << b.y << ") px where no run is";
+    }
+  }
+  // Every run's disc is where its numbers put it: at least a quarter of the
+  // disc (81 px) in its colour within 5 px of that point.
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (covered(i)) continue;
+    int in_colour = 0;
+    for (int dy = -5; dy <= 5; ++dy)
+      for (int dx = -5; dx <= 5; ++dx) {
+        const int x = static_cast<int>(std::lround(runs[i].at.x)) + dx, y = static_cast<int>(std::lround(runs[i].at.y)) + dy;
+        if (dx * dx + dy * dy <= 25 && organsim::test::near_colour(img.at<cv::Vec3b>(y, x), colours[runs[i].series], 8))
+          ++in_colour;
+      }
+    EXPECT_GE(in_colour, 20) << series[runs[i].series] << ": no disc at (" << runs[i].at.x << ", " << runs[i].at.y << ") px";
+  }
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const double ring = organsim::test::ring_share(img, runs[i].at, 10, black, 60);
+    bool near_front = false;
+    for (size_t j = 0; j < runs.size(); ++j) near_front |= j != i && runs[j].pareto && cv::norm(runs[j].at - runs[i].at) < 24;
+    if (runs[i].pareto) {
+      EXPECT_GT(ring, 0.5) << "run " << i << " on the Pareto front has no ring";
+    } else if (!near_front) {
+      EXPECT_LT(ring, 0.3) << "run " << i << " off the Pareto front is ringed";
+    }
+  }
+}
+#endif
 
 TEST(StudyCli, GentlePushStudy) {
   const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_gentle";
@@ -69,6 +166,9 @@ TEST(StudyCli, GentlePushStudy) {
   const auto& a = j["runs"][1];  // double, 0.5 ms
   const auto& b = j["runs"][2];  // double, 0.25 ms
   EXPECT_GT(a["position_error_rms"].get<double>(), 1.5 * b["position_error_rms"].get<double>());
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+  expect_study_plot_shows_the_runs(out / "study.png", j);
+#endif
 }
 
 // A tick of 2 ms (dt 0.4 ms x 5) lets `--dt 0.002` run as one 2 ms step per

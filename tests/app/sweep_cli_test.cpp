@@ -11,7 +11,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -19,6 +21,9 @@
 #include <thread>
 
 #include "tests/app/run_cli_test_util.h"
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+#include "tests/app/plot_pixels.h"
+#endif
 
 extern char** environ;
 
@@ -107,6 +112,65 @@ fs::path reference_sweep() {
   return dir / "out";
 }
 
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+// results.png read back by its pixels (app/sweep_collect.cpp, drawn by
+// core/render/xy_plot.cpp): peak_force against the first swept field
+// (material.young_modulus), one line per value of the other (the push's
+// end height, position2), the lines in the order of their names
+// ("position2=0.044", "position2=0.046"), coloured (200, 80, 30) and
+// (30, 140, 230) BGR, joining the cases in order of E. Read per column:
+// each line's row (the mean row of its colour there). A line runs from its
+// smallest E to its largest, so its first and last columns place E; the
+// rows at the cases' columns must then lie on one linear map of the peak
+// force, the same for both lines, growing upwards, and between the cases
+// each line must be straight. Within 1.5 px: the plot rounds to whole
+// pixels and the line's end is clipped at the frame. A swapped or flipped
+// axis, or a line drawn with another line's numbers, leaves the map.
+void expect_results_plot_shows_the_cases(const fs::path& png, const nlohmann::json& rows) {
+  const cv::Mat img = cv::imread(png.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty()) << png;
+  const cv::Rect frame = find_frame(img, cv::Scalar(30, 30, 30));
+  ASSERT_GT(frame.width, 200);
+  ASSERT_GT(frame.height, 200);
+  const cv::Scalar colours[] = {{200, 80, 30}, {30, 140, 230}};
+  const double heights[] = {0.044, 0.046};
+  std::vector<double> force, row;
+  for (int s = 0; s < 2; ++s) {
+    std::vector<std::pair<double, double>> cases;  // (E, peak force) of this line, by E
+    for (const auto& r : rows)
+      if (r["overrides"]["tool.keyframes[1].position[2]"].get<double>() == heights[s])
+        cases.push_back({r["overrides"]["material.young_modulus"].get<double>(), r["figures"]["peak_force"].get<double>()});
+    std::sort(cases.begin(), cases.end());
+    ASSERT_EQ(cases.size(), 3u) << "line " << s;
+    const std::vector<double> at = curve_rows(img, colours[s], 8, frame);
+    int first = -1, last = -1;
+    for (int c = 0; c < static_cast<int>(at.size()); ++c)
+      if (!std::isnan(at[c])) (first < 0 ? first : last) = c;
+    ASSERT_GE(first, 0) << "line " << s << " is not in the plot";
+    ASSERT_GT(last - first, frame.width / 2) << "line " << s << " spans " << last - first << " px";
+    const double e0 = cases.front().first, e1 = cases.back().first;
+    auto column_of = [&](double e) { return first + (e - e0) / (e1 - e0) * (last - first); };
+    for (const auto& [e, f] : cases) {
+      const int c = static_cast<int>(std::lround(column_of(e)));
+      ASSERT_FALSE(std::isnan(at[c])) << "line " << s << " has no pixel at E = " << e;
+      force.push_back(f), row.push_back(at[c]);
+    }
+    // Straight between the cases: every column within 1.5 px of the chord.
+    for (size_t i = 0; i + 1 < cases.size(); ++i) {
+      const double c0 = column_of(cases[i].first), c1 = column_of(cases[i + 1].first);
+      const double r0 = at[static_cast<int>(std::lround(c0))], r1 = at[static_cast<int>(std::lround(c1))];
+      for (int c = static_cast<int>(std::ceil(c0)) + 5; c < c1 - 5; ++c)  // clear of the markers
+        if (!std::isnan(at[c])) {
+          EXPECT_NEAR(at[c], r0 + (c - c0) / (c1 - c0) * (r1 - r0), 1.5) << "line " << s << ", column " << c;
+        }
+    }
+  }
+  const LineFit y = fit_line(force, row);
+  EXPECT_LT(y.b, 0) << "the force grows upwards";
+  EXPECT_LT(y.worst, 1.5) << "a case off the force axis' map by " << y.worst << " px";
+}
+#endif
+
 TEST(SweepCli, LocalSweepWritesEveryCaseManifestAndResults) {
   const fs::path out = reference_sweep();
   const nlohmann::json manifest = read_json(out / "manifest.json");
@@ -146,6 +210,9 @@ TEST(SweepCli, LocalSweepWritesEveryCaseManifestAndResults) {
   char magic[4] = {};
   png.read(magic, 4);
   EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+  expect_results_plot_shows_the_cases(out / "results.png", rows);
+#endif
 }
 
 TEST(SweepCli, RerunSkipsDoneCases) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -64,40 +65,95 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
   EXPECT_EQ(png.substr(1, 3), "PNG");
 }
 
-// The line-load case against its reference mesh: at the reference's own
-// cell size the ratio is 1 (the same mesh, CGAL's meshing is deterministic),
-// every row carries the 15 % target and its verdict in JSON and CSV. Run
-// alone (--cases line-load): no other case's rows.
-TEST(ValidateCli, LineLoadRowsCompareWithTheReferenceMeshAndCarryTheTarget) {
+// The line load's independent expectation: a 2-D estimate of a rigid
+// cylinder (radius R, pressed d) on an elastic layer of thickness h on a
+// rigid base, per unit length P. The contact is 2-D Hertz, half-width
+// a = sqrt(4 P R / (pi E')), pressure p0 sqrt(1 - x^2/a^2), p0 a = 2 P / pi;
+// its stresses on the axis are the half-space's (McEwen):
+//   sigma_z = -p0 a / sqrt(a^2 + z^2),
+//   sigma_x = -(p0 / a) ((a^2 + 2 z^2) / sqrt(a^2 + z^2) - 2 z),
+// and d is the shortening of the column under the axis down to the base,
+// the integral of -eps_z over 0..h:
+//   d = (2 P / (pi E)) (c1 asinh(h / a) - c2 (h sqrt(a^2 + h^2) - h^2) / a^2),
+// in plane strain (a body long along the axis: E' = E / (1 - nu^2),
+// c1 = 1 - nu^2, c2 = nu (1 + nu)) or plane stress (a thin one: E' = E,
+// c1 = 1, c2 = nu). Assumed: small strain, frictionless, the base's effect
+// on the stresses neglected (they are the half-space's down to h), the
+// body wide across the axis. The validation block (0.08 x 0.04 x 0.03 m,
+// the capsule across its 4 cm) is neither long nor thin: u_y = 0 everywhere
+// (plane strain) is a constraint it lacks, so plane strain is the stiffer
+// estimate, and its free ends make it stiffer than plane stress. Solved for
+// P by bisection (d grows with P); the force is P times the block's 4 cm.
+double line_load_estimate(double depth, double E, double nu, bool plane_strain) {
+  const double R = 0.005, h = 0.03, length = 0.04, kPi = 3.141592653589793;
+  const double e_prime = plane_strain ? E / (1 - nu * nu) : E;
+  const double c1 = plane_strain ? 1 - nu * nu : 1, c2 = plane_strain ? nu * (1 + nu) : nu;
+  auto depth_at = [&](double P) {
+    const double a = std::sqrt(4 * P * R / (kPi * e_prime));
+    return 2 * P / (kPi * E) * (c1 * std::asinh(h / a) - c2 * (h * std::sqrt(a * a + h * h) - h * h) / (a * a));
+  };
+  double lo = 1e-6, hi = 1e4;  // N/m
+  for (int i = 0; i < 200; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (depth_at(mid) < depth ? lo : hi) = mid;
+  }
+  return lo * length;
+}
+
+// The line-load case (nu 0.4, E 10 kPa) on 20 and 12 mm cells against an
+// 8 mm reference mesh, which neither shares. The 12 mm rows and the
+// reference lie within [0.9 x plane stress, plane strain] of the estimate
+// above: measured 0.96-1.12 of plane stress and 0.76-0.88 of plane strain
+// (the 2.5 mm mesh of docs/validation.md at nu 0.45: 0.97-1.08 and
+// 0.70-0.81); the 0.9 leaves room for the finer meshes' further fall (4-6 %
+// from 3.5 to 2.5 mm). Without the line layer the reference is 1.18-1.34
+// times plane strain at 1 and 2 mm, outside. The 12 mm rows are within the
+// 15 % target of the reference (measured 0.90-1.04); the 20 mm cells (141
+// points), three times the 7 mm contact strip, miss it at 4 mm (1.29). Each
+// row's verdict is checked against the 15 % written here.
+TEST(ValidateCli, LineLoadAgreesWithAFinerMeshAndLiesBetweenThePlaneStressAndPlaneStrainEstimates) {
+  constexpr double kTarget = 0.15, kReference = 0.008;
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_line_load";
   fs::remove_all(dir);
-  const auto r = test::run_organsim("validate --cell-size 0.02,0.012 --poisson-ratio 0.4 --line-load-reference 0.012 "
-                                    "--cases line-load -o " +
-                                        (dir / "out").string(),
+  const auto r = test::run_organsim("validate --cell-size 0.02,0.012 --poisson-ratio 0.4 --line-load-reference 0.008 "
+                                    "--cases line-load -o " + (dir / "out").string(),
                                     dir / "log");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(test::slurp(dir / "out" / "validation.json"));
-  EXPECT_EQ(j["line_load"]["reference_cell_size"].get<double>(), 0.012);
+  EXPECT_EQ(j["line_load"]["reference_cell_size"].get<double>(), kReference);
   EXPECT_EQ(j["cases"], nlohmann::json::array({"line-load"}));
-  int rows = 0, at_reference = 0;
-  for (const auto& row : j["rows"]) {
-    ASSERT_EQ(row["test"].get<std::string>().rfind("line load d=", 0), 0u) << row["test"];
-    ++rows;
-    const double error = row["error"];
-    EXPECT_GT(row["theory"].get<double>(), 0) << row["test"];
-    EXPECT_EQ(row["tolerance"].get<double>(), 0.15);
-    EXPECT_EQ(row["pass"].get<bool>(), std::abs(error - 1) <= 0.15) << row["test"] << " error " << error;
-    if (row["cell_size"].get<double>() == 0.012) {
-      EXPECT_NEAR(error, 1.0, 1e-12) << row["test"];
-      ++at_reference;
+  const double depths[] = {0.001, 0.002, 0.004};
+  ASSERT_EQ(j["rows"].size(), 2u * 3u);  // 2 cell sizes x depths 1, 2, 4 mm
+  int passed = 0;
+  for (size_t k = 0; k < j["rows"].size(); ++k) {
+    const auto& row = j["rows"][k];
+    const double depth = depths[k % 3], cell = row["cell_size"];
+    char test[48];
+    std::snprintf(test, sizeof test, "line load d=%gmm", depth * 1000);
+    ASSERT_EQ(row["test"], test);
+    EXPECT_EQ(cell, k < 3 ? 0.02 : 0.012);
+    const double measured = row["measured"], reference = row["theory"], error = row["error"];
+    EXPECT_NEAR(error, measured / reference, 1e-12);
+    EXPECT_EQ(row["tolerance"].get<double>(), kTarget);
+    EXPECT_EQ(row["pass"].get<bool>(), std::abs(measured / reference - 1) <= kTarget) << test << " at " << cell;
+    passed += row["pass"].get<bool>();
+    const double strain = line_load_estimate(depth, 10e3, 0.4, true), stress = line_load_estimate(depth, 10e3, 0.4, false);
+    EXPECT_GT(strain, stress);
+    EXPECT_GT(reference, 0.9 * stress) << test << ": the 8 mm reference against plane stress " << stress << " N";
+    EXPECT_LT(reference, strain) << test << ": the 8 mm reference against plane strain " << strain << " N";
+    if (cell == 0.012) {
+      EXPECT_GT(measured, 0.9 * stress) << test << " at 12 mm against plane stress " << stress << " N";
+      EXPECT_LT(measured, strain) << test << " at 12 mm against plane strain " << strain << " N";
+      EXPECT_TRUE(row["pass"].get<bool>()) << test << " at 12 mm: " << error;
     }
   }
-  EXPECT_EQ(rows, 2 * 3);  // 2 cell sizes x depths 1, 2, 4 mm
-  EXPECT_EQ(at_reference, 3);
+  EXPECT_FALSE(j["rows"][2]["pass"].get<bool>()) << "20 mm, d = 4 mm: " << j["rows"][2]["error"];
+  EXPECT_LT(passed, 6);
   const std::string csv = test::slurp(dir / "out" / "validation.csv");
   EXPECT_NE(csv.find("tolerance,pass\n"), std::string::npos);
   EXPECT_NE(csv.find("line load d=2mm,nu 0.40,0.012,"), std::string::npos);
-  EXPECT_NE(csv.find(",ratio,0.15,pass\n"), std::string::npos);  // at least the reference's own rows
+  EXPECT_NE(csv.find(",ratio,0.15,pass\n"), std::string::npos);
+  EXPECT_NE(csv.find(",ratio,0.15,fail\n"), std::string::npos);
 }
 
 TEST(ValidateCli, NegativeLineLoadReferenceIsAUsageError) {

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <fstream>
 
+#include "core/mesh/tet_mesh.h"
+#include "core/model/model.h"
+#include "core/model/stiffness.h"
 #include "core/scenario/scenario.h"
 #include "core/util/error.h"
 
@@ -313,6 +316,106 @@ TEST(ScenarioParse, ToolContactIsReadAndChecked) {
   j["tool"]["contact"] = "points";
   j["tool"]["mode"] = "pull";
   EXPECT_EQ(error_of(j), "scene.json: tool.contact: only used with \"mode\": \"push\"");
+}
+
+// --- material.poisson_ratio, volume_formulation, shear_formulation ------------
+// Each read, its refusal naming the field, and the value carried into the
+// Model that build_model makes from the parsed material (a 2 x 2 x 2 box of
+// 48 tets), so a parse branch that is dropped or maps to the wrong form shows.
+
+Model model_of(const json& j) {
+  return build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.02), 2, 2, 2), parse(j).material, ModelOptions{});
+}
+
+// poisson_ratio 0.45 with E = 8 kPa: from 1/4 up the springs carry
+// E_s = 2.5 E / (2 (1 + nu)) = 6896.55 Pa and the nodal volume term
+// K = E (4 nu - 1) / (2 (1 + nu) (1 - 2 nu)) = 22068.97 Pa (docs/validation.md,
+// "material.poisson_ratio"; the constants are written out here, not taken
+// from core/model/stiffness.h); every point's nodal stiffness times its rest
+// volume is K. Below 1/4 (0.1) the shear element is on and no volume term.
+TEST(ScenarioParse, PoissonRatioIsReadCheckedAndReachesTheModel) {
+  json j = minimal();
+  EXPECT_FALSE(parse(j).material.poisson_ratio.has_value());  // absent: springs plus volume_modulus
+  j["material"] = {{"young_modulus", 8000}, {"poisson_ratio", 0.45}};
+  EXPECT_DOUBLE_EQ(*parse(j).material.poisson_ratio, 0.45);
+  const Model m = model_of(j);
+  ASSERT_TRUE(m.material.poisson_ratio.has_value());
+  EXPECT_DOUBLE_EQ(*m.material.poisson_ratio, 0.45);
+  const double k_nodal = 8000 * (4 * 0.45 - 1) / (2 * 1.45 * (1 - 0.9));
+  EXPECT_NEAR(k_nodal, 22068.97, 0.01);
+  EXPECT_NEAR(spring_modulus(m.material), 2.5 * 8000 / (2 * 1.45), 1e-9);
+  ASSERT_EQ(m.point_volume_k.size(), static_cast<size_t>(m.npoint()));
+  EXPECT_TRUE(m.tet_k.empty());
+  EXPECT_TRUE(m.tet_shear_k.empty());
+  for (int32_t a = 0; a < m.npoint(); ++a)
+    EXPECT_NEAR(m.point_volume_k[a] * m.point_rest_volume[a], k_nodal, 1e-9 * k_nodal) << a;
+  // 0 and 0.2: the shear element, no volume term.
+  for (double nu : {0.0, 0.2}) {
+    j["material"]["poisson_ratio"] = nu;
+    EXPECT_DOUBLE_EQ(*parse(j).material.poisson_ratio, nu);
+    const Model low = model_of(j);
+    EXPECT_EQ(low.tet_shear_k.size(), low.tet_points.size()) << nu;
+    EXPECT_TRUE(low.tet_k.empty() && low.point_volume_k.empty()) << nu;
+  }
+  for (double nu : {-0.01, 0.5, 0.7}) {
+    j["material"]["poisson_ratio"] = nu;
+    EXPECT_NE(error_of(j).find("scene.json: material.poisson_ratio: expected a number in [0, 0.5)"), std::string::npos)
+        << nu;
+  }
+  j["material"] = {{"poisson_ratio", "0.3"}};
+  EXPECT_NE(error_of(j).find("material.poisson_ratio"), std::string::npos) << error_of(j);
+  j["material"] = {{"poisson_ratio", 0.3}, {"volume_modulus", 1000}};
+  EXPECT_NE(error_of(j).find("give poisson_ratio or volume_modulus, not both"), std::string::npos);
+  j["material"] = {{"poisson_ratio", 0.3}, {"spring_stiffness", 50}};
+  EXPECT_NE(error_of(j).find("poisson_ratio needs young_modulus, not spring_stiffness"), std::string::npos);
+}
+
+TEST(ScenarioParse, VolumeFormulationIsReadCheckedAndReachesTheModel) {
+  json j = minimal();
+  EXPECT_FALSE(parse(j).material.volume_formulation.has_value());  // absent: the material's default
+  j["material"] = {{"volume_modulus", 2000}, {"volume_formulation", "nodal"}};
+  EXPECT_EQ(*parse(j).material.volume_formulation, VolumeFormulation::Nodal);
+  Model m = model_of(j);
+  EXPECT_EQ(m.point_volume_k.size(), static_cast<size_t>(m.npoint()));
+  EXPECT_TRUE(m.tet_k.empty());
+  j["material"]["volume_formulation"] = "per_tet";
+  EXPECT_EQ(*parse(j).material.volume_formulation, VolumeFormulation::PerTet);
+  m = model_of(j);
+  EXPECT_EQ(m.tet_k.size(), m.tet_points.size());
+  EXPECT_TRUE(m.point_volume_k.empty());
+  // Per tet, each tet's stiffness times its rest volume is volume_modulus.
+  for (size_t t = 0; t < m.tet_k.size(); ++t) EXPECT_NEAR(m.tet_k[t] * m.tet_rest_volume[t], 2000, 1e-9) << t;
+  // With poisson_ratio the default is nodal, and per_tet overrides it.
+  j["material"] = {{"poisson_ratio", 0.45}, {"volume_formulation", "per_tet"}};
+  m = model_of(j);
+  EXPECT_EQ(m.tet_k.size(), m.tet_points.size());
+  EXPECT_TRUE(m.point_volume_k.empty());
+  j["material"] = {{"volume_modulus", 2000}, {"volume_formulation", "tet"}};
+  EXPECT_EQ(error_of(j), "scene.json: material.volume_formulation: expected \"per_tet\" or \"nodal\" (got \"tet\")");
+  j["material"]["volume_formulation"] = 1;
+  EXPECT_NE(error_of(j).find("material.volume_formulation"), std::string::npos) << error_of(j);
+}
+
+// Below nu = 1/4: smoothed by default (share 1/2 on node-averaged
+// gradients, docs/physics.md), per_tet asks for the plain element (share 0).
+TEST(ScenarioParse, ShearFormulationIsReadCheckedAndReachesTheModel) {
+  json j = minimal();
+  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::Smoothed);  // absent: smoothed
+  j["material"] = {{"poisson_ratio", 0.1}};
+  Model m = model_of(j);
+  EXPECT_EQ(m.shear_smoothed_share, 0.5);
+  EXPECT_EQ(m.point_shear_k.size(), static_cast<size_t>(m.npoint()));
+  j["material"]["shear_formulation"] = "per_tet";
+  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::PerTet);
+  m = model_of(j);
+  EXPECT_EQ(m.shear_smoothed_share, 0.0);
+  EXPECT_TRUE(m.point_shear_k.empty());
+  EXPECT_EQ(m.tet_shear_k.size(), m.tet_points.size());
+  j["material"]["shear_formulation"] = "smoothed";
+  EXPECT_EQ(parse(j).material.shear_formulation, ShearFormulation::Smoothed);
+  EXPECT_EQ(model_of(j).shear_smoothed_share, 0.5);
+  j["material"]["shear_formulation"] = "nodal";
+  EXPECT_EQ(error_of(j), "scene.json: material.shear_formulation: expected \"smoothed\" or \"per_tet\" (got \"nodal\")");
 }
 
 // tool.hertz_layer: on by default for a pushing sphere on the surface (and
