@@ -66,6 +66,7 @@ std::vector<std::pair<size_t, CutEvent>> take_one_tick_cuts(EventsDef& events, d
 
 LiveSession::LiveSession(LiveLink& link, LiveOptions options)
     : link_(link), o_(std::move(options)), refusals_(o_.log), command_refusals_(o_.log), device_(o_.device), current_(o_.start) {
+  if (!o_.clock) o_.clock = [] { return LiveClock::now(); };
   keyframes_.push_back({0.0, o_.start});
   scripted_applied_at_.resize(o_.scripted_cuts.size());
 }
@@ -82,7 +83,7 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
       stopped_by_ = "SIGINT";
       return std::nullopt;
     }
-    start_ = last_status_ = LiveClock::now();
+    start_ = last_status_ = o_.clock();
   }
   // The run loop's t0 for this tick is the last tick's t1, the same double.
   const double t_start = tick == 0 ? 0.0 : end_time_;
@@ -107,14 +108,14 @@ std::optional<Vec3> LiveSession::tool_at_end_of(int64_t tick, double t_end) {
 }
 
 void LiveSession::wait_until(LiveClock::time_point deadline) {
-  const LiveClock::time_point before = LiveClock::now();
+  const LiveClock::time_point before = o_.clock();
   pose_started_at_.reset();
   link_.receive_until(deadline, *this);
   if (before >= deadline) return;  // behind the clock: no wait
   // The loop ran again at the pose that started the tick or, without one,
   // now. A pose before the deadline ended the wait early (no wake-up to
   // record); one read in the link's last pass came after the clock woke it.
-  const LiveClock::time_point woke = pose_started_at_.value_or(LiveClock::now());
+  const LiveClock::time_point woke = pose_started_at_.value_or(o_.clock());
   if (woke >= deadline) wake_up_seconds_.push_back(seconds(woke - deadline));
 }
 
@@ -128,12 +129,20 @@ void LiveSession::cut_applied(double t0) {
   if (in_flight_.empty()) return;
   const auto [is_scripted, i] = in_flight_.front();
   in_flight_.pop_front();
+  // The tick that starts now (ticks_ were served before it).
   if (is_scripted) {
     scripted_applied_at_[i] = t0;
+    if (o_.log) {
+      const auto& [index, cut] = o_.scripted_cuts[i];
+      *o_.log << "organsim serve: the scenario's cut " << index;
+      if (!cut.name.empty()) *o_.log << " (\"" << cut.name << "\")";
+      *o_.log << " in the model from tick " << ticks_ << "\n";
+    }
     return;
   }
   cuts_[i].applied_at = t0;
-  cut_log_[i]["applied_tick"] = ticks_;  // the tick that starts now (ticks_ were served before it)
+  cut_log_[i]["applied_tick"] = ticks_;
+  if (o_.log) *o_.log << "organsim serve: " << cuts_[i].name << " in the model from tick " << ticks_ << "\n";
 }
 
 std::vector<std::pair<size_t, double>> LiveSession::scripted_applied() const {
@@ -227,7 +236,7 @@ bool LiveSession::on_pose(const ClientPose& pose) {
   if (pending_) ++superseded_;
   pending_ = pose;
   pending_position_ = p;
-  const LiveClock::time_point now = LiveClock::now();
+  const LiveClock::time_point now = o_.clock();
   if (now < early_) return false;
   if (!pose_started_at_) pose_started_at_ = now;
   return true;
@@ -264,6 +273,7 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   }
   Mat3 stiffness = info.held_stiffness;  // a pulling tool's, while it holds
   if (info.reaction.contacts > 0 && o_.tool.mode == ToolMode::Push) {
+    // CPU work, timed on the steady clock whatever the session's clock is.
     const LiveClock::time_point begin = LiveClock::now();
     backend.reaction_positions(stiffness_positions_);
     stiffness = tool_contact_stiffness(model, stiffness_positions_, o_.tool, recent_ends_.front().second,
@@ -272,7 +282,7 @@ void LiveSession::on_tick(const Model& model, Backend& backend, const TickInfo& 
   }
   link_.send_reaction(info.tick, info.t, o_.frame.client_direction(info.reaction.force),
                       o_.frame.client_direction(info.reaction.torque), o_.frame.client_matrix(stiffness));
-  const LiveClock::time_point now = LiveClock::now();
+  const LiveClock::time_point now = o_.clock();
   note_tick_wall(info.tick, seconds(now - (ticks_ == 0 ? start_ : last_reply_)));
   last_reply_ = now;
   ++ticks_;

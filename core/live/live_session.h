@@ -54,6 +54,16 @@ struct LiveOptions {
   // their index among its cuts, by start time: each is handed to the run at
   // its tick as a client's cut is, so that it is built off the tick's path.
   std::vector<std::pair<size_t, CutEvent>> scripted_cuts;
+  // The clock the session keeps its schedule on: the session's start, each
+  // tick's start and the deadlines it hands the link, the wake-ups, late
+  // ticks, reply latencies, slowest ticks and the status and surface
+  // intervals. It must be the clock the link's deadlines and receipt times
+  // are on. Empty: LiveClock::now, as IgtlServer (organsim serve). A test
+  // passes its fake link's clock, which moves only when the fake link says
+  // time passed, so that the timing rules are checked exactly, whatever
+  // the machine's scheduling. (The reply stiffness's CPU time is measured
+  // on LiveClock: it is work, not schedule.)
+  std::function<LiveClock::time_point()> clock;
 };
 
 // Whether `cut` is active over exactly one tick [i tick, (i + 1) tick] of the

@@ -39,7 +39,7 @@ TEST(IgtlServer, OneReceiveHandsOverEveryPoseAndCommandThatHasArrivedInOrder) {
       ASSERT_TRUE(client.send_text("Command", "CUT"));
     }
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // all three in the server's socket
+  ASSERT_TRUE(client.wait_until_received());  // all of them in the server's socket
   CountingSink sink;
   server.receive_until(LiveClock::now() - std::chrono::seconds(1), sink);
   ASSERT_EQ(sink.poses.size(), 3u);

@@ -4,8 +4,10 @@
 // our server is read by the library's own code, not by ours.
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <linux/sockios.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -129,6 +131,21 @@ class IgtlTestClient {
   }
   bool send_pose(const std::string& device, const std::array<float, 3>& p) { return send_bytes(transform(device, p)); }
   bool send_text(const std::string& device, const std::string& content) { return send_bytes(text(device, content)); }
+
+  // Waits up to `seconds` until every byte sent is in the server's socket
+  // (the kernel's send queue holds only bytes not yet acknowledged, and on
+  // loopback the server's side acknowledges what it has queued); false if
+  // that did not come.
+  bool wait_until_received(double seconds = 60) const {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (true) {
+      int unacknowledged = 0;
+      if (ioctl(fd_, SIOCOUTQ, &unacknowledged) != 0) return false;
+      if (unacknowledged == 0) return true;
+      if (std::chrono::steady_clock::now() > until) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
 
   // Reads what has arrived (waiting up to `wait_ms`), unpacking complete
   // messages into replies; false once the server has closed the connection.

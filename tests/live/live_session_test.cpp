@@ -27,40 +27,73 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Delivers the poses scripted for a tick when the session waits before it,
-// without waiting for any clock; raises `stop` before tick `stop_at`.
+// A link and its clock, scripted: the poses and commands of a tick arrive
+// in the session's first wait of that tick, on a fake clock that moves only
+// here. A wait that nothing ends runs out exactly at its deadline (as on an
+// idle machine, less the scheduler's delay), a pose arrives at the time the
+// clock shows, and a scripted slow client or late wake-up moves the clock
+// on by its milliseconds. The session's timing figures then follow from the
+// script alone, however loaded the machine is. Raises `stop` before tick
+// `stop_at`.
 class ScriptedLink : public LiveLink {
  public:
   std::map<int64_t, std::vector<ClientPose>> script;
   std::map<int64_t, std::vector<std::string>> texts;  // STRING commands, after the tick's poses
-  std::map<int64_t, int> pause_ms;  // a slow client: waits this long before delivering the tick's messages
-  // A loop that wakes late: waits this long past the deadline of the tick's
-  // first wait (when it is still ahead), then delivers; counted in `overslept`.
+  std::map<int64_t, int> pause_ms;  // a slow client: the clock moves on this long before the tick's messages arrive
+  // A loop that wakes late: the tick's first wait that starts ahead of its
+  // deadline runs out this long after it (then the tick's messages
+  // arrive, if not yet); counted in `overslept`.
   std::map<int64_t, int> oversleep_ms;
   int overslept = 0;
+  // Waits that started ahead of their deadline and ended at or after it (ran
+  // out, or a pose came after it): what the session counts as wake-ups.
+  int ran_out = 0;
+  // Real time for the change worker, which builds a cut off the tick's path
+  // at nice 19 and is swapped in at the first tick after it is done: from
+  // tick `await_change_from` on, until a change is in (`changed`, set by
+  // the ChangeSeen observer that serve() adds), each tick's first wait
+  // sleeps 1 ms, then twice as long as the tick before up to 1 s: a few
+  // milliseconds on an idle machine, about a minute in all over the
+  // cube's ticks when other work takes the cores. The fake clock does
+  // not move meanwhile.
+  int64_t await_change_from = -1;
+  bool changed = false;
+  // Each tick's step and reply take this long on the clock (it moves on when the reply is sent).
+  int work_us = 0;
   std::vector<std::pair<double, Vec3>> replies;  // (t, force)
   std::vector<Eigen::Matrix3d> stiffness;         // per reply
   int64_t stop_at = -1;
   std::atomic<bool> stop{false};
 
+  // The fake clock (LiveOptions::clock).
+  LiveClock::time_point now() const { return now_; }
+
   bool wait_for_client(const std::atomic<bool>&) override { return true; }
   void receive_until(LiveClock::time_point deadline, LivePoseSink& sink) override {
     const int64_t tick = static_cast<int64_t>(replies.size());
     if (tick == stop_at) stop = true;
-    if (delivered_ > tick) return;
-    delivered_ = tick + 1;
-    if (pause_ms.count(tick)) std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms[tick]));
-    if (oversleep_ms.count(tick) && LiveClock::now() < deadline) {
-      std::this_thread::sleep_until(deadline + std::chrono::milliseconds(oversleep_ms[tick]));
+    const bool ahead = now_ < deadline;
+    if (ahead && oversleep_ms.count(tick) && overslept_at_ < tick) {
+      now_ = deadline + std::chrono::milliseconds(oversleep_ms[tick]);
+      overslept_at_ = tick;
       ++overslept;
     }
-    for (ClientPose p : script[tick]) {
-      p.received = LiveClock::now();
-      sink.on_pose(p);
+    bool started = false;  // a pose asked the link to return: the tick starts
+    if (delivered_ <= tick) {
+      delivered_ = tick + 1;
+      await_change(tick);
+      if (pause_ms.count(tick)) now_ += std::chrono::milliseconds(pause_ms[tick]);
+      for (ClientPose p : script[tick]) {
+        p.received = now_;
+        started = sink.on_pose(p) || started;
+      }
+      for (const std::string& t : texts[tick]) sink.on_text({"Command", t, "test", now_});
     }
-    for (const std::string& t : texts[tick]) sink.on_text({"Command", t, "test", LiveClock::now()});
+    if (!started && now_ < deadline) now_ = deadline;  // nothing ended the wait: it runs out on time
+    if (ahead && now_ >= deadline) ++ran_out;
   }
   void send_reaction(int64_t, double t, const Vec3& force, const Vec3&, const Eigen::Matrix3d& k) override {
+    now_ += std::chrono::microseconds(work_us);
     replies.push_back({t, force});
     stiffness.push_back(k);
   }
@@ -72,7 +105,22 @@ class ScriptedLink : public LiveLink {
   nlohmann::json report() const override { return nlohmann::json::object(); }
 
  private:
+  void await_change(int64_t tick) {
+    if (await_change_from < 0 || tick < await_change_from || changed) return;
+    std::this_thread::sleep_for(await_step_);
+    await_step_ = std::min<std::chrono::milliseconds>(2 * await_step_, std::chrono::seconds(1));
+  }
   int64_t delivered_ = 0;
+  int64_t overslept_at_ = -1;
+  LiveClock::time_point now_{std::chrono::hours(1)};
+  std::chrono::milliseconds await_step_{1};
+};
+
+// Tells the link when the run swapped a new Model version in.
+struct ChangeSeen : RunObserver {
+  ScriptedLink* link = nullptr;
+  void on_tick(const Model&, Backend&, const TickInfo&) override {}
+  void on_topology_changed(const Model&, Backend&) override { link->changed = true; }
 };
 
 ClientPose pose_mm(const std::string& device, double x, double y, double z) {
@@ -146,10 +194,13 @@ Served serve(const Scenario& s, const Model& model, ScriptedLink& link, RunObser
   o.surface_rate = surface_rate;
   Scenario run = s;  // as organsim serve: the one-tick cuts go through the session
   o.scripted_cuts = take_one_tick_cuts(run.events, o.tick);
+  o.clock = [&link] { return link.now(); };
   LiveSession session(link, o);
+  ChangeSeen seen;
+  seen.link = &link;
   RunOptions r;
   r.outdir = fs::path(ORGANSIM_TEST_TMP) / "live_session";
-  r.observers = {&session};
+  r.observers = {&session, &seen};
   if (probe) r.observers.push_back(probe);
   r.tool_driver = &session;
   Served out;
@@ -302,6 +353,7 @@ TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessAndSurfaceAreThoseOfTheReacti
   GlBackendOptions keep;
   keep.keep_reaction_positions = true;
   GlBackend gl(model, backend_tool(s), keep);
+  link.work_us = 100;  // no two replies at the same time on the clock: a surface after each
   const Served served = serve(s, model, link, &probe, &gl, 1e9);
   const ForceSamples& f = served.result.samples;
   ASSERT_EQ(link.stiffness.size(), 80u);
@@ -332,8 +384,15 @@ TEST(LiveSession, OnTheGlBackendTheRepliesStiffnessAndSurfaceAreThoseOfTheReacti
   }
 }
 
+// The session's deadlines are its start plus a tick's simulated time, cast
+// to the clock's nanoseconds (truncated): a figure the clock gives exactly
+// may be off by a nanosecond or two.
+constexpr double kClockRoundingMs = 1e-5;
+
 // meta.live.slowest_ticks names the ticks that took longest between two
-// replies, slowest first: here the two a slow client held up.
+// replies, slowest first: here the two a slow client held up (30 and 60 ms
+// on the clock), then ticks paced by the clock (one tick, 1 ms, after the
+// reply before); a tick behind the clock runs at once (0 ms).
 TEST(LiveSession, TheSlowestTicksAreNamedWithTheirWallTime) {
   const Scenario s = cube();
   const Model model = cube_model(s);
@@ -342,25 +401,26 @@ TEST(LiveSession, TheSlowestTicksAreNamedWithTheirWallTime) {
   link.pause_ms[15] = 60;
   const Served served = serve(s, model, link);
   const nlohmann::json& slowest = served.live["slowest_ticks"];
-  ASSERT_LE(slowest.size(), 5u);
-  ASSERT_GE(slowest.size(), 2u);
-  std::map<int64_t, double> ms;
-  for (size_t i = 0; i < slowest.size(); ++i) {
-    ms[slowest[i]["tick"].get<int64_t>()] = slowest[i]["ms"].get<double>();
-    if (i > 0) {
-      EXPECT_GE(slowest[i - 1]["ms"].get<double>(), slowest[i]["ms"].get<double>());
-    }
+  ASSERT_EQ(slowest.size(), 5u) << slowest;
+  for (size_t i = 1; i < slowest.size(); ++i) EXPECT_GE(slowest[i - 1]["ms"].get<double>(), slowest[i]["ms"].get<double>());
+  EXPECT_EQ(slowest[0]["tick"], 15) << slowest;
+  EXPECT_NEAR(slowest[0]["ms"].get<double>(), 60.0, kClockRoundingMs) << slowest;
+  EXPECT_EQ(slowest[1]["tick"], 7) << slowest;
+  EXPECT_NEAR(slowest[1]["ms"].get<double>(), 30.0, kClockRoundingMs) << slowest;
+  for (size_t i = 2; i < 5; ++i) {
+    // Ticks 1 to 6, before the first pause; after it the session is behind the clock to the end.
+    EXPECT_GE(slowest[i]["tick"].get<int64_t>(), 1) << slowest;
+    EXPECT_LE(slowest[i]["tick"].get<int64_t>(), 6) << slowest;
+    EXPECT_NEAR(slowest[i]["ms"].get<double>(), 1.0, kClockRoundingMs) << slowest;
   }
-  ASSERT_EQ(ms.count(15), 1u) << slowest;
-  ASSERT_EQ(ms.count(7), 1u) << slowest;
-  EXPECT_GE(ms[15], 60.0);
-  EXPECT_GE(ms[7], 30.0);
 }
 
 // meta.live.wake_up counts the waits that ran out on the clock and how late
-// the loop ran after each: here only the two the link overslept (the others
-// return at once, ahead of their deadlines), poses delivered after the
-// deadline included.
+// the loop ran after each: every wait the session began ahead of its
+// deadline and that nothing ended before it, on time (0 ms) but for the two
+// the link overslept, 3 ms at tick 10 and 6 ms at tick 40, where the pose
+// came after the late wake-up (read in the link's last pass); the session's
+// other waits were behind the clock or ended by a pose (no wake-up).
 TEST(LiveSession, ItsWakeUpsFromTheClockAreCountedWithHowLateTheyCame) {
   Scenario s = cube();
   s.time.duration = 0.06;
@@ -368,16 +428,20 @@ TEST(LiveSession, ItsWakeUpsFromTheClockAreCountedWithHowLateTheyCame) {
   ScriptedLink link;
   link.oversleep_ms[10] = 3;
   link.oversleep_ms[40] = 6;
+  // Tick 39 starts a tick early at its pose, so that tick 40's first wait is ahead of its deadline.
+  link.script[39] = {pose_mm("Tool", 20, 20, 50.5)};
   link.script[40] = {pose_mm("Tool", 20, 20, 50)};
   const Served served = serve(s, model, link);
   const nlohmann::json& wake = served.live["wake_up"];
-  ASSERT_GE(link.overslept, 1) << "the session never waited ahead of the clock";
-  EXPECT_EQ(wake["count"].get<int64_t>(), link.overslept) << wake;
-  EXPECT_EQ(wake["over_1_ms"].get<int64_t>(), link.overslept) << wake;
-  EXPECT_EQ(wake["over_0.25_ms"].get<int64_t>(), link.overslept) << wake;
-  // sleep_until never returns early; the loop ran at least 3 ms after the deadline.
-  EXPECT_GE(wake["max_ms"].get<double>(), link.overslept == 2 ? 6.0 : 3.0) << wake;
-  EXPECT_GE(wake["median_ms"].get<double>(), 3.0) << wake;
+  EXPECT_EQ(link.overslept, 2);
+  EXPECT_GT(link.ran_out, 20) << "the ticks paced by the clock wait for it";
+  EXPECT_EQ(wake["count"].get<int64_t>(), link.ran_out) << wake;
+  EXPECT_EQ(wake["over_1_ms"].get<int64_t>(), 2) << wake;
+  EXPECT_EQ(wake["over_0.25_ms"].get<int64_t>(), 2) << wake;
+  EXPECT_NEAR(wake["max_ms"].get<double>(), 6.0, kClockRoundingMs) << wake;
+  EXPECT_NEAR(wake["median_ms"].get<double>(), 0.0, kClockRoundingMs) << wake;
+  // Tick 40 applied its pose: it started at the pose that came after the late wake-up.
+  EXPECT_EQ(served.result.samples.tool_position[40], Vec3(0.02, 0.02, 0.05));
 }
 
 // Where the session's first applied pose lives, after every tick.
@@ -406,6 +470,7 @@ TEST(LiveSession, ItsRecordsGrowWithoutMovingWhatTheyHold) {
   o.tick = s.time.tick();
   o.start = s.tool->spec.position_at(0);
   o.scene = scene_box(model.rest_position);
+  o.clock = [&link] { return link.now(); };
   LiveSession session(link, o);
   RecordAddressProbe probe;
   probe.session = &session;
@@ -499,11 +564,11 @@ TEST(LiveSession, AClientCutIsBuiltOffTheTicksPathAndReplaysBitForBit) {
   link.texts[10] = {" cut ", "CUT"};                 // the second while the first is not in: refused
   link.script[20] = {pose_down_mm(22, 25, 46)};
   // The session does not wait for the worker (a change not in by the last
-  // tick never is), and this one is paced by the script alone: a client
-  // slow for a second after the cut gives the worker time even on a loaded
-  // machine.
-  for (int64_t tick = 11; tick < 31; ++tick) link.pause_ms[tick] = 50;
+  // tick never is), and the fake clock does not either: the link gives the
+  // worker real time from tick 11 until the change is in, up to a minute.
+  link.await_change_from = 11;
   const Served served = serve(s, model, link);
+  ASSERT_TRUE(link.changed) << "the cut was not in the model by the last tick";
 
   EXPECT_EQ(served.live["commands_refused"],
             (nlohmann::json{{"cut_busy", 1}, {"cut_without_pose", 1}, {"unknown_command", 3}}));
@@ -585,8 +650,9 @@ TEST(LiveSession, AScenariosOneTickCutIsBuiltOffTheTicksPathAndReplaysBitForBit)
   const Model model = cube_model(s);
   ScriptedLink link;
   link.script[2] = {pose_down_mm(20, 21, 46)};
-  for (int64_t tick = 11; tick < 31; ++tick) link.pause_ms[tick] = 50;  // time for the worker (as above)
+  link.await_change_from = 11;  // real time for the worker (as above)
   const Served served = serve(s, model, link);
+  ASSERT_TRUE(link.changed) << "the cut was not in the model by the last tick";
 
   ASSERT_EQ(served.scripted.size(), 1u);
   EXPECT_EQ(served.scripted[0].first, 0u);

@@ -1,8 +1,10 @@
 // `organsim serve` end to end on the loopback address: a client of ours
 // (packing and unpacking with the OpenIGTLink library) streams a path, sends
 // malformed messages, disconnects, reconnects, never reads; the recorded
-// session replays bit for bit with `organsim run`. Every wait is bounded and
-// every session is 2 s of simulated time or less.
+// session replays bit for bit with `organsim run`. Every wait is bounded
+// (generously: a minute or more), and a test that needs something to have
+// happened waits for it, not for a time: a session that must see it lasts
+// until it has (SIGINT then), the others a second or two of simulated time.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
@@ -45,33 +47,56 @@ void expect_replay_identical(const fs::path& dir) {
   EXPECT_TRUE(served["samples"] == replayed["samples"]) << "the replay's samples differ from the session's";
 }
 
+// Waits up to `seconds` for `done`, reading the client's replies meanwhile; true if it came.
+template <class Done>
+bool read_until(IgtlTestClient& client, double seconds, Done done) {
+  const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+  while (!done()) {
+    if (Clock::now() > until || !client.read_replies(10)) return done();
+  }
+  return true;
+}
+
 TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
-  // 2 s at 1 kHz, the stream: 2000 poses pressing 5 mm into the box top.
+  // The stream: 2000 poses at 1 kHz pressing 5 mm into the box top,
+  // then a STRING the server refuses (and logs) once it has read them all.
+  // The session runs until the client has that refusal and 2000 replies
+  // (SIGINT then), so that what is asserted is what arrived, not how much
+  // arrived in a given time (the machine may be loaded: ticks late, replies
+  // dropped for a client not scheduled, poses arriving together).
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_stream";
   fs::remove_all(dir);
-  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "2", "--device", "Probe"}, dir);
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "300", "--device", "Probe"}, dir);
   const int port = serve.port();
   ASSERT_GT(port, 0) << serve.stderr_text();
   IgtlTestClient client;
   ASSERT_TRUE(client.connect_to(port));
   const int n = 2000;
   const auto start = Clock::now();
-  // The session's clock starts at the connection and the client's a little
-  // later, so its last poses may come after the session's 2000 ticks (the
-  // server has then closed: sending stops).
   int sent = 0;
+  float last_z = 0;
   for (int k = 0; k < n; ++k, ++sent) {
     std::this_thread::sleep_until(start + std::chrono::microseconds(1000 * k));
-    const float z = 50.0f - 5.0f * static_cast<float>(k) / n;
-    if (!client.send_pose("Probe", {20.0f, 20.0f, z}) || !client.read_replies(0)) break;
+    last_z = 50.0f - 5.0f * static_cast<float>(k) / n;
+    if (!client.send_pose("Probe", {20.0f, 20.0f, last_z}) || !client.read_replies(0)) break;
   }
+  ASSERT_EQ(sent, n) << serve.stderr_text();
+  ASSERT_TRUE(client.send_text("EndOfPath", "END"));
+  const bool all_read = read_until(client, 60, [&] {
+    return serve.stderr_text().find("STRING of device \"EndOfPath\"") != std::string::npos;
+  });
+  EXPECT_TRUE(all_read) << "the server did not read the whole stream within a minute:\n" << serve.stderr_text();
+  EXPECT_TRUE(read_until(client, 60, [&] { return client.replies.size() >= static_cast<size_t>(n); }))
+      << client.replies.size() << " replies within a minute";
+  serve.interrupt();
   client.read_until_closed(60);
   ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
 
   const nlohmann::json log = read_json(dir / "out/forces.json");
   const nlohmann::json& live = log["meta"]["live"];
   const nlohmann::json& samples = log["samples"];
-  EXPECT_EQ(live["ticks"], 2000);
+  EXPECT_EQ(live["stopped_by"], "SIGINT");
+  const int64_t ticks = live["ticks"];
   // The scenario asks for all threads; a live loop starts on all but one
   // (or one, timed against them), and takes the last only while a step on
   // those takes over 0.8 dt.
@@ -83,22 +108,23 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
                 device.find(live + std::to_string(procs - 1) + ")") != std::string::npos)
         << device;
   }
-  ASSERT_EQ(samples["t"].size(), 2000u);
-  // Count: every pose the server read was applied or superseded, none
-  // refused, and nearly all that were sent arrived within the session.
+  ASSERT_EQ(static_cast<int64_t>(samples["t"].size()), ticks);
+  // Count: every pose sent arrived, and each was applied or superseded
+  // (by a newer one that arrived before the same tick), none refused; the
+  // marker was refused as a STRING that is not a command.
   const int received = live["poses_received"];
-  EXPECT_LE(received, sent);
-  EXPECT_GE(received, 0.9 * n);
+  EXPECT_EQ(received, sent);
   EXPECT_EQ(live["poses_applied"].get<int>() + live["poses_superseded"].get<int>(), received);
   EXPECT_TRUE(live["poses_refused"].empty()) << live["poses_refused"];
+  EXPECT_EQ(live["commands_refused"], (nlohmann::json{{"unknown_command", 1}}));
   // Every reply sent arrived (none is ever cut), the library read it with
   // its CRC, in tick order, carrying its tick's end time and that tick's
-  // logged force and torque. On a loaded machine a client that is not
-  // scheduled for a while misses replies: those were dropped and counted.
+  // logged force and torque. A client that is not scheduled for a while
+  // misses replies: those were dropped and counted.
   const int64_t replies_sent = live["link"]["replies_sent"], dropped = live["link"]["replies_dropped"];
-  EXPECT_EQ(replies_sent + dropped, 2000);
+  EXPECT_EQ(replies_sent + dropped, ticks);
   ASSERT_EQ(static_cast<int64_t>(client.replies.size()), replies_sent);
-  EXPECT_GT(replies_sent, 1000);
+  EXPECT_GE(replies_sent, n);
   EXPECT_EQ(client.bad_crc, 0);
   int64_t previous = -1;
   int replies_in_contact = 0;
@@ -131,18 +157,24 @@ TEST(Serve, AStreamedPathIsAnsweredEveryTickInOrderAndReplaysBitForBit) {
   }
   EXPECT_GT(replies_in_contact, 100);
   // Units and order: each applied pose (mm, as sent) is the tool centre in
-  // metres from its tick on; ticks only grow.
+  // metres from its tick on; ticks only grow, and so does the place along
+  // the path (z falls). Poses that arrive before the same tick supersede
+  // each other (many, when the machine is loaded), so how many apply
+  // depends on the scheduling; the last one sent applies and holds.
   int64_t last_tick = -1;
+  double last_applied_z = std::numeric_limits<double>::infinity();
   for (const auto& p : live["applied_poses"]) {
     const int64_t tick = p["tick"];
     EXPECT_GT(tick, last_tick);
     last_tick = tick;
+    const double z = p["matrix"][11];
+    EXPECT_LT(z, last_applied_z) << tick;
+    last_applied_z = z;
     for (int c = 0; c < 3; ++c)
       ASSERT_EQ(samples["tool_position"][tick][c].get<double>(), 1e-3 * p["matrix"][4 * c + 3].get<double>()) << tick;
   }
-  // Poses that arrive within one tick supersede each other (many, when the
-  // machine is loaded and the session falls behind); still the path moves.
-  EXPECT_GT(live["poses_applied"].get<int>(), 100);
+  EXPECT_EQ(last_applied_z, static_cast<double>(last_z));
+  EXPECT_EQ(samples["tool_position"][ticks - 1][2].get<double>(), 1e-3 * static_cast<double>(last_z));
   double peak = 0;
   for (const auto& f : samples["force"]) peak = std::max(peak, std::hypot(f[0].get<double>(), f[1].get<double>(), f[2].get<double>()));
   EXPECT_GT(peak, 0.01) << "the path presses into the box";
@@ -331,7 +363,9 @@ TEST(Serve, AClientsCutIsBuiltOffTheTicksPathRecordedAsAScriptedCutAndReplaysBit
   // instrument's) pointing down; a CUT cuts 20 mm down from its centre.
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_cut";
   fs::remove_all(dir);
-  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "1"}, dir);
+  // The worker builds the cut at nice 19: on a busy machine it may take
+  // long, so the session runs until the cut is in (SIGINT then).
+  ServeProcess serve({kScenario, "-o", (dir / "out").string(), "--duration", "300"}, dir);
   const int port = serve.port();
   ASSERT_GT(port, 0) << serve.stderr_text();
   IgtlTestClient client;
@@ -339,9 +373,14 @@ TEST(Serve, AClientsCutIsBuiltOffTheTicksPathRecordedAsAScriptedCutAndReplaysBit
   ASSERT_TRUE(client.send_text("Command", "CUT"));  // no pose yet: refused
   igtl::Matrix4x4 down = {{1, 0, 0, 20}, {0, -1, 0, 21}, {0, 0, -1, 46}, {0, 0, 0, 1}};
   ASSERT_TRUE(client.send_bytes(IgtlTestClient::transform("Tool", down)));
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  // A reply has left: tick 0 is over, and the CUT is read at a later tick.
+  ASSERT_TRUE(read_until(client, 60, [&] { return !client.replies.empty(); }));
   ASSERT_TRUE(client.send_text("Command", "SLICE"));  // not a command: refused
   ASSERT_TRUE(client.send_text("Command", "CUT"));
+  EXPECT_TRUE(read_until(client, 120, [&] {
+    return serve.stderr_text().find("client_cut1 in the model from tick") != std::string::npos;
+  })) << "the cut was not in the model within two minutes:\n" << serve.stderr_text();
+  serve.interrupt();
   client.read_until_closed(60);
   ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
 
@@ -356,6 +395,9 @@ TEST(Serve, AClientsCutIsBuiltOffTheTicksPathRecordedAsAScriptedCutAndReplaysBit
   EXPECT_GT(log["meta"]["events"][0]["faces_separated"].get<int>(), 0);
   const std::string err = serve.stderr_text();
   EXPECT_NE(err.find("refused from 127.0.0.1:"), std::string::npos) << err;
+  EXPECT_NE(err.find("client_cut1 in the model from tick " + live["cuts"][0]["applied_tick"].dump() + "\n"),
+            std::string::npos)
+      << err;
   // session.json holds it as an ordinary cut over the tick that applied it.
   const nlohmann::json session = read_json(dir / "out/session.json");
   ASSERT_EQ(session["events"].size(), 1u);
