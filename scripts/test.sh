@@ -4,7 +4,7 @@
 # its closing summary is the last thing printed.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-bash "$root/scripts/setup.sh"
+bash "$root/scripts/setup.sh" --tests
 bash "$root/scripts/build.sh"
 # ~10 s per harness; ORGANSIM_FUZZ_SECONDS=0 skips the fuzzing.
 if [ "${ORGANSIM_FUZZ_SECONDS:-10}" != 0 ]; then
