@@ -6,7 +6,7 @@
 # and the script fails if either failed; its last line says which.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-bash "$root/scripts/setup.sh"
+bash "$root/scripts/setup.sh" --tests
 bash "$root/scripts/build.sh"
 ctest_result=passed
 (cd "${ORGANSIM_BUILD_DIR:-$root/build}" && ctest --output-on-failure -j "${ORGANSIM_TEST_JOBS:-2}" --timeout 900) ||
