@@ -70,13 +70,33 @@ void draw_colormap_legend(cv::Mat& bgr, const std::string& title, double min_val
   int base = 0;
   const cv::Size top_size = cv::getTextSize(top, face, font, 1, &base);
   const cv::Size bottom_size = cv::getTextSize(bottom, face, font, 1, &base);
-  const cv::Size title_size = cv::getTextSize(title, face, font, 1, &base);
+  int title_base = 0;  // how far the title's descenders reach below its baseline
+  const cv::Size title_size = cv::getTextSize(title, face, font, 1, &title_base);
   const int bar_w = std::max(8, bgr.cols / 40);
   const int bar_h = std::max(40, bgr.rows / 2);
   const int margin = std::max(6, bgr.cols / 60);
   const int label_w = std::max(top_size.width, bottom_size.width) + 4;
   const int x0 = bgr.cols - margin - label_w - bar_w;
   const int y0 = (bgr.rows - bar_h) / 2;
+  // The title's place (above the bar, kept inside the image on the right):
+  // its lowest ink (the descenders of "(", "p", ",": title_base below the
+  // baseline) a text height clear of the bar's frame (row y0 - 1), so the
+  // two stay apart when the contact sheet halves the frame
+  // (ColorMap.LegendTitleClearsTheBar).
+  const int title_x = std::max(0, std::min(x0, bgr.cols - margin - title_size.width));
+  const int title_baseline = std::max(title_size.height, y0 - 1 - title_size.height - title_base);
+  // A light backing under each text, so it stays readable where the model
+  // lies behind it.
+  const auto back = [&](cv::Point baseline_left, const cv::Size& size, int below) {
+    const cv::Rect r = cv::Rect(baseline_left.x - 2, baseline_left.y - size.height - 2, size.width + 4,
+                                size.height + below + 4) & cv::Rect(0, 0, bgr.cols, bgr.rows);
+    cv::Mat area = bgr(r);
+    cv::addWeighted(area, 0.3, cv::Mat(area.size(), area.type(), cv::Scalar(250, 250, 250)), 0.7, 0.0, area);
+  };
+  const int tx = x0 + bar_w + 4;
+  back({title_x, title_baseline}, title_size, title_base);
+  back({tx, y0 + top_size.height}, top_size, base);
+  back({tx, y0 + bar_h}, bottom_size, base);
   for (int y = 0; y < bar_h; ++y) {
     const float s = 1.0f - static_cast<float>(y) / static_cast<float>(bar_h - 1);  // max at the top
     const Vec3f c = colormap_rgb(s) * 255.0f;
@@ -84,12 +104,9 @@ void draw_colormap_legend(cv::Mat& bgr, const std::string& title, double min_val
   }
   const cv::Scalar ink(20, 20, 20);
   cv::rectangle(bgr, {x0 - 1, y0 - 1}, {x0 + bar_w, y0 + bar_h}, ink, 1);
-  const int tx = x0 + bar_w + 4;
   cv::putText(bgr, top, {tx, y0 + top_size.height}, face, font, ink, 1, cv::LINE_AA);
   cv::putText(bgr, bottom, {tx, y0 + bar_h}, face, font, ink, 1, cv::LINE_AA);
-  // Title above the bar, kept inside the image on the right.
-  const int title_x = std::min(x0, bgr.cols - margin - title_size.width);
-  cv::putText(bgr, title, {title_x, y0 - title_size.height}, face, font, ink, 1, cv::LINE_AA);
+  cv::putText(bgr, title, {title_x, title_baseline}, face, font, ink, 1, cv::LINE_AA);
 }
 
 std::string colormap_title(Colormap map) {

@@ -2,6 +2,7 @@
 // frame cost measurement bench uses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -65,6 +66,51 @@ TEST(ColorMap, ScaleRunsFromDarkBlueToRedAndLegendShowsIt) {
   cv::Mat grey;
   cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);
   EXPECT_GT(cv::countNonZero(grey(cv::Rect(300, 0, 100, 300)) < 100), 20);
+}
+
+// The legend's title stays clear of the colour bar, in a 640 x 480 frame and
+// in its half-size tile on a contact sheet (cv::INTER_AREA, as
+// contact_sheet.cpp): between the title's lowest ink left of the bar and the
+// bar's frame lie at least 4 rows of background (the title "runs into" the
+// bar when its descenders sit a few rows above it).
+TEST(ColorMap, LegendTitleClearsTheBar) {
+  cv::Mat frame(480, 640, CV_8UC3, cv::Scalar(255, 255, 255));
+  draw_colormap_legend(frame, "displacement (fixed, scenario)", 0.0, 0.015, "m");
+  cv::Mat tile;
+  cv::resize(frame, tile, cv::Size(320, 240), 0, 0, cv::INTER_AREA);
+  for (const cv::Mat* img : {&frame, &tile}) {
+    SCOPED_TRACE(img == &frame ? "640 x 480 frame" : "320 x 240 tile");
+    // The bar: its rows and columns of saturated colour.
+    int bar_top = img->rows, bar_left = img->cols, bar_right = -1;
+    for (int y = 0; y < img->rows; ++y)
+      for (int x = 0; x < img->cols; ++x) {
+        const cv::Vec3b p = img->at<cv::Vec3b>(y, x);
+        const int hi = std::max({p[0], p[1], p[2]}), lo = std::min({p[0], p[1], p[2]});
+        if (hi - lo > 120) {
+          bar_top = std::min(bar_top, y);
+          bar_left = std::min(bar_left, x);
+          bar_right = std::max(bar_right, x);
+        }
+      }
+    ASSERT_LT(bar_right, img->cols) << "no colour bar";
+    ASSERT_GT(bar_right - bar_left, 3);
+    // The title: ink (any darkening of the background) left of the bar and
+    // above its middle; its lowest row.
+    int title_bottom = -1, title_top = img->rows;
+    for (int y = 0; y < bar_top + img->rows / 8; ++y)
+      for (int x = 0; x < bar_left - 2; ++x) {
+        const cv::Vec3b p = img->at<cv::Vec3b>(y, x);
+        if (std::min({p[0], p[1], p[2]}) < 230) {
+          title_bottom = std::max(title_bottom, y);
+          title_top = std::min(title_top, y);
+        }
+      }
+    ASSERT_GE(title_bottom, 0) << "no title left of the bar";
+    EXPECT_GE(title_top, 0);
+    // The bar's frame is drawn one row above its colour.
+    const int gap = (bar_top - 1) - title_bottom - 1;
+    EXPECT_GE(gap, 4) << "title rows " << title_top << ".." << title_bottom << ", bar from row " << bar_top;
+  }
 }
 
 TEST(RenderCommand, WritesAStillOfATetMeshAndRejectsBadCameras) {
