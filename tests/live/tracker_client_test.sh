@@ -13,7 +13,7 @@ work=$2
 examples=/usr/share/doc/openigtlink-examples/examples/Tracker
 root=$(cd "$(dirname "$0")/../.." && pwd)
 if [ ! -f "$examples/TrackerClient.cxx" ]; then
-  echo "openigtlink-examples is not installed (scripts/setup.sh installs it)"
+  echo "openigtlink-examples is not installed (scripts/setup.sh --tests installs it)"
   exit 77
 fi
 rm -rf "$work"

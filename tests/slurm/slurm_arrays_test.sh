@@ -62,7 +62,7 @@ source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 
 for program in munged mungekey slurmctld slurmd sbatch squeue sinfo; do
   if ! command -v "$program" >/dev/null; then
-    echo "SKIPPED: $program not found; install Debian's slurm-wlm and munge (bash scripts/setup.sh does)"
+    echo "SKIPPED: $program not found; install Debian's slurm-wlm and munge (bash scripts/setup.sh --tests does)"
     exit 77
   fi
 done
