@@ -4,9 +4,10 @@
 #   scripts/fuzz.sh [--seconds S | --runs N] [--seed K] [NAME...]
 # --seconds S: a campaign, each harness for S seconds (default 10), its
 # corpus growing in BUILD/corpus/NAME between campaigns. --runs N: a
-# reproducible pass (what scripts/test.sh runs): each harness replays its
-# seeds, then makes N inputs from them with libFuzzer's seed K (default 1),
-# in a fresh corpus, so the same tree gives the same inputs every time.
+# seeded pass (what scripts/test.sh runs): each harness replays its seeds,
+# then makes inputs from them with libFuzzer's seed K (default 1) in a
+# fresh corpus, N executions in all (nearly, not bit for bit, the same
+# inputs every time: docs/robustness.md).
 # The seeds: the hand-made files (tests/fuzz/corpus/NAME), the inputs of
 # past findings (tests/fuzz/regressions/NAME), the row's globs, and each of
 # those cut short at k * size / 11 (k = 1..10) and by its last byte, as the
@@ -43,7 +44,7 @@ CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_T
 cmake --build "$build" --target organsim_fuzz -j "${ORGANSIM_JOBS:-2}"
 
 seed=${seed:-$reproducible}
-# A reproducible pass also runs without address-space randomisation:
+# A seeded pass also runs without address-space randomisation:
 # libFuzzer learns from compared values, and pointers are among them.
 fixed_layout=(env)
 if [ "$reproducible" = 1 ] && setarch "$(uname -m)" -R true 2>/dev/null; then fixed_layout=(setarch "$(uname -m)" -R); fi

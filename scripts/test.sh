@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# README command 2: set up, build, run every test, then a reproducible pass
-# of every fuzz harness (scripts/fuzz.sh --runs: its seeds and a fixed
-# number of inputs made from them with a fixed seed; docs/robustness.md).
+# README command 2: set up, build, run every test, then a seeded pass of
+# every fuzz harness (scripts/fuzz.sh --runs: its seeds, then a fixed number
+# of inputs made from them with a fixed libFuzzer seed; docs/robustness.md).
 # The fuzz pass runs after ctest, so a finding cannot hide the test results,
 # and the script fails if either failed; its last line says which.
 set -euo pipefail
