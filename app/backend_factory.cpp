@@ -3,6 +3,7 @@
 #include "core/gl/egl_context.h"
 #include "core/gl/gl_backend.h"
 #include "core/sim/cpu_backend.h"
+#include "core/sim/implicit_backend.h"
 #include "core/util/error.h"
 
 namespace organsim::app {
@@ -16,6 +17,13 @@ namespace {
 std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model, const BackendTool& tool) {
   CpuBackendOptions o;
   const std::string precision = s.precision.value_or("double");
+  if (s.integrator == Integrator::ImplicitEuler) {
+    if (precision != "double" || !s.cpu_kernel.empty())
+      throw Error(ErrorKind::Usage, "integrator implicit_euler runs on the cpu backend in double precision only "
+                                    "(its reference; asked: " + precision +
+                                        (s.cpu_kernel.empty() ? "" : ", kernel " + s.cpu_kernel) + ")");
+    return make_implicit_backend(model, tool, s.implicit);
+  }
   if (precision == "double") {
     o.precision = Precision::Double;
   } else if (precision == "float") {
@@ -35,6 +43,9 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
 }
 
 std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, const BackendTool& tool) {
+  if (s.integrator == Integrator::ImplicitEuler)
+    throw Error(ErrorKind::Usage, "integrator implicit_euler runs on the cpu backend only (the gl backend integrates "
+                                  "by position Verlet)");
   if (s.precision && *s.precision != "float") {
     throw Error(ErrorKind::Usage, "the gl backend computes in float (precision \"" + *s.precision + "\" asked)");
   }
@@ -49,6 +60,11 @@ std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, 
 std::string resolve_auto_backend(BackendSelection& selection) {
   if (selection.name != "auto") return "";
   std::string why;
+  if (selection.integrator == Integrator::ImplicitEuler) {
+    selection.name = "cpu";
+    if (!selection.precision) selection.precision = "double";
+    return "auto chose cpu (" + *selection.precision + "): integrator implicit_euler runs on the CPU in double";
+  }
   if (selection.precision && *selection.precision == "double") {
     selection.name = "cpu";
     why = "double precision asked, which only the CPU backend computes";
@@ -94,6 +110,8 @@ BackendSelection scenario_backend_selection(const Scenario& s, const std::string
   else if (!backend_switched)
     selection.precision = s.backend.precision;
   selection.threads = threads >= 0 ? threads : s.backend.threads;
+  selection.integrator = s.time.integrator;
+  selection.implicit = s.time.implicit;
   return selection;
 }
 

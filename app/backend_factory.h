@@ -22,6 +22,10 @@ struct BackendSelection {
   // cpu: the kernel by name: a simd target ("avx2", ...: CpuBackendOptions::simd)
   // or "generic"; empty: the default.
   std::string cpu_kernel;
+  // time.integrator: implicit Euler runs on the CPU in double only
+  // (core/sim/implicit_backend.h); another backend or precision is refused.
+  Integrator integrator = Integrator::Verlet;
+  ImplicitOptions implicit;
 };
 
 // The backend a scenario runs on, with the command line's --backend,

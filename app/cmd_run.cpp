@@ -16,11 +16,13 @@
 #include "app/scenario_mesh.h"
 #include "core/model/material_summary.h"
 #include "core/model/stiffness.h"
+#include "core/run/integrator_report.h"
 #include "core/run/prepare_run.h"
 #include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim::app {
 
@@ -213,10 +215,10 @@ void run_command(const RunArgs& args) {
 
   if (args.plan) {
     print_plan(std::cout, s, model, *backend, observer_names);
-    std::cout << format_stability_report(stability, s.time.dt, s.time.substeps);
+    std::cout << format_stability_report(stability, s.time.dt, s.time.substeps, s.time.integrator);
     return;
   }
-  const std::string step_warning = check_time_step(stability, s.time.dt, s.time.substeps, args.allow_unstable);
+  const std::string step_warning = check_time_step(stability, s.time.dt, s.time.substeps, args.allow_unstable, s.time.integrator);
   if (!step_warning.empty()) std::cerr << "organsim: " << step_warning << "\n";
   // A check costs about one step on the CPU (organsim bench): every 10 ticks
   // keeps it near 2 % and still stops a blow-up within 10 ms. On the GPU it
@@ -272,8 +274,17 @@ void run_command(const RunArgs& args) {
               << (result.grasped_points == 0 ? " (none within grasp_radius: the tool pulled nothing)" : "") << "\n";
   }
   if (!result.forces_path.empty()) std::cout << "force log: " << result.forces_path.string() << "\n";
+  if (result.meta.extra.contains("integrator") && result.meta.extra["integrator"].contains("cg_iterations_median")) {
+    const auto& i = result.meta.extra["integrator"];
+    std::cout << "implicit: CG iterations per step median " << i["cg_iterations_median"].get<int>() << ", max "
+              << i["cg_iterations_max"].get<int>() << "; largest final residual "
+              << format_number(i["cg_residual_max"].get<double>()) << "; "
+              << i["cg_unconverged_steps"].get<int64_t>() << " steps stopped at cg_max_iterations\n";
+  }
   std::cout << "outputs:  " << outdir.string() << "\n";
   print_output_files(std::cout, outdir);
+  if (const std::string warning = integrator_warning(*backend); !warning.empty())
+    throw Error(ErrorKind::SolverWarning, warning);
 }
 
 const bool registered = register_command("run", 20, [](CLI::App& root) {

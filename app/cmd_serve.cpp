@@ -150,7 +150,7 @@ void serve_command(const ServeArgs& args) {
   PrepareRunOptions prepare_options;
   prepare_options.threads = selection.threads;
   const PreparedRun prepared = prepare_run(s, model, prepare_options);
-  const std::string step_warning = check_time_step(prepared.stability, s.time.dt, s.time.substeps, args.allow_unstable);
+  const std::string step_warning = check_time_step(prepared.stability, s.time.dt, s.time.substeps, args.allow_unstable, s.time.integrator);
   if (!step_warning.empty()) std::cerr << "organsim: " << step_warning << "\n";
   // On the reaction's tick's positions (GL: kept on the GPU), so that a check never waits for the tick in flight.
   BlowupMonitor monitor = prepared.blowup_monitor(s, s.time.dt, backend->default_check_interval_ticks(), true);

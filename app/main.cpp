@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
     // with the documented usage code, not CLI11's own numbers.
     return root.exit(e) == 0 ? 0 : static_cast<int>(ErrorKind::Usage);
   } catch (const Error& e) {
-    std::cerr << "organsim: error: " << e.what() << "\n";
+    // A warning ends a command that did its work (its outputs are whole).
+    std::cerr << "organsim: " << (e.kind() == ErrorKind::SolverWarning ? "warning: " : "error: ") << e.what() << "\n";
     return e.exit_code();
   } catch (const std::exception& e) {
     std::cerr << "organsim: internal error: " << e.what() << "\n";

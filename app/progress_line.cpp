@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "core/run/integrator_report.h"
 #include "core/util/format.h"
 
 namespace organsim::app {
@@ -26,7 +27,7 @@ void ProgressLine::clear() {
 
 void RunProgress::on_start(const Model&, Backend&) { start_ = Clock::now(); }
 
-void RunProgress::on_tick(const Model&, Backend&, const TickInfo& info) {
+void RunProgress::on_tick(const Model&, Backend& backend, const TickInfo& info) {
   if (!line_.enabled()) return;
   const Clock::time_point now = Clock::now();
   const int64_t done = info.tick + 1;
@@ -38,7 +39,11 @@ void RunProgress::on_tick(const Model&, Backend&, const TickInfo& info) {
   line_.show("organsim run: tick " + std::to_string(done) + "/" + std::to_string(ticks_) + " (" +
              format_number(100.0 * static_cast<double>(done) / static_cast<double>(ticks_), "%.0f") +
              " %), real-time factor " + format_number(wall > 0 ? simulated / wall : 0, "%.3g") + ", " +
-             format_number(left, "%.0f") + " s left");
+             format_number(left, "%.0f") + " s left" +
+             [&] {
+               const std::string cg = integrator_progress(backend);
+               return cg.empty() ? cg : ", " + cg;
+             }());
 }
 
 void RunProgress::on_finish(const Model&, Backend&) { line_.clear(); }

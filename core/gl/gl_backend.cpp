@@ -514,6 +514,10 @@ Plan GlBackend::plan() const {
                  in_step + ", partial reaction per workgroup";
         break;
       case Pass::Integrate: detail = "position Verlet with drag, step.comp: " + grid; break;
+      // The GL backend integrates by position Verlet only (make_gl_backend refuses implicit Euler).
+      case Pass::Linearise:
+      case Pass::ConjugateGradient:
+      case Pass::VelocityUpdate: break;
     }
     plan.passes.push_back({pass_name(pass), detail});
   }

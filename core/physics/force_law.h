@@ -162,6 +162,32 @@ inline auto shear_rest_stiffness(const V3& gi, const V3& gj) {
   return (gi.dot(gj) * M::Identity() + gj * gi.transpose()).eval();
 }
 
+// --- Tangent stiffness (implicit integration) ----------------------------------
+// What the implicit integrator's linear system holds away from rest
+// (core/sim/implicit_system.h), kept positive semi-definite so that its
+// conjugate gradients converge: K = -df/dx, D = -df/dv.
+
+// A spring of length L along u with tension T (its damper's included):
+// K_aa = (k - t) u u^T + t I with t = max(T, 0) / L, the transverse term of
+// a stretched spring. A compressed spring's transverse term -|T|/L (the
+// stiffness that lets it buckle sideways) is left out, the usual choice
+// (Choi and Ko 2002): it would make the system indefinite. Its damper gives
+// D_aa = d u u^T (the damper's dependence on the direction u is left out).
+// Returns t.
+template <class Real>
+inline Real spring_transverse_stiffness(Real tension, Real length) {
+  return tension > Real(0) && length > Real(0) ? tension / length : Real(0);
+}
+
+// A penalty f = k (R - d) n (push_penalty, sphere_triangle_penalty and the
+// capsule's): K = k n n^T along the normal. Its tangential part
+// -k (R - d)/d (I - n n^T) (a point sliding round the sphere feels less
+// push) is left out for the same reason.
+template <class V3, class Real>
+inline auto penalty_normal_stiffness(Real k, const V3& n) {
+  return (k * n * n.transpose()).eval();
+}
+
 // --- Tool ---------------------------------------------------------------------
 
 // Push contact of a sphere (radius R, penalty k N/m, the point's stiffness

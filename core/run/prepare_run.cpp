@@ -21,7 +21,14 @@ PreparedRun prepare_run(const Scenario& scenario, const Model& model, const Prep
   prepared.stability = estimate_critical_step(model, critical_step_options(model, tool));
   if (options.settle && scenario.time.settle > 0) {
     const TimeDef& time = scenario.time;
-    prepared.settled = settle(model, {time.settle, time.dt, time.substeps, options.threads});
+    SettleOptions settle_options;
+    settle_options.seconds = time.settle;
+    settle_options.dt = time.dt;
+    settle_options.substeps = time.substeps;
+    settle_options.threads = options.threads;
+    settle_options.integrator = time.integrator;
+    settle_options.implicit = time.implicit;
+    prepared.settled = settle(model, settle_options);
   }
   return prepared;
 }

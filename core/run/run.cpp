@@ -10,6 +10,7 @@
 
 #include "core/model/material_summary.h"
 #include "core/run/change_worker.h"
+#include "core/run/integrator_report.h"
 #include "core/sim/contact_stiffness.h"
 #include "core/stability/critical_step.h"
 #include "core/topology/run_events.h"
@@ -79,7 +80,7 @@ bool starts_at_or_after(double tick_start, double event_time, double dt) {
 // new Model (a cut should not lower it, docs/topology.md; this checks it).
 void check_step_after_change(const StabilityReport& report, const Scenario& s, double t, bool allow_unstable) {
   try {
-    const std::string warning = check_time_step(report, s.time.dt, s.time.substeps, allow_unstable);
+    const std::string warning = check_time_step(report, s.time.dt, s.time.substeps, allow_unstable, s.time.integrator);
     if (!warning.empty()) std::cerr << "organsim: after the topology change at t = " << t << " s: " << warning << "\n";
   } catch (const Error& e) {
     throw Error(e.kind(), "after the topology change at t = " + std::to_string(t) + " s: " + e.what());
@@ -300,6 +301,7 @@ RunResult run_scenario(const Scenario& scenario, const Model& model, Backend& ba
   // The CPU backend may change its thread count during the run (thread_choice.h).
   if (const std::string device = backend.device(); device != result.meta.device)
     result.meta.extra["device_at_end"] = device;
+  result.meta.extra["integrator"] = integrator_meta(backend);
   result.meta.extra["step_seconds"] = step_seconds;
   result.meta.extra["steps"] = steps;
   if (pull) result.meta.extra["grasped_points"] = result.grasped_points;

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/sim/cpu_backend.h"
+#include "core/sim/implicit_backend.h"
 #include "core/sim/reference_forces.h"
 #include "core/util/error.h"
 #include "core/util/format.h"
@@ -32,7 +33,9 @@ SettleResult settle(const Model& model, const SettleOptions& options) {
   CpuBackendOptions cpu;
   cpu.precision = Precision::Double;
   cpu.threads = options.threads;
-  const auto backend = make_cpu_backend(model, BackendTool{}, cpu);
+  const auto backend = options.integrator == Integrator::ImplicitEuler
+                           ? make_implicit_backend(model, BackendTool{}, options.implicit)
+                           : make_cpu_backend(model, BackendTool{}, cpu);
 
   double heaviest_weight = 0;
   for (int32_t i = 0; i < model.npoint(); ++i) heaviest_weight = std::max(heaviest_weight, model.mass[i] * model.gravity.norm());

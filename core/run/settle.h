@@ -2,7 +2,7 @@
 // The start at rest under load (scenario `time.settle`): before t = 0 the
 // model is brought to equilibrium under gravity and its fixed points, with no
 // tool, by dynamic relaxation with kinetic damping: the double-precision CPU
-// backend steps the model, and whenever the kinetic energy passes a peak all
+// backend steps the model (with the run's integrator), and whenever the kinetic energy passes a peak all
 // velocities are set to zero, so the energy drains into the equilibrium
 // instead of oscillating about it. The run then starts from these positions
 // with zero velocity, so the force log, frames and study show only the tool.
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/sim/implicit_backend.h"
 
 namespace organsim {
 
@@ -23,6 +24,10 @@ struct SettleOptions {
   // Stop early once the largest net force on a free point is below this
   // fraction of the heaviest point's weight.
   double tolerance = 1e-4;
+  // The run's integrator: with implicit Euler (whose dt may exceed dt_crit)
+  // the settling steps are implicit too.
+  Integrator integrator = Integrator::Verlet;
+  ImplicitOptions implicit;
 };
 
 struct SettleResult {

@@ -244,6 +244,37 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
     t.substeps = static_cast<int32_t>(*v);
   }
   if (auto v = r.number("settle")) t.settle = require_non_negative(*v, r.at("settle"));
+  if (auto v = r.string("integrator")) {
+    if (*v == "implicit_euler") t.integrator = Integrator::ImplicitEuler;
+    else if (*v != "verlet")
+      throw r.at("integrator").error("expected \"verlet\" or \"implicit_euler\" (got \"" + *v + "\")");
+  }
+  // The implicit solver's settings mean nothing to Verlet: refused there, not ignored.
+  const auto implicit_only = [&](const char* key) {
+    if (t.integrator != Integrator::ImplicitEuler)
+      throw r.at(key).error("applies only with \"integrator\": \"implicit_euler\"");
+  };
+  if (auto v = r.integer("newton_iterations")) {
+    implicit_only("newton_iterations");
+    if (*v < 1 || *v > 100) throw r.at("newton_iterations").error("expected an integer in 1..100 (got " + std::to_string(*v) + ")");
+    t.implicit.newton_iterations = static_cast<int32_t>(*v);
+  }
+  if (auto v = r.number("cg_tolerance")) {
+    implicit_only("cg_tolerance");
+    t.implicit.cg_tolerance = require_non_negative(*v, r.at("cg_tolerance"));
+  }
+  if (auto v = r.integer("cg_max_iterations")) {
+    implicit_only("cg_max_iterations");
+    if (*v < 1 || *v > 100'000)
+      throw r.at("cg_max_iterations").error("expected an integer in 1..100000 (got " + std::to_string(*v) + ")");
+    t.implicit.cg_max_iterations = static_cast<int32_t>(*v);
+  }
+  if (auto v = r.string("preconditioner")) {
+    implicit_only("preconditioner");
+    if (*v == "rest_cholesky") t.implicit.preconditioner = Preconditioner::RestCholesky;
+    else if (*v != "block_jacobi")
+      throw r.at("preconditioner").error("expected \"block_jacobi\" or \"rest_cholesky\" (got \"" + *v + "\")");
+  }
   r.finish();
   if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");
   return t;

@@ -53,6 +53,20 @@ struct Plan {
   int32_t syncs_per_step = 0;        // CPU-GPU synchronisations per step
 };
 
+// What an implicit integrator's linear solves did so far in a run (the
+// force log's meta and the progress line; core/sim/implicit_backend.h).
+struct IntegratorStats {
+  std::vector<int32_t> cg_iterations;  // per step, summed over its Newton iterations
+  double max_residual = 0;             // the largest final relative CG residual of any solve
+  int64_t unconverged_steps = 0;       // steps with a solve that stopped above its tolerance
+  int32_t cg_max_iterations = 0;       // the limit a solve stops at
+  // With Newton iterations: |M (v1 - v0) - h f(x0 + h v1, v1)| on the free
+  // coordinates after the first solve and after each Newton step, of the
+  // last step (N s); empty with one linearised solve per step.
+  std::vector<double> last_newton_residuals;
+  int64_t steps() const { return static_cast<int64_t>(cg_iterations.size()); }
+};
+
 // A Model version packed by Backend::prepare, for adopt() on the backend
 // that made it. `next` must outlive it and the backend.
 class PreparedModel {
@@ -126,6 +140,8 @@ class Backend {
   virtual void adopt(std::unique_ptr<PreparedModel> prepared) = 0;
   // Simulated time at the end of the last tick, s.
   virtual double time() const = 0;
+  // The implicit integrator's solver statistics; null for an explicit one.
+  virtual const IntegratorStats* integrator_stats() const { return nullptr; }
 };
 
 }  // namespace organsim

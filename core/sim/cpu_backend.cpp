@@ -285,7 +285,10 @@ class CpuBackend final : public Backend {
                                                    : "grasp attachment springs";
       case Pass::Integrate:
         return "position Verlet with drag, fused with the force passes (" + lanes + ", " + kernel_name() +
-               " kernel)";
+               " kernel)";      // Implicit Euler runs on its own backend (implicit_backend.h), never in this one's plan.
+      case Pass::Linearise:
+      case Pass::ConjugateGradient:
+      case Pass::VelocityUpdate: break;
     }
     return "";
   }

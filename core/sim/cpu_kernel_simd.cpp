@@ -1059,6 +1059,8 @@ std::string simd_kernel_unsupported(const StepPlan& plan, int32_t chunk_size, co
   if (plan.shear()) runs.push_back(Pass::ShearElement);
   if (plan.gravity) runs.push_back(Pass::Gravity);
   if (plan.tool != ToolTerm::None) runs.push_back(Pass::ToolContact);
+  if (plan.integrator != Integrator::Verlet)
+    return std::string("it integrates by position Verlet only (the plan asks ") + integrator_name(plan.integrator) + ")";
   runs.push_back(Pass::Integrate);
   for (Pass pass : plan.passes)
     if (std::find(runs.begin(), runs.end(), pass) == runs.end())

@@ -6,8 +6,9 @@ namespace organsim {
 
 bool StepPlan::has(Pass pass) const { return std::find(passes.begin(), passes.end(), pass) != passes.end(); }
 
-StepPlan make_step_plan(const Model& model, const BackendTool& tool) {
+StepPlan make_step_plan(const Model& model, const BackendTool& tool, Integrator integrator) {
   StepPlan plan;
+  plan.integrator = integrator;
   plan.element = model.has_nodal_volume()    ? ElementTerm::NodalVolume
                  : model.has_volume()        ? ElementTerm::TetVolume
                  : model.has_smoothed_shear() ? ElementTerm::SmoothedShear
@@ -30,7 +31,11 @@ StepPlan make_step_plan(const Model& model, const BackendTool& tool) {
   if (plan.shear()) plan.passes.push_back(Pass::ShearElement);
   if (plan.gravity) plan.passes.push_back(Pass::Gravity);
   if (plan.tool != ToolTerm::None) plan.passes.push_back(Pass::ToolContact);
-  plan.passes.push_back(Pass::Integrate);
+  if (integrator == Integrator::Verlet) {
+    plan.passes.push_back(Pass::Integrate);
+  } else {
+    for (Pass pass : {Pass::Linearise, Pass::ConjugateGradient, Pass::VelocityUpdate}) plan.passes.push_back(pass);
+  }
   return plan;
 }
 
@@ -45,8 +50,15 @@ const char* pass_name(Pass pass) {
     case Pass::SurfaceContact: return "surface-contact";
     case Pass::ToolContact: return "tool-contact";
     case Pass::Integrate: return "integrate";
+    case Pass::Linearise: return "linearise";
+    case Pass::ConjugateGradient: return "conjugate-gradient";
+    case Pass::VelocityUpdate: return "velocity-update";
   }
   return "?";
+}
+
+const char* integrator_name(Integrator integrator) {
+  return integrator == Integrator::ImplicitEuler ? "implicit_euler" : "verlet";
 }
 
 }  // namespace organsim

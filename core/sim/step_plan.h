@@ -25,7 +25,18 @@ enum class Pass : uint8_t {
   SurfaceContact,  // the tool against the surface triangles (broad phase, then each touching triangle's penalty)
   ToolContact,     // the tool's push penalty or pull attachments, and its reaction
   Integrate,       // position Verlet with drag
+  // Implicit Euler (core/sim/implicit_backend.h), in place of Integrate:
+  Linearise,          // the force law's tangent blocks K, D at the step's state (and the contact's)
+  ConjugateGradient,  // (M + h D + h^2 K) dv = h (f - h K v) by preconditioned CG
+  VelocityUpdate,     // v += dv, x += h v on the free points (then, with Newton iterations, the passes again)
 };
+
+// How the step advances the state: explicit position Verlet (the paper's,
+// the default) or backward (implicit) Euler, linearised once per Newton
+// iteration (docs/integrators.md).
+enum class Integrator : uint8_t { Verlet, ImplicitEuler };
+// "verlet", "implicit_euler".
+const char* integrator_name(Integrator integrator);
 
 // The per-tet term of a model: at most one of these (core/model/stiffness.h).
 enum class ElementTerm : uint8_t { None, TetVolume, NodalVolume, ShearElement, SmoothedShear };
@@ -37,6 +48,7 @@ struct StepPlan {
   ElementTerm element = ElementTerm::None;
   bool gravity = false;
   ToolTerm tool = ToolTerm::None;  // the scene's tool; a tick without contact skips it
+  Integrator integrator = Integrator::Verlet;
   int32_t sutures = 0;             // springs that pull only, on a schedule
   std::vector<Pass> passes;        // in order of execution
 
@@ -45,10 +57,11 @@ struct StepPlan {
   bool shear() const { return element == ElementTerm::ShearElement || element == ElementTerm::SmoothedShear; }
 };
 
-StepPlan make_step_plan(const Model& model, const BackendTool& tool);
+StepPlan make_step_plan(const Model& model, const BackendTool& tool, Integrator integrator = Integrator::Verlet);
 
 // "nodal-pressure", "shear-smoothing", "springs", "volume", "shear-element",
-// "gravity", "surface-contact", "tool-contact", "integrate".
+// "gravity", "surface-contact", "tool-contact", "integrate", "linearise",
+// "conjugate-gradient", "velocity-update".
 const char* pass_name(Pass pass);
 
 }  // namespace organsim

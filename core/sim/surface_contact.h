@@ -34,6 +34,8 @@ namespace organsim {
 
 template <class Real>
 class SurfaceContact {
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+
  public:
   // Triangles and shares from `model` (a rebuild calls it again: cuts
   // change the surface); `scale` is the backend's Model::tool_k_scale,
@@ -152,6 +154,15 @@ class SurfaceContact {
       }
     };
     const bool layered = !layer_.empty();
+    touches_.clear();
+    sticks_.clear();
+    // The stiffness the implicit integrator puts in its system (record_touches).
+    const auto record = [&](const int32_t corner[3], const Real w[3], const V3& f, Real k_t) {
+      const Real fn = f.norm();
+      if (!record_ || !(fn > Real(0))) return;
+      Touch t{{points_[corner[0]], points_[corner[1]], points_[corner[2]]}, {w[0], w[1], w[2]}, V3(f / fn), k_t};
+      touches_.push_back(t);
+    };
     if (layered) {
       hertz_.clear();
       pending_.clear();
@@ -172,6 +183,7 @@ class SurfaceContact {
           if (jaws == 2) grip_ += t.f.dot(closing[jaw]);
           if (!layered) {
             spread(t.corner, t.w, t.f);
+            record(t.corner, t.w, t.f, k * force_law::triangle_penalty_scale(share));
             continue;
           }
           const V3 q = t.w[0] * at(corner[0]) + t.w[1] * at(corner[1]) + t.w[2] * at(corner[2]);
@@ -183,18 +195,44 @@ class SurfaceContact {
     }
     if (layered) {
       hertz_.solve(placed.radius);
-      for (size_t i = 0; i < pending_.size(); ++i)
-        spread(pending_[i].corner, pending_[i].w, V3(static_cast<Real>(hertz_.factor(i)) * pending_[i].f));
+      for (size_t i = 0; i < pending_.size(); ++i) {
+        const Real factor = static_cast<Real>(hertz_.factor(i));
+        spread(pending_[i].corner, pending_[i].w, V3(factor * pending_[i].f));
+        const int32_t* c = pending_[i].corner;
+        const Real share[3] = {share_[c[0]], share_[c[1]], share_[c[2]]};
+        record(c, pending_[i].w, pending_[i].f, factor * k * force_law::triangle_penalty_scale(share));
+      }
     }
     if (friction.on()) add_friction(placed, k, friction);
   }
+
+  // The contact's stiffness for the implicit integrator
+  // (core/sim/implicit_system.h): with record on, evaluate() keeps every
+  // touching penalty's corners (internal ids), weights, unit normal and
+  // stiffness k_t (times its layer factor: the factor is held constant in
+  // the linearisation), and every sticking point's friction spring (its
+  // stick stiffness across the normal; a slipping point's force is bounded
+  // by mu_k N and adds none).
+  struct Touch {
+    int32_t point[3];
+    Real w[3];
+    V3 n;
+    Real k;
+  };
+  struct Stick {
+    int32_t point;
+    V3 n;
+    Real k;
+  };
+  void record_touches(bool on) { record_ = on; }
+  const std::vector<Touch>& touches() const { return touches_; }
+  const std::vector<Stick>& sticks() const { return sticks_; }
 
   // A grasper's grip at the last evaluate: its jaws' penalties along their
   // closing directions, summed over both jaws, N (0 for one segment).
   Real grip() const { return grip_; }
 
  private:
-  using V3 = Eigen::Matrix<Real, 3, 1>;
   V3 at(int32_t local) const { return V3(x_[local], y_[local], z_[local]); }
   Eigen::Map<V3> force_at(size_t slot) { return Eigen::Map<V3>(&force_[3 * slot]); }
 
@@ -212,6 +250,8 @@ class SurfaceContact {
       V3 anchor = has_anchor_[p] ? V3(origin + R * anchor_[p]) : x;
       bool slipping = has_anchor_[p] == kSlipping;
       force_at(i) += force_law::anchor_friction(x, normal, k * point_scale_[p], mu_s, mu_k, anchor, slipping);
+      const Real N = normal.norm();
+      if (record_ && !slipping && N > Real(0)) sticks_.push_back({p, V3(normal / N), k * point_scale_[p]});
       anchor_[p] = R.transpose() * (anchor - origin);
       if (!has_anchor_[p]) anchored_.push_back(p);
       has_anchor_[p] = slipping ? kSlipping : kSticking;
@@ -304,6 +344,9 @@ class SurfaceContact {
   std::vector<V3> anchor_;               // friction: each point's anchor in the tool's frame, m (npoint)
   static constexpr uint8_t kSticking = 1, kSlipping = 2;
   std::vector<uint8_t> has_anchor_;      // 0 none, kSticking or kSlipping (npoint)
+  bool record_ = false;                  // record_touches
+  std::vector<Touch> touches_;
+  std::vector<Stick> sticks_;
   std::vector<int32_t> anchored_;        // points with an anchor
 };
 

@@ -16,6 +16,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "core/model/model.h"
+#include "core/sim/step_plan.h"
 #include "core/scenario/tool_spec.h"
 
 namespace organsim {
@@ -140,11 +141,16 @@ StepSuggestion suggest_step(const StabilityReport& report, double tick, double s
 // Before a run: throws Error(Numerical) when dt > report.dt_crit, giving
 // dt_crit, the limiting points and the suggested dt and substeps. With
 // allow_unstable it returns the warning text instead (empty when dt is fine).
-std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable);
+// With implicit Euler (unconditionally stable for the linear part) no dt is
+// refused: returns "".
+std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable,
+                            Integrator integrator = Integrator::Verlet);
 
 // For the force log's meta ("stability") and the study.
 nlohmann::json to_json(const StabilityReport& report);
 // Multi-line text for `run --plan`.
-std::string format_stability_report(const StabilityReport& report, double dt, int32_t substeps);
+// With implicit Euler its last line says how many dt_crit the step spans.
+std::string format_stability_report(const StabilityReport& report, double dt, int32_t substeps,
+                                    Integrator integrator = Integrator::Verlet);
 
 }  // namespace organsim

@@ -39,8 +39,9 @@ nlohmann::json point_json(const LimitingPoint& p) {
 
 }  // namespace
 
-std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable) {
-  if (!(dt > report.dt_crit)) return {};
+std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable,
+                            Integrator integrator) {
+  if (integrator == Integrator::ImplicitEuler || !(dt > report.dt_crit)) return {};
   const StepSuggestion s = suggest_step(report, dt * substeps);
   std::string msg = "time.dt = " + fmt(dt) + " s exceeds the critical step dt_crit = " + fmt(report.dt_crit) +
                     " s of this model (limited by the " + dominant_term(report) + " at points " +
@@ -93,7 +94,7 @@ nlohmann::json to_json(const StabilityReport& r) {
   return j;
 }
 
-std::string format_stability_report(const StabilityReport& r, double dt, int32_t substeps) {
+std::string format_stability_report(const StabilityReport& r, double dt, int32_t substeps, Integrator integrator) {
   std::ostringstream o;
   o << "stability (at rest):\n";
   o << "  dt_crit " << fmt(r.dt_crit) << " s (undamped 2/omega_max " << fmt(r.dt_crit_undamped)
@@ -119,6 +120,12 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3]
       << "): quality " << fmt(s.quality, "%.3f") << ", min dihedral " << fmt(s.min_dihedral_deg, "%.1f")
       << " deg, volume " << fmt(s.volume) << " m^3\n";
+  if (integrator == Integrator::ImplicitEuler) {
+    o << "  dt " << fmt(dt) << " s spans " << fmt(dt / r.dt_crit, "%.3g")
+      << " x dt_crit: implicit Euler, not bounded by dt_crit (it damps the modes above 1/dt instead: "
+         "docs/integrators.md)\n";
+    return o.str();
+  }
   const StepSuggestion s = suggest_step(r, dt * substeps);
   o << "  dt " << fmt(dt) << " s is " << fmt(dt / r.dt_crit, "%.2f") << " x dt_crit: "
     << (dt > r.dt_crit ? "UNSTABLE, refused without --allow-unstable" : "stable") << "; suggested dt " << fmt(s.dt)

@@ -14,6 +14,7 @@ enum class ErrorKind {
   Backend = 6,      // GL/EGL context or shader failure
   Output = 7,       // cannot write an output
   Cases = 8,        // organsim sweep: some cases failed (each is recorded)
+  SolverWarning = 9,  // organsim run: finished, but over 1 % of its implicit steps' solves stopped above their tolerance
   Interrupted = 130,  // organsim sweep: stopped by SIGINT/SIGTERM; unfinished cases stay pending
 };
 

@@ -10,6 +10,16 @@
 namespace organsim {
 namespace {
 
+// `seconds` of settling at dt 1e-4 s, 10 substeps, one thread.
+SettleOptions settle_options(double seconds) {
+  SettleOptions o;
+  o.seconds = seconds;
+  o.dt = 1e-4;
+  o.substeps = 10;
+  o.threads = 1;
+  return o;
+}
+
 // A soft 4 x 4 x 4 cm block, base fixed, under gravity: it sags visibly.
 Model sagging_block() {
   const TetMesh mesh = make_box_tet_mesh(Vec3(0, 0, 0), Vec3(0.04, 0.04, 0.04), 4, 4, 4);
@@ -35,7 +45,7 @@ double largest_move(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 
 TEST(Settle, BlockComesToRestAndStaysThere) {
   const Model model = sagging_block();
-  const SettleResult settled = settle(model, {2.0, 1e-4, 10, 1});
+  const SettleResult settled = settle(model, settle_options(2.0));
   EXPECT_TRUE(settled.converged) << describe(settled);
   EXPECT_LT(settled.residual_relative, 1e-4) << describe(settled);
   EXPECT_GT(settled.max_displacement, 1e-3) << "the block should sag by millimetres";
@@ -59,7 +69,7 @@ TEST(Settle, BlockComesToRestAndStaysThere) {
 TEST(Settle, WithoutGravityTheRestShapeIsTheEquilibrium) {
   Model model = sagging_block();
   model.gravity = Vec3::Zero();
-  const SettleResult settled = settle(model, {0.05, 1e-4, 10, 1});
+  const SettleResult settled = settle(model, settle_options(0.05));
   EXPECT_TRUE(settled.converged);
   EXPECT_LT(settled.max_displacement, 1e-12);  // nothing pulls: round-off only
 }

@@ -1,0 +1,28 @@
+#pragma once
+// What a run reports of its integrator: the force log's meta.integrator and
+// the implicit solver's warning (core/sim/implicit_backend.h).
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+#include "core/sim/backend.h"
+
+namespace organsim {
+
+// {"name": "verlet"} or, for implicit Euler, its solver's settings and what
+// the solves did: CG iterations per step (median, max), the largest final
+// relative residual, the steps whose CG stopped at cg_max_iterations above
+// its tolerance (count and share).
+nlohmann::json integrator_meta(const Backend& backend);
+
+// Share of steps above which a run's exit status says its solves fell short.
+inline constexpr double kUnconvergedShareWarning = 0.01;
+
+// "" while the implicit solver converged in all but at most 1 % of the
+// steps (or the integrator is explicit); else the warning, naming the count.
+std::string integrator_warning(const Backend& backend);
+
+// "CG at its limit in N of M steps" for the progress line; "" when none.
+std::string integrator_progress(const Backend& backend);
+
+}  // namespace organsim

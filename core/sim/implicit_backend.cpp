@@ -1,0 +1,416 @@
+#include "core/sim/implicit_backend.h"
+
+#include <Eigen/SparseCholesky>
+#include <array>
+#include <cmath>
+#include <optional>
+
+#include "core/model/rest_stiffness.h"
+#include "core/physics/force_law.h"
+#include "core/sim/conjugate_gradient.h"
+#include "core/sim/implicit_system.h"
+#include "core/sim/reference_forces.h"
+#include "core/sim/surface_contact.h"
+#include "core/util/error.h"
+#include "core/util/format.h"
+
+namespace organsim {
+
+const char* preconditioner_name(Preconditioner preconditioner) {
+  return preconditioner == Preconditioner::RestCholesky ? "rest_cholesky" : "block_jacobi";
+}
+
+namespace {
+
+Eigen::VectorXd flat(const std::vector<Vec3>& v) {
+  Eigen::VectorXd out(3 * static_cast<Eigen::Index>(v.size()));
+  for (size_t i = 0; i < v.size(); ++i) out.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
+  return out;
+}
+void unflat(const Eigen::VectorXd& v, std::vector<Vec3>& out) {
+  out.resize(static_cast<size_t>(v.size() / 3));
+  for (size_t i = 0; i < out.size(); ++i) out[i] = v.segment<3>(3 * static_cast<Eigen::Index>(i));
+}
+
+// Everything derived from one Model version (prepare() builds it on the
+// change worker's thread; it reads nothing of the run).
+struct ImplicitTables {
+  const Model* model = nullptr;
+  StepPlan plan;
+  std::unique_ptr<ImplicitSystem> system;
+  SurfaceContact<double> surface;
+  std::vector<double> tool_scale;
+  std::array<std::vector<double>, 3> rest;  // X per axis (the surface pass reads streams)
+  Eigen::VectorXd free;                     // 1 per free coordinate, 0 per fixed one
+};
+
+struct ImplicitPrepared final : PreparedModel {
+  explicit ImplicitPrepared(const Model& next) : PreparedModel(next) {}
+  ImplicitTables tables;
+};
+
+class ImplicitBackend final : public Backend {
+ public:
+  ImplicitBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options)
+      : tool_(tool), options_(options) {
+    t_ = pack(model);
+    x_ = model.rest_position;
+    d_.assign(model.npoint(), Vec3::Zero());
+    dv_ = Eigen::VectorXd::Zero(3 * model.npoint());
+    stats_.cg_max_iterations = options.cg_max_iterations;
+  }
+
+  std::string name() const override { return "cpu"; }
+  std::string device() const override {
+    return "CPU, 1 thread, implicit Euler (reference, double; " + std::string(preconditioner_name(options_.preconditioner)) +
+           "-preconditioned CG)";
+  }
+  std::string precision() const override { return "double"; }
+  const StepPlan& step_plan() const override { return t_.plan; }
+  int32_t reaction_latency_ticks() const override { return 0; }
+  double time() const override { return time_; }
+  const IntegratorStats* integrator_stats() const override { return &stats_; }
+
+  Plan plan() const override {
+    Plan plan;
+    const Model& m = *t_.model;
+    for (Pass pass : t_.plan.passes) plan.passes.push_back({pass_name(pass), pass_detail(pass)});
+    if (t_.plan.sutures > 0)
+      plan.per_tick.push_back({"suture-rest", std::to_string(t_.plan.sutures) + " sutures' rest lengths from their schedule"});
+    const size_t n = static_cast<size_t>(m.npoint());
+    plan.buffers.push_back({"x, x - x_prev, dv, CG vectors (r, z, p, q, rhs)", 8 * 3 * n * sizeof(double)});
+    plan.buffers.push_back({"spring tangents (u, axial, transverse, d)", static_cast<size_t>(m.nspring()) * 6 * sizeof(double)});
+    if (m.has_volume()) plan.buffers.push_back({"tet volume gradients", static_cast<size_t>(m.ntet()) * 12 * sizeof(double)});
+    plan.dispatches_per_step = 0;
+    plan.syncs_per_step = 0;
+    return plan;
+  }
+
+  std::string pass_detail(Pass pass) const {
+    const Model& m = *t_.model;
+    switch (pass) {
+      case Pass::NodalPressure: return "nodal volumes and pressures (reference)";
+      case Pass::ShearSmoothing: return "every point's stress on its node-averaged deformation gradient (reference)";
+      case Pass::Springs: return std::to_string(m.nspring()) + " springs and their dampers, scattered (reference)";
+      case Pass::Volume: return std::to_string(m.ntet()) + " tets' volume forces, scattered (reference)";
+      case Pass::ShearElement: return std::to_string(m.ntet()) + " tets' shear element and its damper (reference)";
+      case Pass::Gravity: return "m g on every free point";
+      case Pass::SurfaceContact:
+        return std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
+               " surface triangles, as the CPU backend's pass, each touching triangle's normal stiffness recorded";
+      case Pass::ToolContact:
+        return t_.plan.tool == ToolTerm::Pull ? "grasp attachment springs, k s I each in the system"
+                                              : "the tool's penalties on the points, k n n^T each in the system";
+      case Pass::Linearise:
+        return "the force law's tangent: springs (k - t) u u^T + t I (t = max(T, 0)/L) and d u u^T, the volume "
+               "term's k g g^T, the shear element's rest stiffness, drag alpha m I, the contact's blocks";
+      case Pass::ConjugateGradient:
+        return std::string(preconditioner_name(options_.preconditioner)) + "-preconditioned CG on the free points, "
+               "matrix-free products, warm start from the last dv, relative tolerance " +
+               format_number(options_.cg_tolerance) + ", at most " + std::to_string(options_.cg_max_iterations) +
+               " iterations";
+      case Pass::VelocityUpdate:
+        return "v += dv, x += h v" + (options_.newton_iterations > 1
+                                          ? ", then up to " + std::to_string(options_.newton_iterations - 1) +
+                                                " Newton iterations with a backtracking line search"
+                                          : std::string(" (one linearised solve per step)"));
+      case Pass::Integrate: break;  // Verlet's; not in an implicit plan
+    }
+    return "";
+  }
+
+  void attach(const Attachment& attachment) override { attachment_ = attachment; }
+  void release() override { attachment_ = {}; }
+  void positions(std::vector<Vec3>& out) const override { out = x_; }
+
+  void set_state(const std::vector<Vec3>& x, const std::vector<Vec3>& x_prev) override {
+    if (x.size() != x_.size() || x_prev.size() != x_.size())
+      throw Error(ErrorKind::Input, "set_state: expected " + std::to_string(x_.size()) + " positions");
+    x_ = x;
+    for (size_t i = 0; i < x.size(); ++i) d_[i] = x[i] - x_prev[i];
+    dv_.setZero();
+  }
+
+  std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
+    auto prepared = std::make_unique<ImplicitPrepared>(next);
+    prepared->tables = pack(next);
+    return prepared;
+  }
+
+  void adopt(std::unique_ptr<PreparedModel> prepared) override {
+    auto* p = dynamic_cast<ImplicitPrepared*>(prepared.get());
+    if (!p) throw Error(ErrorKind::Backend, "cpu backend (implicit): adopt() of a version it did not prepare");
+    const Model& next = p->model();
+    const size_t old_n = x_.size(), n = static_cast<size_t>(next.npoint());
+    if (n < old_n || next.origin.size() != n)
+      throw Error(ErrorKind::Backend, "cpu backend (implicit): rebuild from a Model with " + std::to_string(n) +
+                                          " points after " + std::to_string(old_n) + " (points are append-only)");
+    // An appended point starts where its origin is, with its velocity.
+    x_.resize(n), d_.resize(n);
+    for (size_t i = old_n; i < n; ++i) x_[i] = x_[next.origin[i]], d_[i] = d_[next.origin[i]];
+    Eigen::VectorXd dv = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(n));
+    dv.head(dv_.size()) = dv_;
+    dv_ = dv;
+    std::swap(t_, p->tables);
+    t_.surface.take_anchors(p->tables.surface);
+    factor_.reset();
+  }
+
+  Reaction tick(const TickRequest& request) override {
+    const double h = request.dt, tick_start = time_;
+    Reaction reaction;
+    for (int32_t s = 0; s < request.substeps; ++s) {
+      const ToolPlacement placed = request.tool_at(tool_, s);
+      reaction = step(h, tick_start, request.tool_active ? t_.plan.tool : ToolTerm::None, placed);
+      time_ += h;
+    }
+    return reaction;
+  }
+
+ private:
+  ImplicitTables pack(const Model& model) const {
+    ImplicitTables t;
+    t.model = &model;
+    t.plan = make_step_plan(model, tool_, Integrator::ImplicitEuler);
+    t.system = std::make_unique<ImplicitSystem>(model);
+    const int32_t n = model.npoint();
+    t.tool_scale.resize(n);
+    for (int32_t i = 0; i < n; ++i) t.tool_scale[i] = model.tool_scale(i);
+    for (int a = 0; a < 3; ++a) {
+      t.rest[a].resize(n);
+      for (int32_t i = 0; i < n; ++i) t.rest[a][i] = model.rest_position[i][a];
+    }
+    t.free = Eigen::VectorXd::Ones(3 * n);
+    for (int32_t i = 0; i < n; ++i)
+      if (model.fixed[i]) t.free.segment<3>(3 * i).setZero();
+    if (t.plan.tool == ToolTerm::Surface) {
+      t.surface.pack(model, t.tool_scale, static_cast<size_t>(n), tool_.hertz_layer);
+      t.surface.record_touches(true);
+    }
+    return t;
+  }
+
+  // f(x, v) on every point: the internal forces, the drag -alpha m v and the
+  // tool's; `contact` gets the tool's stiffness blocks; returns the reaction.
+  Reaction forces(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t, ToolTerm tool,
+                  const ToolPlacement& placed, std::vector<Vec3>& f, std::vector<ContactBlock>& contact) {
+    const Model& m = *t_.model;
+    reference_internal_forces(m, x, v, f, t);
+    for (int32_t i = 0; i < m.npoint(); ++i) f[i] -= m.viscous_damping * m.mass[i] * v[i];
+    contact.clear();
+    const double k = tool_.contact_stiffness;
+    const auto point_block = [&](int32_t p, const Eigen::Matrix3d& block) {
+      ContactBlock c;
+      c.point[0] = p;
+      c.w[0] = 1;
+      c.k = block;
+      contact.push_back(c);
+    };
+    switch (tool) {
+      case ToolTerm::None: return {};
+      case ToolTerm::Push: {
+        for (int32_t i = 0; i < m.npoint(); ++i) {
+          const Vec3 offset = x[i] - force_law::segment_closest_point(x[i], placed.a, placed.b);
+          const double dist = offset.norm();
+          if (!(dist < placed.radius)) continue;
+          const Vec3 n = dist > 0 ? Vec3(offset / dist) : Vec3(0, 0, 1);
+          point_block(i, force_law::penalty_normal_stiffness(k * t_.tool_scale[i], n));
+        }
+        return reference_push_forces(x, placed, k, f, t_.tool_scale);
+      }
+      case ToolTerm::Pull:
+        for (int32_t p : attachment_.points) point_block(p, k * t_.tool_scale[p] * Eigen::Matrix3d::Identity());
+        return reference_pull_forces(x, attachment_, placed.origin, k, f, t_.tool_scale);
+      case ToolTerm::Surface: break;
+    }
+    // The surface pass on the CPU backend's streams: X per axis and u = x - X.
+    for (int a = 0; a < 3; ++a) {
+      u_[a].resize(x.size());
+      for (size_t i = 0; i < x.size(); ++i) u_[a][i] = x[i][a] - t_.rest[a][i];
+    }
+    t_.surface.evaluate({t_.rest[0].data(), t_.rest[1].data(), t_.rest[2].data()},
+                        {u_[0].data(), u_[1].data(), u_[2].data()}, placed, k, tool_.friction, 1);
+    Reaction reaction;
+    const int32_t* slot = t_.surface.slot();
+    for (int32_t p = 0; p < m.npoint(); ++p) {
+      if (slot[p] < 0) continue;
+      const Vec3 fp(t_.surface.force()[3 * slot[p]], t_.surface.force()[3 * slot[p] + 1],
+                    t_.surface.force()[3 * slot[p] + 2]);
+      f[p] += fp;
+      reaction.force -= fp;
+      reaction.torque += (x[p] - placed.origin).cross(-fp);
+      ++reaction.contacts;
+    }
+    reaction.grip = t_.surface.grip();
+    for (const auto& touch : t_.surface.touches()) {
+      ContactBlock c;
+      for (int j = 0; j < 3; ++j) c.point[j] = touch.point[j], c.w[j] = touch.w[j];
+      c.k = force_law::penalty_normal_stiffness(touch.k, touch.n);
+      contact.push_back(c);
+    }
+    for (const auto& stick : t_.surface.sticks())
+      point_block(stick.point, stick.k * (Eigen::Matrix3d::Identity() - stick.n * stick.n.transpose()));
+    return reaction;
+  }
+
+  // One backward Euler step of h from the state (x_, d_ = h v).
+  Reaction step(double h, double t, ToolTerm tool, const ToolPlacement& placed) {
+    const Model& m = *t_.model;
+    const int32_t n = m.npoint();
+    ImplicitSystem& system = *t_.system;
+    const Eigen::VectorXd& free = t_.free;
+    std::vector<Vec3> v0(n), f, v1;
+    for (int32_t i = 0; i < n; ++i) v0[i] = m.fixed[i] ? Vec3::Zero() : Vec3(d_[i] / h);
+    std::vector<ContactBlock> contact;
+    const Reaction reaction = forces(x_, v0, t, tool, placed, f, contact);
+    system.linearise(x_, v0, t, std::move(contact));
+    const Eigen::VectorXd v0f = flat(v0);
+    Eigen::VectorXd kv;
+    system.apply(0, 0, 1, v0f, kv);
+    const Eigen::VectorXd rhs = h * flat(f) - h * h * kv;
+    int32_t iterations = 0;
+    double residual = 0;
+    bool converged = true;
+    const auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+      const CgResult r = conjugate_gradient(
+          [&](const Eigen::VectorXd& p, Eigen::VectorXd& y) { system.apply(1, h, h * h, p, y); },
+          preconditioner(h), b, free, options_.cg_tolerance, options_.cg_max_iterations, x);
+      iterations += r.iterations;
+      residual = std::max(residual, r.residual);
+      converged = converged && r.converged;
+    };
+    solve(rhs, dv_);
+    Eigen::VectorXd v = v0f + dv_;
+    if (options_.newton_iterations > 1) newton(h, t, tool, placed, v0f, v, solve);
+    unflat(v, v1);
+    for (int32_t i = 0; i < n; ++i) {
+      if (m.fixed[i]) continue;
+      d_[i] = h * v1[i];
+      x_[i] += d_[i];
+    }
+    stats_.cg_iterations.push_back(iterations);
+    stats_.max_residual = std::max(stats_.max_residual, residual);
+    if (!converged) ++stats_.unconverged_steps;
+    return reaction;
+  }
+
+  // Newton iterations 2.. on g(v) = M (v - v0) - h f(x0 + h v, v), each
+  // solving (M + h D + h^2 K) dv = -g at the new state, its step halved
+  // (at most 4 times) while |g| does not fall.
+  template <class Solve>
+  void newton(double h, double t, ToolTerm tool, const ToolPlacement& placed, const Eigen::VectorXd& v0,
+              Eigen::VectorXd& v, const Solve& solve) {
+    const Model& m = *t_.model;
+    std::vector<Vec3> x, vv, f;
+    std::vector<ContactBlock> contact;
+    Eigen::VectorXd mass(v.size());
+    for (int32_t i = 0; i < m.npoint(); ++i) mass.segment<3>(3 * i).setConstant(m.mass[i]);
+    const auto residual = [&](const Eigen::VectorXd& vel, bool linearise) {
+      unflat(vel, vv);
+      x = x_;
+      for (int32_t i = 0; i < m.npoint(); ++i)
+        if (!m.fixed[i]) x[i] += h * vv[i];
+      forces(x, vv, t, tool, placed, f, contact);
+      if (linearise) t_.system->linearise(x, vv, t, contact);
+      return Eigen::VectorXd((mass.cwiseProduct(vel - v0) - h * flat(f)).cwiseProduct(t_.free));
+    };
+    Eigen::VectorXd g = residual(v, true);
+    stats_.last_newton_residuals.assign(1, g.norm());
+    for (int32_t k = 1; k < options_.newton_iterations; ++k) {
+      Eigen::VectorXd step = Eigen::VectorXd::Zero(v.size());
+      solve(Eigen::VectorXd(-g), step);
+      double alpha = 1;
+      Eigen::VectorXd trial = v + step, g_trial = residual(trial, false);
+      for (int halvings = 0; halvings < 4 && g_trial.norm() > g.norm(); ++halvings) {
+        alpha /= 2;
+        trial = v + alpha * step;
+        g_trial = residual(trial, false);
+      }
+      v = trial;
+      stats_.last_newton_residuals.push_back(g_trial.norm());
+      if (k + 1 < options_.newton_iterations) g = residual(v, true);
+    }
+  }
+
+  // z = P r: block Jacobi at the current linearisation, or the rest system's factor.
+  LinearOperator preconditioner(double h) {
+    if (options_.preconditioner == Preconditioner::RestCholesky) {
+      if (!factor_ || factor_h_ != h) factor_rest_system(h);
+      return [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+        Eigen::VectorXd rf(free_index_.size());
+        for (size_t i = 0; i < free_index_.size(); ++i) rf[static_cast<Eigen::Index>(i)] = r[free_index_[i]];
+        const Eigen::VectorXd zf = factor_->solve(rf);
+        z = Eigen::VectorXd::Zero(r.size());
+        for (size_t i = 0; i < free_index_.size(); ++i) z[free_index_[i]] = zf[static_cast<Eigen::Index>(i)];
+      };
+    }
+    t_.system->diagonal_blocks(1, h, h * h, blocks_);
+    for (auto& b : blocks_) b = b.inverse().eval();
+    return [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+      z.resize(r.size());
+      for (size_t i = 0; i < blocks_.size(); ++i)
+        z.segment<3>(3 * static_cast<Eigen::Index>(i)) = blocks_[i] * r.segment<3>(3 * static_cast<Eigen::Index>(i));
+    };
+  }
+
+  // M + h D_rest + h^2 K_rest on the free coordinates, factored (the
+  // contact's blocks left out: they come and go with the tool).
+  void factor_rest_system(double h) {
+    const Model& m = *t_.model;
+    Triplets t = rest_stiffness(m);
+    for (auto& e : t) e = {e.row(), e.col(), h * h * e.value()};
+    for (const auto& e : rest_damping(m)) t.emplace_back(e.row(), e.col(), h * e.value());
+    for (int32_t i = 0; i < m.npoint(); ++i)
+      for (int a = 0; a < 3; ++a) t.emplace_back(3 * i + a, 3 * i + a, m.mass[i]);
+    std::vector<int32_t> index(3 * m.npoint(), -1);
+    free_index_.clear();
+    for (int32_t i = 0; i < 3 * m.npoint(); ++i)
+      if (t_.free[i] != 0) index[i] = static_cast<int32_t>(free_index_.size()), free_index_.push_back(i);
+    Triplets ff;
+    ff.reserve(t.size());
+    for (const auto& e : t)
+      if (index[e.row()] >= 0 && index[e.col()] >= 0) ff.emplace_back(index[e.row()], index[e.col()], e.value());
+    const auto nf = static_cast<Eigen::Index>(free_index_.size());
+    Eigen::SparseMatrix<double> a(nf, nf);
+    a.setFromTriplets(ff.begin(), ff.end());
+    factor_ = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(a);
+    if (factor_->info() != Eigen::Success)
+      throw Error(ErrorKind::Numerical, "implicit Euler: the rest system M + h D + h^2 K could not be factored");
+    factor_h_ = h;
+  }
+
+  BackendTool tool_;
+  ImplicitOptions options_;
+  ImplicitTables t_;
+  std::vector<Vec3> x_, d_;  // positions and the last step's increment h v
+  Eigen::VectorXd dv_;       // the last solve's dv: the next one's warm start
+  Attachment attachment_;
+  double time_ = 0;
+  IntegratorStats stats_;
+  std::array<std::vector<double>, 3> u_;  // the surface pass's displacement streams
+  std::vector<Eigen::Matrix3d> blocks_;    // block Jacobi's inverses
+  std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> factor_;
+  double factor_h_ = 0;
+  std::vector<int32_t> free_index_;  // the factor's coordinates
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
+                                               const ImplicitOptions& options) {
+  if (options.newton_iterations < 1)
+    throw Error(ErrorKind::Usage, "implicit Euler: newton_iterations must be >= 1 (got " +
+                                      std::to_string(options.newton_iterations) + ")");
+  if (!(options.cg_tolerance >= 0))
+    throw Error(ErrorKind::Usage, "implicit Euler: cg_tolerance must be >= 0");
+  if (options.cg_max_iterations < 1)
+    throw Error(ErrorKind::Usage, "implicit Euler: cg_max_iterations must be >= 1 (got " +
+                                      std::to_string(options.cg_max_iterations) + ")");
+  if (options.newton_iterations > 1 && tool.present && tool.friction.on())
+    throw Error(ErrorKind::Usage,
+                "implicit Euler: newton_iterations > 1 with a tool that has friction is not supported (the "
+                "friction anchors advance at every evaluation of the contact); use newton_iterations 1");
+  return std::make_unique<ImplicitBackend>(model, tool, options);
+}
+
+}  // namespace organsim

@@ -1,0 +1,46 @@
+#pragma once
+// The implicit (backward Euler) integrator on the CPU in double precision:
+// the reference for implicit integration, as the generic kernel is for
+// Verlet. Each step evaluates the force law (the reference forces,
+// core/sim/reference_forces.h, and the surface contact pass the CPU backend
+// runs) at the step's start, linearises it (core/sim/implicit_system.h) and
+// solves
+//   (M + h D + h^2 K) dv = h (f - h K v)
+// by preconditioned conjugate gradients, warm-started from the last step's
+// dv, with the fixed points projected out; then v += dv, x += h v. With
+// newton_iterations > 1 the nonlinear residual M (v1 - v0) - h f(x0 + h v1,
+// v1) is driven further by Newton steps on the same system at the new
+// state, each with a backtracking line search. The step is unconditionally
+// stable for the linear part, so time.dt is not bounded by dt_crit; it
+// damps numerically (docs/integrators.md). The tool's contact and a pulling
+// tool's attachments are springs in the system (their stiffness inside it,
+// so a stiff contact is stable too). One thread: results do not depend on
+// the thread count.
+#include <memory>
+#include <string>
+
+#include "core/sim/backend.h"
+
+namespace organsim {
+
+enum class Preconditioner : uint8_t {
+  BlockJacobi,   // the inverse of each point's 3x3 diagonal block, at every linearisation
+  RestCholesky,  // a sparse Cholesky factor of the rest system M + h D_rest + h^2 K_rest, refreshed when h or the Model changes
+};
+// "block_jacobi", "rest_cholesky".
+const char* preconditioner_name(Preconditioner preconditioner);
+
+struct ImplicitOptions {
+  int32_t newton_iterations = 1;  // linearised solves per step (1: SOFA's one-step form)
+  double cg_tolerance = 1e-5;     // relative residual |b - A dv| / |b| a solve stops at
+  int32_t cg_max_iterations = 200;
+  Preconditioner preconditioner = Preconditioner::BlockJacobi;
+};
+
+// Throws Error(Usage) for options out of range or a combination it does not
+// run (Newton iterations with friction, whose anchors advance at every
+// evaluation of the contact).
+std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
+                                               const ImplicitOptions& options = {});
+
+}  // namespace organsim

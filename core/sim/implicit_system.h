@@ -1,0 +1,69 @@
+#pragma once
+// The linear system of one backward (implicit) Euler step, matrix-free:
+//   (M + h D + h^2 K) dv = h (f + h (-K) v)   (SOFA's one-step form),
+// K = -df/dx and D = -df/dv the force law's tangent at the step's state,
+// kept positive semi-definite (force_law.h, "Tangent stiffness"), so that
+// preconditioned conjugate gradients solve it. Products are evaluated from
+// per-element data stored at linearise() (no assembled matrix): springs
+// (k - t) u u^T + t I and their dampers d u u^T, the volume term's
+// Gauss-Newton part k g g^T (per tet, or G^T diag(k_a) G for the nodal term;
+// the pressure's own second derivative p d^2V/dx^2 is left out: it is
+// indefinite and vanishes at rest), the shear element's rest stiffness and
+// its damper's (constant sparse matrices, exact at rest), the drag alpha m I,
+// and the tool's contact blocks (ContactBlock). Fixed points are projected
+// out by the caller (ImplicitSolve). docs/integrators.md derives it.
+#include <Eigen/SparseCore>
+#include <array>
+#include <vector>
+
+#include "core/model/model.h"
+
+namespace organsim {
+
+// A contact's stiffness on up to three points with weights w (a triangle's
+// corners; one point with w = 1 for a point contact, an attachment or a
+// friction anchor): block (p_i, p_j) of K gains w_i w_j k. k symmetric
+// positive semi-definite; unused corners have point -1.
+struct ContactBlock {
+  std::array<int32_t, 3> point{-1, -1, -1};
+  std::array<double, 3> w{0, 0, 0};
+  Eigen::Matrix3d k = Eigen::Matrix3d::Zero();
+};
+
+class ImplicitSystem {
+ public:
+  // The Model's constant parts (the shear element's rest matrices); the
+  // Model must outlive the system.
+  explicit ImplicitSystem(const Model& model);
+
+  // The tangent at positions x and velocities v (npoint), the sutures' rest
+  // lengths at time t, with the contact's blocks.
+  void linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t, std::vector<ContactBlock> contact);
+
+  // out = (M m_coef + D alpha + K beta) p over all 3 npoint coordinates
+  // (fixed points included: the caller projects them out).
+  void apply(double m_coef, double alpha, double beta, const Eigen::VectorXd& p, Eigen::VectorXd& out) const;
+  // The diagonal 3x3 blocks of the same matrix (npoint).
+  void diagonal_blocks(double m_coef, double alpha, double beta, std::vector<Eigen::Matrix3d>& out) const;
+
+  const Model& model() const { return model_; }
+
+ private:
+  const Model& model_;
+  // Per spring at the linearisation: its direction, axial and transverse
+  // stiffness (K = axial u u^T + transverse I) and damper (D = d u u^T); a
+  // slack suture has all three zero.
+  struct SpringTangent {
+    Vec3 u{0, 0, 0};
+    double axial = 0, transverse = 0, d = 0;
+  };
+  std::vector<SpringTangent> springs_;
+  // Volume term: dV_t/dx_i of every tet's corners at the linearisation.
+  std::vector<std::array<Vec3, 4>> volume_gradient_;
+  std::vector<std::vector<int32_t>> tets_of_point_;  // nodal term: each point's tets
+  std::vector<ContactBlock> contact_;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> shear_k_, shear_d_;  // empty without the element
+  mutable std::vector<double> tet_scratch_, node_scratch_;          // nodal term's two passes
+};
+
+}  // namespace organsim
