@@ -613,3 +613,44 @@ TEST(ToolSpec, OrientationIsSlerpedBetweenKeyframesAndExactAtThem) {
 
 }  // namespace
 }  // namespace organsim
+
+namespace organsim {
+namespace {
+
+// time.integrator and the implicit solver's settings: defaults, values,
+// and the settings refused where they mean nothing (Verlet) or are out of range.
+TEST(ScenarioParse, IntegratorAndItsSolverSettingsAreReadAndChecked) {
+  const Scenario d = parse(minimal());
+  EXPECT_EQ(d.time.integrator, Integrator::Verlet);
+  EXPECT_EQ(d.time.implicit.newton_iterations, 1);
+  EXPECT_EQ(d.time.implicit.cg_tolerance, 1e-5);
+  EXPECT_EQ(d.time.implicit.cg_max_iterations, 200);
+  EXPECT_EQ(d.time.implicit.preconditioner, Preconditioner::BlockJacobi);
+
+  json j = minimal();
+  j["time"] = {{"dt", 1e-3}, {"substeps", 1}, {"integrator", "implicit_euler"}, {"newton_iterations", 3},
+               {"cg_tolerance", 1e-7}, {"cg_max_iterations", 50}, {"preconditioner", "rest_cholesky"}};
+  const Scenario s = parse(j);
+  EXPECT_EQ(s.time.integrator, Integrator::ImplicitEuler);
+  EXPECT_EQ(s.time.implicit.newton_iterations, 3);
+  EXPECT_EQ(s.time.implicit.cg_tolerance, 1e-7);
+  EXPECT_EQ(s.time.implicit.cg_max_iterations, 50);
+  EXPECT_EQ(s.time.implicit.preconditioner, Preconditioner::RestCholesky);
+
+  j = minimal();
+  j["time"] = {{"integrator", "rk4"}};
+  EXPECT_NE(error_of(j).find("time.integrator"), std::string::npos);
+  j["time"] = {{"cg_tolerance", 1e-6}};
+  EXPECT_NE(error_of(j).find("applies only with \"integrator\": \"implicit_euler\""), std::string::npos);
+  j["time"] = {{"integrator", "implicit_euler"}, {"newton_iterations", 0}};
+  EXPECT_NE(error_of(j).find("time.newton_iterations"), std::string::npos);
+  j["time"] = {{"integrator", "implicit_euler"}, {"cg_max_iterations", 0}};
+  EXPECT_NE(error_of(j).find("time.cg_max_iterations"), std::string::npos);
+  j["time"] = {{"integrator", "implicit_euler"}, {"cg_tolerance", -1}};
+  EXPECT_NE(error_of(j).find("time.cg_tolerance"), std::string::npos);
+  j["time"] = {{"integrator", "implicit_euler"}, {"preconditioner", "ilu"}};
+  EXPECT_NE(error_of(j).find("time.preconditioner"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace organsim
