@@ -105,6 +105,9 @@ std::string fmt(double v, const char* spec = "%.6g") {
 
 void fit_command(const FitArgs& args) {
   Scenario s = load_scenario(args.scenario);
+  if (s.time.integrator != Integrator::Verlet)
+    throw Error(ErrorKind::Usage, args.scenario + ": organsim fit simulates with Verlet only (time.integrator \"" +
+                                      integrator_name(s.time.integrator) + "\" is not yet one it fits with)");
   if (!s.tool) throw Error(ErrorKind::Scenario, args.scenario + ": tool: fit needs a tool whose force it compares");
   std::vector<const ParameterSlot*> slots;
   std::vector<FitParameter> parameters;

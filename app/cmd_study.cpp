@@ -184,6 +184,12 @@ nlohmann::json request_of(const StudyArgs& args) {
 StudySetup set_up(const StudyArgs& args) {
   StudySetup u;
   u.scenario = load_scenario(args.scenario);
+  // The configurations and the reference are Verlet runs; an implicit
+  // scenario would be studied as something it is not.
+  if (u.scenario.time.integrator != Integrator::Verlet)
+    throw Error(ErrorKind::Usage, args.scenario + ": organsim study compares Verlet configurations only "
+                                  "(time.integrator \"" + integrator_name(u.scenario.time.integrator) +
+                                  "\" is not yet one of its axes: docs/integrators.md)");
   Scenario& s = u.scenario;
   if (args.duration > 0) s.time.duration = args.duration;
   const TetMesh mesh = load_scenario_mesh(s.mesh);

@@ -91,5 +91,15 @@ TEST(RunImplicitCli, BackendsThatIntegrateOnlyExplicitlyAreRefused) {
   EXPECT_NE(f.err.find("double precision only"), std::string::npos) << f.err;
 }
 
+// study and fit run Verlet only: an implicit scenario is refused, not run as Verlet.
+TEST(RunImplicitCli, StudyAndFitRefuseAnImplicitScenario) {
+  const fs::path dir = implicit_scene("study", nlohmann::json::object());
+  const auto study = run_organsim("study '" + (dir / "scene.json").string() + "' --dt 0.001 -o '" +
+                                      (dir / "study").string() + "'", dir);
+  EXPECT_EQ(study.exit_code, 2) << study.err;
+  EXPECT_NE(study.err.find("compares Verlet configurations only"), std::string::npos) << study.err;
+  EXPECT_FALSE(fs::exists(dir / "study"));
+}
+
 }  // namespace
 }  // namespace organsim
