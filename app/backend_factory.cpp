@@ -17,9 +17,9 @@ namespace {
 std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model, const BackendTool& tool) {
   CpuBackendOptions o;
   const std::string precision = s.precision.value_or("double");
-  if (s.integrator == Integrator::ImplicitEuler) {
+  if (solves_implicitly(s.integrator)) {
     if (precision != "double" || !s.cpu_kernel.empty())
-      throw Error(ErrorKind::Usage, "integrator implicit_euler runs on the cpu backend in double precision only "
+      throw Error(ErrorKind::Usage, std::string("integrator ") + integrator_name(s.integrator) + " runs on the cpu backend in double precision only "
                                     "(its reference; asked: " + precision +
                                         (s.cpu_kernel.empty() ? "" : ", kernel " + s.cpu_kernel) + ")");
     return make_implicit_backend(model, tool, s.implicit);
@@ -43,9 +43,9 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
 }
 
 std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, const BackendTool& tool) {
-  if (s.integrator == Integrator::ImplicitEuler)
-    throw Error(ErrorKind::Usage, "integrator implicit_euler runs on the cpu backend only (the gl backend integrates "
-                                  "by position Verlet)");
+  if (solves_implicitly(s.integrator))
+    throw Error(ErrorKind::Usage, std::string("integrator ") + integrator_name(s.integrator) +
+                                      " runs on the cpu backend only (the gl backend integrates by position Verlet)");
   if (s.precision && *s.precision != "float") {
     throw Error(ErrorKind::Usage, "the gl backend computes in float (precision \"" + *s.precision + "\" asked)");
   }
@@ -60,10 +60,11 @@ std::unique_ptr<Backend> make_gl(const BackendSelection& s, const Model& model, 
 std::string resolve_auto_backend(BackendSelection& selection) {
   if (selection.name != "auto") return "";
   std::string why;
-  if (selection.integrator == Integrator::ImplicitEuler) {
+  if (solves_implicitly(selection.integrator)) {
     selection.name = "cpu";
     if (!selection.precision) selection.precision = "double";
-    return "auto chose cpu (" + *selection.precision + "): integrator implicit_euler runs on the CPU in double";
+    return "auto chose cpu (" + *selection.precision + "): integrator " + integrator_name(selection.integrator) +
+           " runs on the CPU in double";
   }
   if (selection.precision && *selection.precision == "double") {
     selection.name = "cpu";

@@ -1,4 +1,5 @@
-// `organsim study SCENARIO.json --dt LIST --backend LIST --precision LIST [--jobs N] [-o OUTDIR]`
+// `organsim study SCENARIO.json --dt LIST --backend LIST --precision LIST [--integrator LIST
+//  [--implicit-dt LIST]] [--jobs N] [-o OUTDIR]`
 // `... --reference-only`, `... --shard i/N|slurm`, `organsim study --collect OUTDIR`
 // Error against run time: runs the scenario once per configuration, compares
 // each with a converged double-precision CPU reference and writes study.json,
@@ -28,6 +29,7 @@
 #include "app/scenario_mesh.h"
 #include "app/study_tables.h"
 #include "app/sweep_runner.h"
+#include "core/run/integrator_report.h"
 #include "core/run/prepare_run.h"
 #include "core/run/run.h"
 #include "core/stability/blowup_monitor.h"
@@ -49,6 +51,10 @@ struct StudyArgs {
   std::vector<double> dts;
   std::vector<std::string> backends{"cpu"};
   std::vector<std::string> precisions{"double", "float"};
+  // time.integrator names; an implicit one runs on the CPU in double only,
+  // at --implicit-dt (default: --dt), with the scenario's solver settings.
+  std::vector<std::string> integrators{"verlet"};
+  std::vector<double> implicit_dts;
   double duration = 0;           // s; 0 = the scenario's
   int32_t ref_factor = 4;        // reference dt = smallest asked dt / ref_factor
   double ref_tolerance = 1e-4;   // max position change from halving dt_ref, relative to the bbox diagonal
@@ -78,15 +84,26 @@ struct Ran {
   Trajectory trajectory;
 };
 
-Ran run_configuration(const Scenario& base, const Model& model, const std::string& backend_name,
-                          const std::string& precision, int32_t substeps, int32_t threads, int64_t sample_every,
-                          const PreparedRun& prepared) {
+Integrator integrator_named(const std::string& name) {
+  for (Integrator i : {Integrator::Verlet, Integrator::ImplicitEuler, Integrator::ImplicitDamping})
+    if (name == integrator_name(i)) return i;
+  throw Error(ErrorKind::Usage, "--integrator: expected verlet, implicit_euler or implicit_damping (got \"" + name + "\")");
+}
+
+Ran run_configuration(const Scenario& base, const Model& model, const StudyConfiguration& c, int32_t threads,
+                      int64_t sample_every, const PreparedRun& prepared) {
   Ran ran;
   StudyOutcome& o = ran.outcome;
   Trajectory& trajectory = ran.trajectory;
+  const std::string& backend_name = c.backend;
+  const std::string& precision = c.precision;
+  const int32_t substeps = c.substeps;
+  o.integrator = c.integrator;
   o.backend = backend_name;
   o.precision = precision;
   Scenario s = base;
+  s.time.integrator = integrator_named(c.integrator);
+  if (solves_implicitly(s.time.integrator)) s.time.implicit.integrator = s.time.integrator;
   s.time.substeps = substeps;
   s.time.dt = base.time.tick() / substeps;
   s.outputs = OutputsDef{};
@@ -97,6 +114,8 @@ Ran run_configuration(const Scenario& base, const Model& model, const std::strin
   selection.name = backend_name;
   selection.precision = precision;
   selection.threads = threads;
+  selection.integrator = s.time.integrator;
+  selection.implicit = s.time.implicit;
   std::unique_ptr<Backend> backend;
   try {
     backend = make_backend(selection, model, backend_tool(s));
@@ -121,6 +140,7 @@ Ran run_configuration(const Scenario& base, const Model& model, const std::strin
     o.steps_per_second = r.meta.steps_per_second;
     o.simulated = static_cast<double>(r.samples.size()) * s.time.tick();
     trajectory.force = r.samples.force;
+    if (const std::string warning = integrator_warning(*backend); !warning.empty()) o.reason = warning;
   } catch (const Error& e) {
     if (e.kind() != ErrorKind::Numerical) throw;
     o.stable = false;
@@ -178,18 +198,12 @@ struct StudySetup {
 nlohmann::json request_of(const StudyArgs& args) {
   return {{"scenario_text", read_text_file(args.scenario)}, {"dt", args.dts}, {"backend", args.backends},
           {"precision", args.precisions}, {"duration", args.duration}, {"ref_factor", args.ref_factor},
-          {"samples", args.samples}};
+          {"samples", args.samples}, {"integrator", args.integrators}, {"implicit_dt", args.implicit_dts}};
 }
 
 StudySetup set_up(const StudyArgs& args) {
   StudySetup u;
   u.scenario = load_scenario(args.scenario);
-  // The configurations and the reference are Verlet runs; an implicit
-  // scenario would be studied as something it is not.
-  if (u.scenario.time.integrator != Integrator::Verlet)
-    throw Error(ErrorKind::Usage, args.scenario + ": organsim study compares Verlet configurations only "
-                                  "(time.integrator \"" + integrator_name(u.scenario.time.integrator) +
-                                  "\" is not yet one of its axes: docs/integrators.md)");
   Scenario& s = u.scenario;
   if (args.duration > 0) s.time.duration = args.duration;
   const TetMesh mesh = load_scenario_mesh(s.mesh);
@@ -203,15 +217,35 @@ StudySetup set_up(const StudyArgs& args) {
   u.sample_every = std::max<int64_t>(1, s.time.ticks() / std::max(args.samples, 1));
 
   const double tick = s.time.tick();
-  std::vector<int32_t> substeps;
-  for (double dt : args.dts) {
-    if (!(dt > 0)) throw Error(ErrorKind::Usage, "--dt: expected positive steps in s, got " + fmt(dt));
-    substeps.push_back(std::max<int32_t>(1, static_cast<int32_t>(std::lround(tick / dt))));
+  const auto substeps_of = [&](const std::vector<double>& dts, const char* option) {
+    std::vector<int32_t> out;
+    for (double dt : dts) {
+      if (!(dt > 0)) throw Error(ErrorKind::Usage, std::string(option) + ": expected positive steps in s, got " + fmt(dt));
+      out.push_back(std::max<int32_t>(1, static_cast<int32_t>(std::lround(tick / dt))));
+    }
+    return out;
+  };
+  const std::vector<int32_t> substeps = substeps_of(args.dts, "--dt");
+  const std::vector<int32_t> implicit_substeps =
+      args.implicit_dts.empty() ? substeps : substeps_of(args.implicit_dts, "--implicit-dt");
+  // The reference is Verlet, the integrator without numerical damping, at
+  // a quarter of the smallest asked step (and at half that, to show it is
+  // converged); whatever the configurations' integrators, it is the
+  // solution of the same equations they approximate.
+  u.ref_substeps = std::max(*std::max_element(substeps.begin(), substeps.end()),
+                            *std::max_element(implicit_substeps.begin(), implicit_substeps.end())) *
+                   args.ref_factor;
+  for (const std::string& name : args.integrators) {
+    if (!solves_implicitly(integrator_named(name))) {
+      for (const std::string& b : args.backends)
+        for (const std::string& p : args.precisions)
+          for (int32_t n : substeps) u.configurations.push_back({b, p, n, name});
+      continue;
+    }
+    // An implicit integrator runs on the CPU in double only: its rows are
+    // those, and the other backends and precisions are not asked of it.
+    for (int32_t n : implicit_substeps) u.configurations.push_back({"cpu", "double", n, name});
   }
-  u.ref_substeps = *std::max_element(substeps.begin(), substeps.end()) * args.ref_factor;
-  for (const std::string& b : args.backends)
-    for (const std::string& p : args.precisions)
-      for (int32_t n : substeps) u.configurations.push_back({b, p, n});
   // With --jobs N the runs share the CPUs: each gets its share of threads
   // (results do not depend on the thread count, so they equal a serial
   // study's; run times do, which is why one job is the default).
@@ -220,8 +254,8 @@ StudySetup set_up(const StudyArgs& args) {
   return u;
 }
 
-Ran run_one(const StudySetup& u, const std::string& backend, const std::string& precision, int32_t substeps) {
-  return run_configuration(u.scenario, u.model, backend, precision, substeps, u.threads, u.sample_every, u.prepared);
+Ran run_one(const StudySetup& u, const StudyConfiguration& c) {
+  return run_configuration(u.scenario, u.model, c, u.threads, u.sample_every, u.prepared);
 }
 
 // The converged reference, double CPU at dt_ref and dt_ref / 2, and the head
@@ -234,7 +268,7 @@ Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::j
   int done = 0;
   run_jobs(2, args.jobs, [&](size_t i) {
     Ran& o = i == 0 ? ref : half;
-    o = run_one(u, "cpu", "double", static_cast<int32_t>(i + 1) * u.ref_substeps);
+    o = run_one(u, {"cpu", "double", static_cast<int32_t>(i + 1) * u.ref_substeps, "verlet"});
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress(++done, 2, "reference dt " + fmt(o.outcome.dt));
   });
@@ -260,7 +294,7 @@ Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::j
   head["duration"] = u.scenario.time.duration;
   head["step_policy"] = "the haptic tick is kept: each asked dt becomes tick / round(tick / dt)";
   head["stability"] = to_json(u.prepared.stability);
-  head["reference"] = {{"backend", "cpu"}, {"precision", "double"}, {"dt", ref.outcome.dt},
+  head["reference"] = {{"integrator", "verlet"}, {"backend", "cpu"}, {"precision", "double"}, {"dt", ref.outcome.dt},
                        {"dt_half", half.outcome.dt}, {"compared_against", "dt_half"},
                        {"halving_position_change_max", convergence.position_max},
                        {"halving_position_change_rms", convergence.position_rms},
@@ -281,11 +315,11 @@ void run_configurations(const StudyArgs& args, const StudySetup& u, const std::v
     // share one device.
     std::unique_lock<std::mutex> gl_lock(gl_mutex, std::defer_lock);
     if (c.backend == "gl") gl_lock.lock();
-    Ran o = run_one(u, c.backend, c.precision, c.substeps);
+    Ran o = run_one(u, c);
     if (o.outcome.stable) o.outcome.errors = compare_trajectories(o.trajectory, reference, u.diag);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress(++finished, static_cast<int>(which.size()),
-             c.backend + " " + c.precision + " dt " + fmt(u.scenario.time.tick() / c.substeps));
+             c.integrator + " " + c.backend + " " + c.precision + " dt " + fmt(u.scenario.time.tick() / c.substeps));
     done(which[i], std::move(o.outcome));
   });
 }
@@ -375,7 +409,7 @@ void run_shard(const StudyArgs& args, const Shard& shard, const StudyPlan& plan,
             << " to run\n" << std::flush;
   run_configurations(args, u, which, reference, [&](size_t k, StudyOutcome&& o) {
     write_file_atomically(run_path(outdir, k), [&](std::ostream& out) { out << outcome_record_json(o).dump(2) << "\n"; });
-    std::cout << "configuration " << k << " (" << o.backend << " " << o.precision << " dt " << fmt(o.dt) << "): "
+    std::cout << "configuration " << k << " (" << o.integrator << " " << o.backend << " " << o.precision << " dt " << fmt(o.dt) << "): "
               << (o.ran ? (o.stable ? "stable" : "unstable") : "not run") << " -> " << run_path(outdir, k).string()
               << std::endl;
   });
@@ -390,13 +424,16 @@ void collect_study(const fs::path& outdir) {
     const fs::path path = run_path(outdir, k);
     const StudyConfiguration& c = plan.configurations[k];
     if (!fs::exists(path)) {
-      missing += (missing.empty() ? "" : ", ") + std::to_string(k) + " (" + c.backend + " " + c.precision + ")";
+      missing += (missing.empty() ? "" : ", ") + std::to_string(k) + " (" + c.integrator + " " + c.backend + " " +
+                 c.precision + ")";
       continue;
     }
     StudyOutcome o = parse_outcome_record(read_study_file(path.string()), path.string());
-    if (o.backend != c.backend || o.precision != c.precision || o.substeps != c.substeps)
-      throw input_error(path.string(), "expected configuration " + std::to_string(k) + " of the plan (" + c.backend +
-                                           " " + c.precision + ", " + std::to_string(c.substeps) + " substeps)");
+    if (o.integrator != c.integrator || o.backend != c.backend || o.precision != c.precision ||
+        o.substeps != c.substeps)
+      throw input_error(path.string(), "expected configuration " + std::to_string(k) + " of the plan (" +
+                                           c.integrator + " " + c.backend + " " + c.precision + ", " +
+                                           std::to_string(c.substeps) + " substeps)");
     runs.push_back(std::move(o));
   }
   if (!missing.empty())
@@ -445,6 +482,13 @@ const bool registered = register_command("study", 40, [](CLI::App& root) {
       ->delimiter(',');
   cmd->add_option("--backend", args->backends, "Backends (comma-separated: cpu, gl)")->delimiter(',');
   cmd->add_option("--precision", args->precisions, "Precisions (comma-separated: double, float)")->delimiter(',');
+  cmd->add_option("--integrator", args->integrators,
+                  "Integrators (comma-separated: verlet, implicit_euler, implicit_damping; default verlet); an "
+                  "implicit one runs on the cpu in double, with the scenario's solver settings")
+      ->delimiter(',');
+  cmd->add_option("--implicit-dt", args->implicit_dts,
+                  "Steps for the implicit integrators, s (comma-separated; default: --dt)")
+      ->delimiter(',');
   cmd->add_option("-o,--output", args->outdir, "Output folder (default: out/<scenario name>_study)");
   cmd->add_option("--duration", args->duration, "Simulated time per run, s (default: the scenario's)");
   cmd->add_option("--ref-factor", args->ref_factor, "Reference dt = smallest asked dt / this (default 4)")

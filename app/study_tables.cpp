@@ -27,7 +27,7 @@ std::string fmt(double v, const char* spec = "%.4g") {
 }
 
 nlohmann::json outcome_json(const StudyOutcome& o, double dt_crit, bool pareto) {
-  nlohmann::json j = {{"backend", o.backend}, {"precision", o.precision}, {"dt", o.dt},
+  nlohmann::json j = {{"integrator", o.integrator}, {"backend", o.backend}, {"precision", o.precision}, {"dt", o.dt},
                       {"substeps", o.substeps}, {"dt_over_dt_crit", o.dt / dt_crit}, {"ran", o.ran}};
   if (!o.ran) {
     j["error"] = o.reason;
@@ -35,7 +35,8 @@ nlohmann::json outcome_json(const StudyOutcome& o, double dt_crit, bool pareto) 
   }
   j["device"] = o.device;
   j["stable"] = o.stable;
-  j["reason"] = o.stable ? "completed; no blow-up detected" : o.reason;
+  // A stable run's reason is empty, or the implicit solver's warning.
+  j["reason"] = o.stable && o.reason.empty() ? "completed; no blow-up detected" : o.reason;
   if (o.stable) {
     j["wall_seconds_per_simulated_second"] = o.wall / o.simulated;
     j["steps_per_second"] = o.steps_per_second;
@@ -84,7 +85,7 @@ void write_plot(const fs::path& path, const std::vector<StudyOutcome>& runs, con
   const cv::Scalar colours[] = {{200, 80, 30}, {30, 140, 230}, {60, 170, 60}, {160, 60, 200}};
   std::vector<std::string> series;
   auto series_of = [&](const StudyOutcome& o) {
-    const std::string name = o.backend + " " + o.precision;
+    const std::string name = (o.integrator == "verlet" ? "" : o.integrator + " ") + o.backend + " " + o.precision;
     auto it = std::find(series.begin(), series.end(), name);
     if (it == series.end()) {
       series.push_back(name);
@@ -142,13 +143,13 @@ void write_study_outputs(const fs::path& outdir, const nlohmann::json& head, dou
   write_file_atomically(outdir / "study.json", [&](std::ostream& out) { out << j.dump(2) << "\n"; });
 
   std::ostringstream csv;
-  csv << "backend,precision,dt_s,substeps,dt_over_dt_crit,stable,wall_s_per_sim_s,steps_per_s,"
+  csv << "integrator,backend,precision,dt_s,substeps,dt_over_dt_crit,stable,wall_s_per_sim_s,steps_per_s,"
          "position_error_max,position_error_rms,force_error_rms,pareto,reason\n";
   for (size_t i = 0; i < runs.size(); ++i) {
     const StudyOutcome& o = runs[i];
-    std::string reason = o.stable ? "" : o.reason;
+    std::string reason = o.reason;
     std::replace(reason.begin(), reason.end(), '"', '\'');
-    csv << o.backend << "," << o.precision << "," << fmt(o.dt, "%.6g") << "," << o.substeps << ","
+    csv << o.integrator << "," << o.backend << "," << o.precision << "," << fmt(o.dt, "%.6g") << "," << o.substeps << ","
         << fmt(o.dt / dt_crit, "%.3f") << "," << (o.ran ? (o.stable ? "yes" : "no") : "not run") << ",";
     if (o.stable)
       csv << fmt(o.wall / o.simulated) << "," << fmt(o.steps_per_second) << "," << fmt(o.errors.position_max) << ","
@@ -160,7 +161,7 @@ void write_study_outputs(const fs::path& outdir, const nlohmann::json& head, dou
   write_file_atomically(outdir / "study.csv", [&](std::ostream& out) { out << csv.str(); });
 
   const nlohmann::json& reference = head.at("reference");
-  std::cout << "reference: cpu double dt " << fmt(reference.at("dt_half").get<double>())
+  std::cout << "reference: verlet cpu double dt " << fmt(reference.at("dt_half").get<double>())
             << " s; halving dt_ref changed positions by "
             << fmt(reference.at("halving_position_change_max").get<double>()) << " (max) of the bbox diagonal: "
             << (reference.at("converged").get<bool>() ? "converged" : "NOT converged")

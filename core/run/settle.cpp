@@ -33,7 +33,7 @@ SettleResult settle(const Model& model, const SettleOptions& options) {
   CpuBackendOptions cpu;
   cpu.precision = Precision::Double;
   cpu.threads = options.threads;
-  const auto backend = options.integrator == Integrator::ImplicitEuler
+  const auto backend = solves_implicitly(options.integrator)
                            ? make_implicit_backend(model, BackendTool{}, options.implicit)
                            : make_cpu_backend(model, BackendTool{}, cpu);
 

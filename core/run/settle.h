@@ -24,8 +24,8 @@ struct SettleOptions {
   // Stop early once the largest net force on a free point is below this
   // fraction of the heaviest point's weight.
   double tolerance = 1e-4;
-  // The run's integrator: with implicit Euler (whose dt may exceed dt_crit)
-  // the settling steps are implicit too.
+  // The run's integrator: with an implicit one (whose dt may exceed
+  // dt_crit) the settling steps are implicit too (`implicit` says how).
   Integrator integrator = Integrator::Verlet;
   ImplicitOptions implicit;
 };

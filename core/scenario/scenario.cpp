@@ -246,16 +246,20 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
   if (auto v = r.number("settle")) t.settle = require_non_negative(*v, r.at("settle"));
   if (auto v = r.string("integrator")) {
     if (*v == "implicit_euler") t.integrator = Integrator::ImplicitEuler;
+    else if (*v == "implicit_damping") t.integrator = Integrator::ImplicitDamping;
     else if (*v != "verlet")
-      throw r.at("integrator").error("expected \"verlet\" or \"implicit_euler\" (got \"" + *v + "\")");
+      throw r.at("integrator").error("expected \"verlet\", \"implicit_euler\" or \"implicit_damping\" (got \"" + *v +
+                                     "\")");
   }
   // The implicit solver's settings mean nothing to Verlet: refused there, not ignored.
   const auto implicit_only = [&](const char* key) {
-    if (t.integrator != Integrator::ImplicitEuler)
-      throw r.at(key).error("applies only with \"integrator\": \"implicit_euler\"");
+    if (!solves_implicitly(t.integrator))
+      throw r.at(key).error("applies only with \"integrator\": \"implicit_euler\" or \"implicit_damping\"");
   };
   if (auto v = r.integer("newton_iterations")) {
     implicit_only("newton_iterations");
+    if (t.integrator == Integrator::ImplicitDamping && *v != 1)
+      throw r.at("newton_iterations").error("must be 1 with implicit_damping (its system is linear in v)");
     if (*v < 1 || *v > 100) throw r.at("newton_iterations").error("expected an integer in 1..100 (got " + std::to_string(*v) + ")");
     t.implicit.newton_iterations = static_cast<int32_t>(*v);
   }
@@ -275,6 +279,7 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
     else if (*v != "block_jacobi")
       throw r.at("preconditioner").error("expected \"block_jacobi\" or \"rest_cholesky\" (got \"" + *v + "\")");
   }
+  t.implicit.integrator = solves_implicitly(t.integrator) ? t.integrator : Integrator::ImplicitEuler;
   r.finish();
   if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");
   return t;

@@ -62,7 +62,7 @@ class ImplicitBackend final : public Backend {
 
   std::string name() const override { return "cpu"; }
   std::string device() const override {
-    return "CPU, 1 thread, implicit Euler (reference, double; " + std::string(preconditioner_name(options_.preconditioner)) +
+    return std::string("CPU, 1 thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") + " (reference, double; " + std::string(preconditioner_name(options_.preconditioner)) +
            "-preconditioned CG)";
   }
   std::string precision() const override { return "double"; }
@@ -102,10 +102,14 @@ class ImplicitBackend final : public Backend {
         return t_.plan.tool == ToolTerm::Pull ? "grasp attachment springs, k s I each in the system"
                                               : "the tool's penalties on the points, k n n^T each in the system";
       case Pass::Linearise:
+        if (damping_only())
+          return "the dampers' d u u^T, the shear element's damper, drag alpha m I (the elastic and contact forces "
+                 "stay explicit: dt below the undamped 2/omega_max)";
         return "the force law's tangent: springs (k - t) u u^T + t I (t = max(T, 0)/L) and d u u^T, the volume "
                "term's k g g^T, the shear element's rest stiffness, drag alpha m I, the contact's blocks";
       case Pass::ConjugateGradient:
-        return std::string(preconditioner_name(options_.preconditioner)) + "-preconditioned CG on the free points, "
+        return std::string(damping_only() ? "(M + h D) dv = h f" : "(M + h D + h^2 K) dv = h (f - h K v)") + " by " +
+               preconditioner_name(options_.preconditioner) + "-preconditioned CG on the free points, "
                "matrix-free products, warm start from the last dv, relative tolerance " +
                format_number(options_.cg_tolerance) + ", at most " + std::to_string(options_.cg_max_iterations) +
                " iterations";
@@ -171,7 +175,7 @@ class ImplicitBackend final : public Backend {
   ImplicitTables pack(const Model& model) const {
     ImplicitTables t;
     t.model = &model;
-    t.plan = make_step_plan(model, tool_, Integrator::ImplicitEuler);
+    t.plan = make_step_plan(model, tool_, options_.integrator);
     t.system = std::make_unique<ImplicitSystem>(model);
     const int32_t n = model.npoint();
     t.tool_scale.resize(n);
@@ -265,16 +269,18 @@ class ImplicitBackend final : public Backend {
     const Reaction reaction = forces(x_, v0, t, tool, placed, f, contact);
     system.linearise(x_, v0, t, std::move(contact));
     const Eigen::VectorXd v0f = flat(v0);
-    Eigen::VectorXd kv;
-    system.apply(0, 0, 1, v0f, kv);
-    const Eigen::VectorXd rhs = h * flat(f) - h * h * kv;
+    // Implicit damping: no K in the system, none in the right-hand side.
+    const double beta = damping_only() ? 0 : h * h;
+    Eigen::VectorXd kv = Eigen::VectorXd::Zero(v0f.size());
+    if (beta != 0) system.apply(0, 0, 1, v0f, kv);
+    const Eigen::VectorXd rhs = h * flat(f) - beta * kv;
     int32_t iterations = 0;
     double residual = 0;
     bool converged = true;
     const auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd& x) {
       const CgResult r = conjugate_gradient(
-          [&](const Eigen::VectorXd& p, Eigen::VectorXd& y) { system.apply(1, h, h * h, p, y); },
-          preconditioner(h), b, free, options_.cg_tolerance, options_.cg_max_iterations, x);
+          [&](const Eigen::VectorXd& p, Eigen::VectorXd& y) { system.apply(1, h, beta, p, y); },
+          preconditioner(h, beta), b, free, options_.cg_tolerance, options_.cg_max_iterations, x);
       iterations += r.iterations;
       residual = std::max(residual, r.residual);
       converged = converged && r.converged;
@@ -333,9 +339,9 @@ class ImplicitBackend final : public Backend {
   }
 
   // z = P r: block Jacobi at the current linearisation, or the rest system's factor.
-  LinearOperator preconditioner(double h) {
+  LinearOperator preconditioner(double h, double beta) {
     if (options_.preconditioner == Preconditioner::RestCholesky) {
-      if (!factor_ || factor_h_ != h) factor_rest_system(h);
+      if (!factor_ || factor_h_ != h) factor_rest_system(h, beta);
       return [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
         Eigen::VectorXd rf(free_index_.size());
         for (size_t i = 0; i < free_index_.size(); ++i) rf[static_cast<Eigen::Index>(i)] = r[free_index_[i]];
@@ -344,7 +350,7 @@ class ImplicitBackend final : public Backend {
         for (size_t i = 0; i < free_index_.size(); ++i) z[free_index_[i]] = zf[static_cast<Eigen::Index>(i)];
       };
     }
-    t_.system->diagonal_blocks(1, h, h * h, blocks_);
+    t_.system->diagonal_blocks(1, h, beta, blocks_);
     for (auto& b : blocks_) b = b.inverse().eval();
     return [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
       z.resize(r.size());
@@ -355,10 +361,10 @@ class ImplicitBackend final : public Backend {
 
   // M + h D_rest + h^2 K_rest on the free coordinates, factored (the
   // contact's blocks left out: they come and go with the tool).
-  void factor_rest_system(double h) {
+  void factor_rest_system(double h, double beta) {
     const Model& m = *t_.model;
-    Triplets t = rest_stiffness(m);
-    for (auto& e : t) e = {e.row(), e.col(), h * h * e.value()};
+    Triplets t = beta != 0 ? rest_stiffness(m) : Triplets{};
+    for (auto& e : t) e = {e.row(), e.col(), beta * e.value()};
     for (const auto& e : rest_damping(m)) t.emplace_back(e.row(), e.col(), h * e.value());
     for (int32_t i = 0; i < m.npoint(); ++i)
       for (int a = 0; a < 3; ++a) t.emplace_back(3 * i + a, 3 * i + a, m.mass[i]);
@@ -379,6 +385,8 @@ class ImplicitBackend final : public Backend {
     factor_h_ = h;
   }
 
+  bool damping_only() const { return options_.integrator == Integrator::ImplicitDamping; }
+
   BackendTool tool_;
   ImplicitOptions options_;
   ImplicitTables t_;
@@ -398,6 +406,11 @@ class ImplicitBackend final : public Backend {
 
 std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
                                                const ImplicitOptions& options) {
+  if (!solves_implicitly(options.integrator))
+    throw Error(ErrorKind::Usage, "make_implicit_backend: the integrator is verlet (the cpu backend's)");
+  if (options.newton_iterations > 1 && options.integrator == Integrator::ImplicitDamping)
+    throw Error(ErrorKind::Usage, "implicit damping: newton_iterations must be 1 (its system is linear in v and "
+                                  "solved exactly)");
   if (options.newton_iterations < 1)
     throw Error(ErrorKind::Usage, "implicit Euler: newton_iterations must be >= 1 (got " +
                                       std::to_string(options.newton_iterations) + ")");

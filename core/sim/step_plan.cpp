@@ -58,7 +58,12 @@ const char* pass_name(Pass pass) {
 }
 
 const char* integrator_name(Integrator integrator) {
-  return integrator == Integrator::ImplicitEuler ? "implicit_euler" : "verlet";
+  switch (integrator) {
+    case Integrator::Verlet: return "verlet";
+    case Integrator::ImplicitEuler: return "implicit_euler";
+    case Integrator::ImplicitDamping: return "implicit_damping";
+  }
+  return "?";
 }
 
 }  // namespace organsim

@@ -31,12 +31,15 @@ enum class Pass : uint8_t {
   VelocityUpdate,     // v += dv, x += h v on the free points (then, with Newton iterations, the passes again)
 };
 
-// How the step advances the state: explicit position Verlet (the paper's,
-// the default) or backward (implicit) Euler, linearised once per Newton
-// iteration (docs/integrators.md).
-enum class Integrator : uint8_t { Verlet, ImplicitEuler };
-// "verlet", "implicit_euler".
+// How the step advances the state (docs/integrators.md): explicit position
+// Verlet (the paper's, the default); backward (implicit) Euler, linearised
+// once per Newton iteration; or the dampers alone implicit, the elastic
+// forces explicit (symplectic Euler: dt below the undamped 2/omega_max).
+enum class Integrator : uint8_t { Verlet, ImplicitEuler, ImplicitDamping };
+// "verlet", "implicit_euler", "implicit_damping".
 const char* integrator_name(Integrator integrator);
+// Whether a step solves a linear system (core/sim/implicit_backend.h).
+inline bool solves_implicitly(Integrator integrator) { return integrator != Integrator::Verlet; }
 
 // The per-tet term of a model: at most one of these (core/model/stiffness.h).
 enum class ElementTerm : uint8_t { None, TetVolume, NodalVolume, ShearElement, SmoothedShear };

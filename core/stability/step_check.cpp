@@ -41,7 +41,18 @@ nlohmann::json point_json(const LimitingPoint& p) {
 
 std::string check_time_step(const StabilityReport& report, double dt, int32_t substeps, bool allow_unstable,
                             Integrator integrator) {
-  if (integrator == Integrator::ImplicitEuler || !(dt > report.dt_crit)) return {};
+  if (integrator == Integrator::ImplicitEuler) return {};
+  if (integrator == Integrator::ImplicitDamping) {
+    // Only the dampers are implicit: the elastic forces' symplectic Euler
+    // needs dt below the undamped limit.
+    if (!(dt > report.dt_crit_undamped)) return {};
+    const std::string msg = "time.dt = " + fmt(dt) + " s exceeds the undamped limit 2/omega_max = " +
+                            fmt(report.dt_crit_undamped) + " s that implicit_damping needs (its elastic forces are "
+                            "explicit); use a smaller dt or \"integrator\": \"implicit_euler\"";
+    if (!allow_unstable) throw Error(ErrorKind::Numerical, msg + ", or pass --allow-unstable to run anyway");
+    return "warning: " + msg + ". Running anyway (--allow-unstable).";
+  }
+  if (!(dt > report.dt_crit)) return {};
   const StepSuggestion s = suggest_step(report, dt * substeps);
   std::string msg = "time.dt = " + fmt(dt) + " s exceeds the critical step dt_crit = " + fmt(report.dt_crit) +
                     " s of this model (limited by the " + dominant_term(report) + " at points " +
@@ -120,6 +131,13 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3]
       << "): quality " << fmt(s.quality, "%.3f") << ", min dihedral " << fmt(s.min_dihedral_deg, "%.1f")
       << " deg, volume " << fmt(s.volume) << " m^3\n";
+  if (integrator == Integrator::ImplicitDamping) {
+    o << "  dt " << fmt(dt) << " s is " << fmt(dt / r.dt_crit_undamped, "%.2f")
+      << " x the undamped 2/omega_max that implicit damping needs (" << fmt(dt / r.dt_crit, "%.3g")
+      << " x dt_crit): " << (dt > r.dt_crit_undamped ? "UNSTABLE, refused without --allow-unstable" : "stable")
+      << "\n";
+    return o.str();
+  }
   if (integrator == Integrator::ImplicitEuler) {
     o << "  dt " << fmt(dt) << " s spans " << fmt(dt / r.dt_crit, "%.3g")
       << " x dt_crit: implicit Euler, not bounded by dt_crit (it damps the modes above 1/dt instead: "

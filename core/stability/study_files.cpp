@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/sim/step_plan.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
 #include "core/util/json_fields.h"
@@ -29,12 +30,23 @@ json points_json(const std::vector<Vec3>& points) {
   return a;
 }
 
+// A configuration's or outcome's integrator: absent (files written before
+// the integrator was an axis) means "verlet".
+std::string integrator_of(const JsonFields& r, const json& j, const std::string& where) {
+  if (!j.is_object() || !j.contains("integrator")) return "verlet";
+  const std::string name = r.text(j, "integrator", where);
+  for (Integrator i : {Integrator::Verlet, Integrator::ImplicitEuler, Integrator::ImplicitDamping})
+    if (name == integrator_name(i)) return name;
+  throw r.error(where + ".integrator", "\"verlet\", \"implicit_euler\" or \"implicit_damping\"");
+}
+
 }  // namespace
 
 json plan_json(const StudyPlan& plan) {
   json configurations = json::array();
   for (const StudyConfiguration& c : plan.configurations)
-    configurations.push_back({{"backend", c.backend}, {"precision", c.precision}, {"substeps", c.substeps}});
+    configurations.push_back(
+        {{"integrator", c.integrator}, {"backend", c.backend}, {"precision", c.precision}, {"substeps", c.substeps}});
   return {{"format", kPlanFormat}, {"request", plan.request}, {"head", plan.head}, {"configurations", configurations}};
 }
 
@@ -62,7 +74,8 @@ StudyPlan parse_study_plan(const json& j, const std::string& source) {
     const std::string where = "configurations[" + std::to_string(i) + "]";
     const json& c = configurations[i];
     plan.configurations.push_back({r.text(c, "backend", where), r.text(c, "precision", where),
-                                   static_cast<int32_t>(r.whole(c, "substeps", where, 1, 1 << 30))});
+                                   static_cast<int32_t>(r.whole(c, "substeps", where, 1, 1 << 30)),
+                                   integrator_of(r, c, where)});
   }
   return plan;
 }
@@ -100,6 +113,7 @@ Trajectory parse_trajectory(const json& j, const std::string& source) {
 
 json outcome_record_json(const StudyOutcome& o) {
   return {{"format", kRunFormat},
+          {"integrator", o.integrator},
           {"backend", o.backend},
           {"precision", o.precision},
           {"substeps", o.substeps},
@@ -123,6 +137,7 @@ StudyOutcome parse_outcome_record(const json& j, const std::string& source) {
   const JsonFields r(source);
   r.format(j, kRunFormat);
   StudyOutcome o;
+  o.integrator = integrator_of(r, j, "file");
   o.backend = r.text(j, "backend", "file");
   o.precision = r.text(j, "precision", "file");
   o.substeps = static_cast<int32_t>(r.whole(j, "substeps", "file", 1, 1 << 30));

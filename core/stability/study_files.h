@@ -19,6 +19,7 @@ namespace organsim {
 
 // One configuration's result, as study.json and study.csv report it.
 struct StudyOutcome {
+  std::string integrator = "verlet";  // time.integrator's name (integrator_name)
   std::string backend, precision, device;
   double dt = 0;
   int32_t substeps = 0;
@@ -34,6 +35,7 @@ struct StudyOutcome {
 struct StudyConfiguration {
   std::string backend, precision;
   int32_t substeps = 0;
+  std::string integrator = "verlet";  // time.integrator's name; a file without it means "verlet"
 };
 
 struct StudyPlan {

@@ -91,14 +91,15 @@ TEST(RunImplicitCli, BackendsThatIntegrateOnlyExplicitlyAreRefused) {
   EXPECT_NE(f.err.find("double precision only"), std::string::npos) << f.err;
 }
 
-// study and fit run Verlet only: an implicit scenario is refused, not run as Verlet.
-TEST(RunImplicitCli, StudyAndFitRefuseAnImplicitScenario) {
-  const fs::path dir = implicit_scene("study", nlohmann::json::object());
-  const auto study = run_organsim("study '" + (dir / "scene.json").string() + "' --dt 0.001 -o '" +
-                                      (dir / "study").string() + "'", dir);
-  EXPECT_EQ(study.exit_code, 2) << study.err;
-  EXPECT_NE(study.err.find("compares Verlet configurations only"), std::string::npos) << study.err;
-  EXPECT_FALSE(fs::exists(dir / "study"));
+// fit runs Verlet only: an implicit scenario is refused, not fitted as Verlet.
+TEST(RunImplicitCli, FitRefusesAnImplicitScenario) {
+  const fs::path dir = implicit_scene("fit", nlohmann::json::object());
+  std::ofstream(dir / "curve.csv") << "t,force\n0.05,0.1\n0.1,0.3\n";
+  const auto fit = run_organsim("fit '" + (dir / "scene.json").string() + "' --measured '" +
+                                    (dir / "curve.csv").string() + "' --param material.young_modulus -o '" +
+                                    (dir / "fit").string() + "'", dir);
+  EXPECT_EQ(fit.exit_code, 2) << fit.err;
+  EXPECT_NE(fit.err.find("organsim fit simulates with Verlet only"), std::string::npos) << fit.err;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -64,7 +65,9 @@ void expect_study_plot_shows_the_runs(const fs::path& png, const nlohmann::json&
   std::vector<std::string> series;
   for (const auto& r : study["runs"]) {
     if (!r["stable"].get<bool>() || !(r["position_error_rms"].get<double>() > 0)) continue;
-    const std::string name = r["backend"].get<std::string>() + " " + r["precision"].get<std::string>();
+    const std::string integrator = r["integrator"].get<std::string>();
+    const std::string name = (integrator == "verlet" ? "" : integrator + " ") + r["backend"].get<std::string>() +
+                             " " + r["precision"].get<std::string>();
     const auto it = std::find(series.begin(), series.end(), name);
     if (it == series.end()) series.push_back(name);
     runs.push_back({std::log10(r["wall_seconds_per_simulated_second"].get<double>()),
@@ -245,6 +248,62 @@ TEST(StudyCli, JobsGiveTheSerialStudysResults) {
   EXPECT_EQ(unstable, 2);  // 2 ms in both precisions
 }
 
+// The integrator as an axis: Verlet at steps below dt_crit and implicit
+// Euler at steps above it, in one table against the same Verlet reference;
+// the implicit rows run on the CPU in double, stable beyond dt_crit; the
+// Pareto flag is taken across both integrators (a row is on the front when
+// no row of either integrator is at least as good in cost and error and
+// better in one).
+TEST(StudyCli, IntegratorsSideBySideShareTheReferenceAndOneParetoFront) {
+  const fs::path out = fs::path(ORGANSIM_TEST_TMP) / "study_integrators";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  // gentle_push.json with a 4 ms tick, so that steps beyond its dt_crit
+  // (1.37 ms) fit in a tick.
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(stress / "gentle_push.json"));
+  scene["mesh"]["tet"] = (stress / "box.mesh").string();
+  scene["time"] = {{"duration", 0.2}, {"dt", 0.0002}, {"substeps", 20}};
+  std::ofstream(out / "scene.json") << scene.dump(2);
+  std::string output;
+  const int code = run("study " + (out / "scene.json").string() + " --integrator verlet,implicit_euler --dt 0.0005,0.00025 "
+                           "--implicit-dt 0.004,0.002 --precision double --duration 0.1 --threads 1 -o " + out.string(),
+                       output);
+  ASSERT_EQ(code, 0) << output;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(out / "study.json"));
+  EXPECT_EQ(j["reference"]["integrator"], "verlet");
+  const double dt_crit = j["stability"]["dt_crit"].get<double>();
+  ASSERT_EQ(j["runs"].size(), 4u);
+  std::vector<double> cost, error;
+  for (size_t i = 0; i < 4; ++i) {
+    const auto& r = j["runs"][i];
+    ASSERT_TRUE(r["stable"].get<bool>()) << r.dump();
+    EXPECT_EQ(r["integrator"], i < 2 ? "verlet" : "implicit_euler");
+    EXPECT_EQ(r["precision"], "double");
+    if (i >= 2) {
+      EXPECT_GT(r["dt"].get<double>(), dt_crit) << r.dump();
+    }
+    // The implicit rows' error: numerical damping of a gentle push, a few
+    // 1e-3 of the diagonal at most; 1e-2 would mean a wrong comparison.
+    EXPECT_LT(r["position_error_max"].get<double>(), 1e-2) << r.dump();
+    cost.push_back(r["wall_seconds_per_simulated_second"].get<double>());
+    error.push_back(r["position_error_rms"].get<double>());
+  }
+  for (size_t i = 0; i < 4; ++i) {
+    bool dominated = false;
+    for (size_t k = 0; k < 4; ++k)
+      dominated |= k != i && cost[k] <= cost[i] && error[k] <= error[i] && (cost[k] < cost[i] || error[k] < error[i]);
+    EXPECT_EQ(j["runs"][i]["pareto"].get<bool>(), !dominated) << "run " << i;
+  }
+  std::ifstream csv_file(out / "study.csv");
+  const std::string csv((std::istreambuf_iterator<char>(csv_file)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(csv.rfind("integrator,backend,precision,dt_s,", 0), 0u) << csv;
+  EXPECT_NE(csv.find("\nimplicit_euler,cpu,double,0.004,1,"), std::string::npos) << csv;
+#ifdef ORGANSIM_TEST_PLOT_PIXELS
+  expect_study_plot_shows_the_runs(out / "study.png", j);
+#endif
+}
+
 // study.csv with the timing columns (wall_s_per_sim_s, steps_per_s and the
 // Pareto flag drawn from them) blanked: what must not depend on the run.
 std::string csv_without_timing(const fs::path& file) {
@@ -254,11 +313,11 @@ std::string csv_without_timing(const fs::path& file) {
     std::vector<std::string> cells;
     std::istringstream fields(line);
     std::string cell;
-    for (int column = 0; column < 12 && std::getline(fields, cell, ','); ++column) cells.push_back(cell);
-    std::getline(fields, cell);  // the 13th, the reason, may hold commas
+    for (int column = 0; column < 13 && std::getline(fields, cell, ','); ++column) cells.push_back(cell);
+    std::getline(fields, cell);  // the 14th, the reason, may hold commas
     cells.push_back(cell);
-    if (cells.size() != 13) return "a line without 13 columns: " + line;
-    for (const int timing : {6, 7, 11}) cells[timing].clear();
+    if (cells.size() != 14) return "a line without 14 columns: " + line;
+    for (const int timing : {7, 8, 12}) cells[timing].clear();
     for (const std::string& c : cells) out += c + ",";
     out += "\n";
   }

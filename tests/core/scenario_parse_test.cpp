@@ -638,10 +638,20 @@ TEST(ScenarioParse, IntegratorAndItsSolverSettingsAreReadAndChecked) {
   EXPECT_EQ(s.time.implicit.preconditioner, Preconditioner::RestCholesky);
 
   j = minimal();
+  j["time"] = {{"integrator", "implicit_damping"}, {"cg_tolerance", 1e-6}};
+  const Scenario damping = parse(j);
+  EXPECT_EQ(damping.time.integrator, Integrator::ImplicitDamping);
+  EXPECT_EQ(damping.time.implicit.integrator, Integrator::ImplicitDamping);
+  EXPECT_EQ(damping.time.implicit.cg_tolerance, 1e-6);
+  j["time"] = {{"integrator", "implicit_damping"}, {"newton_iterations", 2}};
+  EXPECT_NE(error_of(j).find("must be 1 with implicit_damping"), std::string::npos);
+
+  j = minimal();
   j["time"] = {{"integrator", "rk4"}};
   EXPECT_NE(error_of(j).find("time.integrator"), std::string::npos);
   j["time"] = {{"cg_tolerance", 1e-6}};
-  EXPECT_NE(error_of(j).find("applies only with \"integrator\": \"implicit_euler\""), std::string::npos);
+  EXPECT_NE(error_of(j).find("applies only with \"integrator\": \"implicit_euler\" or \"implicit_damping\""),
+            std::string::npos);
   j["time"] = {{"integrator", "implicit_euler"}, {"newton_iterations", 0}};
   EXPECT_NE(error_of(j).find("time.newton_iterations"), std::string::npos);
   j["time"] = {{"integrator", "implicit_euler"}, {"cg_max_iterations", 0}};
