@@ -131,23 +131,27 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
     out[m.spring_ends[s][0]] += block;
     out[m.spring_ends[s][1]] += block;
   }
-  if (m.has_volume() && m.has_nodal_volume()) {
-    // Node a's row of G at each point i of its patch: sum over the tets of a
-    // holding i of dV_t/dx_i / 4 (a patch has a few tens of points).
-    std::vector<std::pair<int32_t, Vec3>> row;
+  if (m.has_volume() && m.has_nodal_volume() && beta != 0) {
+    // Node a's row of G at each point q of its patch: the sum over the tets
+    // of a holding q of dV_t/dx_q / 4, accumulated per point id.
+    std::vector<Vec3> row(n, Vec3::Zero());
+    std::vector<uint8_t> in_patch(n, 0);
+    std::vector<int32_t> patch;
     for (int32_t a = 0; a < n; ++a) {
-      row.clear();
+      patch.clear();
       for (int32_t e : tets_of_point_[a])
         for (int i = 0; i < 4; ++i) {
           const int32_t q = m.tet_points[e][i];
-          auto it = row.begin();
-          while (it != row.end() && it->first != q) ++it;
-          if (it == row.end()) row.push_back({q, volume_gradient_[e][i] / 4});
-          else it->second += volume_gradient_[e][i] / 4;
+          if (!in_patch[q]) in_patch[q] = 1, patch.push_back(q);
+          row[q] += volume_gradient_[e][i] / 4;
         }
-      for (const auto& [q, g] : row) out[q] += beta * m.point_volume_k[a] * g * g.transpose();
+      for (int32_t q : patch) {
+        out[q] += beta * m.point_volume_k[a] * row[q] * row[q].transpose();
+        row[q].setZero();
+        in_patch[q] = 0;
+      }
     }
-  } else if (m.has_volume()) {
+  } else if (m.has_volume() && beta != 0) {
     for (int32_t e = 0; e < m.ntet(); ++e)
       for (int i = 0; i < 4; ++i) {
         const Vec3& g = volume_gradient_[e][i];
