@@ -52,9 +52,10 @@ struct StudyArgs {
   std::vector<std::string> backends{"cpu"};
   std::vector<std::string> precisions{"double", "float"};
   // time.integrator names; an implicit one runs on the CPU in double only,
-  // at --implicit-dt (default: --dt), with the scenario's solver settings.
+  // with the scenario's solver settings: implicit_euler at --implicit-dt,
+  // implicit_damping at --damping-dt (each by default --dt).
   std::vector<std::string> integrators{"verlet"};
-  std::vector<double> implicit_dts;
+  std::vector<double> implicit_dts, damping_dts;
   double duration = 0;           // s; 0 = the scenario's
   int32_t ref_factor = 4;        // reference dt = smallest asked dt / ref_factor
   double ref_tolerance = 1e-4;   // max position change from halving dt_ref, relative to the bbox diagonal
@@ -198,7 +199,8 @@ struct StudySetup {
 nlohmann::json request_of(const StudyArgs& args) {
   return {{"scenario_text", read_text_file(args.scenario)}, {"dt", args.dts}, {"backend", args.backends},
           {"precision", args.precisions}, {"duration", args.duration}, {"ref_factor", args.ref_factor},
-          {"samples", args.samples}, {"integrator", args.integrators}, {"implicit_dt", args.implicit_dts}};
+          {"samples", args.samples}, {"integrator", args.integrators}, {"implicit_dt", args.implicit_dts},
+          {"damping_dt", args.damping_dts}};
 }
 
 StudySetup set_up(const StudyArgs& args) {
@@ -228,15 +230,12 @@ StudySetup set_up(const StudyArgs& args) {
   const std::vector<int32_t> substeps = substeps_of(args.dts, "--dt");
   const std::vector<int32_t> implicit_substeps =
       args.implicit_dts.empty() ? substeps : substeps_of(args.implicit_dts, "--implicit-dt");
-  // The reference is Verlet, the integrator without numerical damping, at
-  // a quarter of the smallest asked step (and at half that, to show it is
-  // converged); whatever the configurations' integrators, it is the
-  // solution of the same equations they approximate.
-  u.ref_substeps = std::max(*std::max_element(substeps.begin(), substeps.end()),
-                            *std::max_element(implicit_substeps.begin(), implicit_substeps.end())) *
-                   args.ref_factor;
+  const std::vector<int32_t> damping_substeps =
+      args.damping_dts.empty() ? substeps : substeps_of(args.damping_dts, "--damping-dt");
+  int32_t most = 0;
   for (const std::string& name : args.integrators) {
-    if (!solves_implicitly(integrator_named(name))) {
+    const Integrator integrator = integrator_named(name);
+    if (!solves_implicitly(integrator)) {
       for (const std::string& b : args.backends)
         for (const std::string& p : args.precisions)
           for (int32_t n : substeps) u.configurations.push_back({b, p, n, name});
@@ -244,8 +243,15 @@ StudySetup set_up(const StudyArgs& args) {
     }
     // An implicit integrator runs on the CPU in double only: its rows are
     // those, and the other backends and precisions are not asked of it.
-    for (int32_t n : implicit_substeps) u.configurations.push_back({"cpu", "double", n, name});
+    for (int32_t n : integrator == Integrator::ImplicitEuler ? implicit_substeps : damping_substeps)
+      u.configurations.push_back({"cpu", "double", n, name});
   }
+  for (const StudyConfiguration& c : u.configurations) most = std::max(most, c.substeps);
+  // The reference is Verlet, the integrator without numerical damping, at
+  // a quarter of the smallest step asked of any integrator (and at half
+  // that, to show it is converged): the solution of the same equations
+  // every configuration approximates.
+  u.ref_substeps = most * args.ref_factor;
   // With --jobs N the runs share the CPUs: each gets its share of threads
   // (results do not depend on the thread count, so they equal a serial
   // study's; run times do, which is why one job is the default).
@@ -487,7 +493,10 @@ const bool registered = register_command("study", 40, [](CLI::App& root) {
                   "implicit one runs on the cpu in double, with the scenario's solver settings")
       ->delimiter(',');
   cmd->add_option("--implicit-dt", args->implicit_dts,
-                  "Steps for the implicit integrators, s (comma-separated; default: --dt)")
+                  "Steps for implicit_euler, s (comma-separated; default: --dt)")
+      ->delimiter(',');
+  cmd->add_option("--damping-dt", args->damping_dts,
+                  "Steps for implicit_damping, s (comma-separated; default: --dt)")
       ->delimiter(',');
   cmd->add_option("-o,--output", args->outdir, "Output folder (default: out/<scenario name>_study)");
   cmd->add_option("--duration", args->duration, "Simulated time per run, s (default: the scenario's)");
