@@ -45,6 +45,7 @@ BlowupMonitor PreparedRun::blowup_monitor(const Scenario& scenario, double dt, i
     context.tool_contact_stiffness = scenario.tool->spec.contact_stiffness;
   }
   context.stability = stability;
+  context.integrator = scenario.time.integrator;
   return BlowupMonitor(options, context);
 }
 

@@ -270,9 +270,15 @@ std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, 
   bool limiting = false;
   if (st)
     for (const auto& p : st->mode_points) limiting |= p.point == f.point;
-  if (st && context_.dt > st->dt_crit) {
+  const bool verlet = context_.integrator == Integrator::Verlet;
+  const bool damping_only = context_.integrator == Integrator::ImplicitDamping;
+  if (st && verlet && context_.dt > st->dt_crit) {
     msg += "time.dt = " + fmt(context_.dt) + " s exceeds dt_crit = " + fmt(st->dt_crit) +
            " s, so the stiffest mode grows every step; use a smaller dt or more substeps.";
+  } else if (st && damping_only && context_.dt > st->dt_crit_undamped) {
+    msg += "time.dt = " + fmt(context_.dt) + " s exceeds the undamped limit 2/omega_max = " +
+           fmt(st->dt_crit_undamped) + " s that implicit_damping needs, so the stiffest mode grows every step; use "
+           "a smaller dt or \"integrator\": \"implicit_euler\".";
   } else if (near_tool && f.kind == BlowupFinding::Kind::Inversion) {
     msg += "the tool pushed the material through itself (penetration deeper than the tets can resist); move the "
            "tool less deep or slower, or raise material.volume_modulus.";

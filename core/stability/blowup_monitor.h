@@ -58,6 +58,9 @@ struct BlowupContext {
   double tool_radius = 0;                // m: the ball about the tool origin that holds the tool; 0 = no tool
   double tool_contact_stiffness = 0;     // N/m
   std::optional<StabilityReport> stability;  // dt_crit and limiting points, when estimated
+  // What bounds dt: dt_crit for Verlet, the undamped 2/omega_max for
+  // implicit damping, nothing for implicit Euler (its likely causes are others).
+  Integrator integrator = Integrator::Verlet;
 };
 
 struct BlowupFinding {
