@@ -62,8 +62,8 @@ class ImplicitBackend final : public Backend {
 
   std::string name() const override { return "cpu"; }
   std::string device() const override {
-    return std::string("CPU, 1 thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") + " (reference, double; " + std::string(preconditioner_name(options_.preconditioner)) +
-           "-preconditioned CG)";
+    return std::string("CPU, 1 thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") +
+           " (reference, double; " + preconditioner_name(options_.preconditioner) + "-preconditioned CG)";
   }
   std::string precision() const override { return "double"; }
   const StepPlan& step_plan() const override { return t_.plan; }
@@ -98,9 +98,14 @@ class ImplicitBackend final : public Backend {
       case Pass::SurfaceContact:
         return std::string(shape_name(tool_.shape)) + " against " + std::to_string(m.nsurface()) +
                " surface triangles, as the CPU backend's pass, each touching triangle's normal stiffness recorded";
-      case Pass::ToolContact:
-        return t_.plan.tool == ToolTerm::Pull ? "grasp attachment springs, k s I each in the system"
-                                              : "the tool's penalties on the points, k n n^T each in the system";
+      case Pass::ToolContact: {
+        // With implicit damping the contact, like every elastic force, stays explicit.
+        const std::string in_system = damping_only() ? " (explicit)" : t_.plan.tool == ToolTerm::Pull
+                                                                            ? ", k s I each in the system"
+                                                                            : ", k n n^T each in the system";
+        return (t_.plan.tool == ToolTerm::Pull ? "grasp attachment springs" : "the tool's penalties on the points") +
+               in_system;
+      }
       case Pass::Linearise:
         if (damping_only())
           return "the dampers' d u u^T, the shear element's damper, drag alpha m I (the elastic and contact forces "
