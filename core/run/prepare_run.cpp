@@ -1,5 +1,7 @@
 #include "core/run/prepare_run.h"
 
+#include <cmath>
+
 #include "core/run/run.h"
 #include "core/util/error.h"
 
@@ -28,6 +30,19 @@ PreparedRun prepare_run(const Scenario& scenario, const Model& model, const Prep
     settle_options.threads = options.threads;
     settle_options.integrator = time.integrator;
     settle_options.implicit = time.implicit;
+    // The equilibrium does not depend on the step, and the run refuses (or
+    // adapts) an unstable one only after this: a step above the limit of
+    // the settle's integrator is replaced by a stable one that keeps the
+    // tick, so that settling never diverges into a start of NaN.
+    const StabilityReport& st = prepared.stability;
+    if (time.integrator == Integrator::Verlet && time.dt > st.dt_crit) {
+      const StepSuggestion step = suggest_step(st, time.tick());
+      settle_options.dt = step.dt;
+      settle_options.substeps = step.substeps;
+    } else if (time.integrator == Integrator::ImplicitDamping && time.dt > st.dt_crit_undamped) {
+      settle_options.substeps = static_cast<int32_t>(std::ceil(time.tick() / (0.9 * st.dt_crit_undamped)));
+      settle_options.dt = time.tick() / settle_options.substeps;
+    }
     prepared.settled = settle(model, settle_options);
   }
   return prepared;
