@@ -94,7 +94,14 @@ void expect_study_plot_shows_the_runs(const fs::path& png, const nlohmann::json&
     // another series' by up to ~8.
     const std::vector<cv::Point2d> found =
         organsim::test::blobs(organsim::test::colour_mask(img, colours[s], 8, frame, 3), 12, 6);
-    EXPECT_FALSE(found.empty()) << series[s];
+    // A series whose every disc another series' covers (double and float
+    // at the same dt and nearly the same cost) shows none: only a series
+    // with an uncovered disc must be seen.
+    bool uncovered = false;
+    for (size_t i = 0; i < runs.size(); ++i) uncovered |= runs[i].series == s && !covered(i);
+    if (uncovered) {
+      EXPECT_FALSE(found.empty()) << series[s];
+    }
     for (const cv::Point2d& b : found) {
       bool expected = false;
       for (size_t i = 0; i < runs.size(); ++i)
