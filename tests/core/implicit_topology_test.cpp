@@ -32,32 +32,12 @@ RunResult run_implicit(const Scenario& s, const Model& model, testing::TopologyR
   return run_scenario(s, model, *backend, run);
 }
 
-// The block of topology_run_test.cpp: 4 cm, hanging from its top face, no
-// drag, cut through the plane z = 2 cm at t = 20 ms.
+// The hanging block of topology_test_util.h (4 cm, no drag, cut through the
+// plane z = 2 cm at t = 20 ms).
 TEST(ImplicitTopology, ABlockCutThroughDropsItsLowerPartAtGWithItsMassKept) {
-  Scenario s;
-  s.file = "hanging_block.json";
-  s.material.density = 1000;
-  s.material.young_modulus = 5000;
-  s.material.spring_damping_time = 1e-3;
-  s.material.volume_modulus = 10000;
-  s.material.viscous_damping = 0;
-  FixedSelector top;
-  top.kind = FixedSelector::Kind::Plane;
-  top.point = Vec3(0, 0, 0.04 - 1e-6);
-  top.normal = Vec3(0, 0, 1);
-  s.fixed = {top};
-  s.time.duration = 0.06;
-  s.time.dt = 1e-4;
-  s.time.substeps = 10;
-  CutEvent cut;
-  cut.name = "through";
-  cut.keyframes = {{0.020, Vec3(-0.01, -0.01, 0.02), Vec3(-0.01, 0.05, 0.02)},
-                   {0.021, Vec3(0.05, -0.01, 0.02), Vec3(0.05, 0.05, 0.02)}};
-  s.events.cuts = {cut};
+  Scenario s = testing::hanging_block();
   implicit_at_the_tick(s);
-  const Model model =
-      build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 4, 4, 4), s.material, model_options(s), "block");
+  const Model model = testing::block_model(s);
   testing::TopologyRecorder rec;
   rec.keep_positions = true;
   run_implicit(s, model, rec, "implicit_block_cut");

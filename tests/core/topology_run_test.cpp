@@ -24,38 +24,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A 4 cm soft block (4 x 4 x 4 cubes of 1 cm) hanging from its top face under
-// gravity, without drag so that a freed part falls freely. A blade edge
-// along y sweeps the plane z = 2 cm (a grid plane) from x = -1 cm to 5 cm
-// within one 1 ms tick at t = 20 ms.
-Scenario hanging_block() {
-  Scenario s;
-  s.file = "hanging_block.json";
-  s.material.density = 1000;
-  s.material.young_modulus = 5000;
-  s.material.spring_damping_time = 1e-3;
-  s.material.volume_modulus = 10000;
-  s.material.viscous_damping = 0;  // drag would slow the fall
-  FixedSelector top;
-  top.kind = FixedSelector::Kind::Plane;
-  top.point = Vec3(0, 0, 0.04 - 1e-6);
-  top.normal = Vec3(0, 0, 1);
-  s.fixed = {top};
-  s.time.duration = 0.06;
-  s.time.dt = 1e-4;
-  s.time.substeps = 10;
-  CutEvent cut;
-  cut.name = "through";
-  cut.keyframes = {{0.020, Vec3(-0.01, -0.01, 0.02), Vec3(-0.01, 0.05, 0.02)},
-                   {0.021, Vec3(0.05, -0.01, 0.02), Vec3(0.05, 0.05, 0.02)}};
-  s.events.cuts = {cut};
-  return s;
-}
-
-Model block_model(const Scenario& s) {
-  return build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 4, 4, 4), s.material, model_options(s),
-                     "block");
-}
+using testing::block_model;
+using testing::hanging_block;
 
 TEST(TopologyRun, BlockCutThroughDropsItsLowerPartWithG) {
   const Scenario s = hanging_block();
