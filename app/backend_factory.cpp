@@ -22,7 +22,7 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
       throw Error(ErrorKind::Usage, std::string("integrator ") + integrator_name(s.integrator) + " runs on the cpu backend in double precision only "
                                     "(its reference; asked: " + precision +
                                         (s.cpu_kernel.empty() ? "" : ", kernel " + s.cpu_kernel) + ")");
-    return make_implicit_backend(model, tool, s.implicit);
+    return make_implicit_backend(model, tool, s.implicit, s.integrator);
   }
   if (precision == "double") {
     o.precision = Precision::Double;

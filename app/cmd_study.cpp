@@ -104,7 +104,6 @@ Ran run_configuration(const Scenario& base, const Model& model, const StudyConfi
   o.precision = precision;
   Scenario s = base;
   s.time.integrator = integrator_named(c.integrator);
-  if (solves_implicitly(s.time.integrator)) s.time.implicit.integrator = s.time.integrator;
   s.time.substeps = substeps;
   s.time.dt = base.time.tick() / substeps;
   s.outputs = OutputsDef{};

@@ -34,7 +34,7 @@ SettleResult settle(const Model& model, const SettleOptions& options) {
   cpu.precision = Precision::Double;
   cpu.threads = options.threads;
   const auto backend = solves_implicitly(options.integrator)
-                           ? make_implicit_backend(model, BackendTool{}, options.implicit)
+                           ? make_implicit_backend(model, BackendTool{}, options.implicit, options.integrator)
                            : make_cpu_backend(model, BackendTool{}, cpu);
 
   double heaviest_weight = 0;

@@ -279,7 +279,6 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
     else if (*v != "block_jacobi")
       throw r.at("preconditioner").error("expected \"block_jacobi\" or \"rest_cholesky\" (got \"" + *v + "\")");
   }
-  t.implicit.integrator = solves_implicitly(t.integrator) ? t.integrator : Integrator::ImplicitEuler;
   r.finish();
   if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");
   return t;

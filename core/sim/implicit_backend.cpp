@@ -51,8 +51,8 @@ struct ImplicitPrepared final : PreparedModel {
 
 class ImplicitBackend final : public Backend {
  public:
-  ImplicitBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options)
-      : tool_(tool), options_(options) {
+  ImplicitBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options, Integrator integrator)
+      : tool_(tool), options_(options), integrator_(integrator) {
     t_ = pack(model);
     x_ = model.rest_position;
     d_.assign(model.npoint(), Vec3::Zero());
@@ -180,7 +180,7 @@ class ImplicitBackend final : public Backend {
   ImplicitTables pack(const Model& model) const {
     ImplicitTables t;
     t.model = &model;
-    t.plan = make_step_plan(model, tool_, options_.integrator);
+    t.plan = make_step_plan(model, tool_, integrator_);
     t.system = std::make_unique<ImplicitSystem>(model);
     const int32_t n = model.npoint();
     t.tool_scale.resize(n);
@@ -390,10 +390,11 @@ class ImplicitBackend final : public Backend {
     factor_h_ = h;
   }
 
-  bool damping_only() const { return options_.integrator == Integrator::ImplicitDamping; }
+  bool damping_only() const { return integrator_ == Integrator::ImplicitDamping; }
 
   BackendTool tool_;
   ImplicitOptions options_;
+  Integrator integrator_;
   ImplicitTables t_;
   std::vector<Vec3> x_, d_;  // positions and the last step's increment h v
   Eigen::VectorXd dv_;       // the last solve's dv: the next one's warm start
@@ -410,10 +411,10 @@ class ImplicitBackend final : public Backend {
 }  // namespace
 
 std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
-                                               const ImplicitOptions& options) {
-  if (!solves_implicitly(options.integrator))
+                                               const ImplicitOptions& options, Integrator integrator) {
+  if (!solves_implicitly(integrator))
     throw Error(ErrorKind::Usage, "make_implicit_backend: the integrator is verlet (the cpu backend's)");
-  if (options.newton_iterations > 1 && options.integrator == Integrator::ImplicitDamping)
+  if (options.newton_iterations > 1 && integrator == Integrator::ImplicitDamping)
     throw Error(ErrorKind::Usage, "implicit damping: newton_iterations must be 1 (its system is linear in v and "
                                   "solved exactly)");
   if (options.newton_iterations < 1)
@@ -428,7 +429,7 @@ std::unique_ptr<Backend> make_implicit_backend(const Model& model, const Backend
     throw Error(ErrorKind::Usage,
                 "implicit Euler: newton_iterations > 1 with a tool that has friction is not supported (the "
                 "friction anchors advance at every evaluation of the contact); use newton_iterations 1");
-  return std::make_unique<ImplicitBackend>(model, tool, options);
+  return std::make_unique<ImplicitBackend>(model, tool, options, integrator);
 }
 
 }  // namespace organsim

@@ -30,12 +30,9 @@ enum class Preconditioner : uint8_t {
 // "block_jacobi", "rest_cholesky".
 const char* preconditioner_name(Preconditioner preconditioner);
 
+// The solver's settings (scenario `time`); which implicit integrator is
+// make_implicit_backend's argument, as time.integrator is the scenario's.
 struct ImplicitOptions {
-  // ImplicitEuler: (M + h D + h^2 K) dv = h (f - h K v). ImplicitDamping:
-  // (M + h D) dv = h f, the elastic and contact forces taken at the step's
-  // start (symplectic Euler for them, stable below the undamped
-  // 2/omega_max), the dampers and drag at its end.
-  Integrator integrator = Integrator::ImplicitEuler;
   int32_t newton_iterations = 1;  // linearised solves per step (1: SOFA's one-step form)
   double cg_tolerance = 1e-5;     // relative residual |b - A dv| / |b| a solve stops at
   int32_t cg_max_iterations = 200;
@@ -46,7 +43,13 @@ struct ImplicitOptions {
 // run (Newton iterations with friction, whose anchors advance at every
 // evaluation of the contact; Newton iterations with implicit damping, whose
 // system is already exact).
+// `integrator` ImplicitEuler: (M + h D + h^2 K) dv = h (f - h K v).
+// ImplicitDamping: (M + h D) dv = h f, the elastic and contact forces taken
+// at the step's start (symplectic Euler for them, stable below the
+// undamped 2/omega_max), the dampers and drag at its end. Verlet is refused
+// (the CPU backend's).
 std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
-                                               const ImplicitOptions& options = {});
+                                               const ImplicitOptions& options = {},
+                                               Integrator integrator = Integrator::ImplicitEuler);
 
 }  // namespace organsim

@@ -134,9 +134,12 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
   if (m.has_volume() && m.has_nodal_volume() && beta != 0) {
     // Node a's row of G at each point q of its patch: the sum over the tets
     // of a holding q of dV_t/dx_q / 4, accumulated per point id.
-    std::vector<Vec3> row(n, Vec3::Zero());
-    std::vector<uint8_t> in_patch(n, 0);
-    std::vector<int32_t> patch;
+    // Scratch kept between calls (zero again after each node): no allocation per step.
+    std::vector<Vec3>& row = row_scratch_;
+    std::vector<uint8_t>& in_patch = patch_mark_;
+    std::vector<int32_t>& patch = patch_scratch_;
+    row.resize(n, Vec3::Zero());
+    in_patch.resize(n, 0);
     for (int32_t a = 0; a < n; ++a) {
       patch.clear();
       for (int32_t e : tets_of_point_[a])

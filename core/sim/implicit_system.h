@@ -11,7 +11,8 @@
 // indefinite and vanishes at rest), the shear element's rest stiffness and
 // its damper's (constant sparse matrices, exact at rest), the drag alpha m I,
 // and the tool's contact blocks (ContactBlock). Fixed points are projected
-// out by the caller (ImplicitSolve). docs/integrators.md derives it.
+// out by the caller (conjugate_gradient's `free`). docs/integrators.md
+// derives it.
 #include <Eigen/SparseCore>
 #include <array>
 #include <vector>
@@ -64,6 +65,9 @@ class ImplicitSystem {
   std::vector<ContactBlock> contact_;
   Eigen::SparseMatrix<double, Eigen::RowMajor> shear_k_, shear_d_;  // empty without the element
   mutable std::vector<double> tet_scratch_, node_scratch_;          // nodal term's two passes
+  mutable std::vector<Vec3> row_scratch_;                           // nodal diagonal: a node's G row per point
+  mutable std::vector<uint8_t> patch_mark_;
+  mutable std::vector<int32_t> patch_scratch_;
 };
 
 }  // namespace organsim

@@ -407,9 +407,8 @@ TEST(ImplicitDamping, SingleSpringFollowsItsClosedFormAndOnlyTheUndampedLimitBou
   const double h = 0.9 * 2 * std::sqrt(m / k);
   Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, -rest)}, {m, m}, {{0, 1}}, k, d, {0});
   ImplicitOptions options;
-  options.integrator = Integrator::ImplicitDamping;
   options.cg_tolerance = 1e-14;
-  auto backend = make_implicit_backend(model, {}, options);
+  auto backend = make_implicit_backend(model, {}, options, Integrator::ImplicitDamping);
   EXPECT_TRUE(backend->step_plan().has(Pass::ConjugateGradient));
   double x = 0.01, v = 0;
   backend->set_state({Vec3::Zero(), Vec3(0, 0, -rest - x)}, {Vec3::Zero(), Vec3(0, 0, -rest - x)});
@@ -531,11 +530,8 @@ TEST(ImplicitEuler, OptionsOutOfRangeAreRefused) {
   ImplicitOptions newton;
   newton.newton_iterations = 2;
   EXPECT_THROW(make_implicit_backend(model, tool, newton), Error);
-  newton.integrator = Integrator::ImplicitDamping;
-  EXPECT_THROW(make_implicit_backend(model, {}, newton), Error);
-  ImplicitOptions verlet;
-  verlet.integrator = Integrator::Verlet;
-  EXPECT_THROW(make_implicit_backend(model, {}, verlet), Error);
+  EXPECT_THROW(make_implicit_backend(model, {}, newton, Integrator::ImplicitDamping), Error);
+  EXPECT_THROW(make_implicit_backend(model, {}, {}, Integrator::Verlet), Error);
 }
 
 }  // namespace
