@@ -12,6 +12,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "app/command.h"
@@ -36,6 +37,7 @@ struct ValidateArgs {
   std::string contact = "surface";
   std::string hertz_layer;  // "on", "off"; empty: on with surface contact
   double line_load_reference = 0;  // m; 0: the line-load case is left out
+  std::optional<double> contact_stiffness;  // N/m; the hertz-run case's penalty
   std::vector<std::string> cases;  // empty: every case
 };
 
@@ -76,6 +78,12 @@ void validate_command(const ValidateArgs& args) {
   if (!args.hertz_layer.empty() && args.hertz_layer != "on" && args.hertz_layer != "off")
     throw Error(ErrorKind::Usage, "--hertz-layer: expected 'on' or 'off', got '" + args.hertz_layer + "'");
   options.hertz_layer = options.contact == ToolContact::Surface && args.hertz_layer != "off";
+  if (args.contact_stiffness) {
+    if (!(*args.contact_stiffness > 0) || !std::isfinite(*args.contact_stiffness))
+      throw Error(ErrorKind::Usage, "--contact-stiffness: expected a stiffness in N/m (> 0), got " +
+                                        fmt(*args.contact_stiffness));
+    options.run_contact_stiffness = *args.contact_stiffness;
+  }
   if (args.line_load_reference < 0 || !std::isfinite(args.line_load_reference))
     throw Error(ErrorKind::Usage, "--line-load-reference: expected a cell size in m (> 0), got " +
                                       fmt(args.line_load_reference));
@@ -114,6 +122,7 @@ void validate_command(const ValidateArgs& args) {
   j["probe_radius"] = options.probe_radius;
   j["contact"] = args.contact;
   j["hertz_layer"] = options.hertz_layer;
+  j["run_contact_stiffness"] = options.run_contact_stiffness;
   j["cases"] = options.cases.empty() ? kSuiteCases : options.cases;
   if (options.line_load_reference)
     j["line_load"] = {{"block", {options.line_load_block.x(), options.line_load_block.y(), options.line_load_block.z()}},
@@ -136,9 +145,10 @@ void validate_command(const ValidateArgs& args) {
   std::cout << csv.str();
 
   // One panel per test (measured / theory against cell size), one line per
-  // material; Hertz at d/R = 0.1 only, the small-strain case.
+  // material; Hertz at d/R = 0.1 only, small-strain and as run.
   std::vector<cv::Mat> panels;
-  for (const char* test : {"uniaxial E", "cantilever tip load", "cantilever guided", "hertz d/R=0.1"}) {
+  for (const char* test :
+       {"uniaxial E", "cantilever tip load", "cantilever guided", "hertz d/R=0.1", "hertz as run d/R=0.1"}) {
     std::map<std::string, XySeries> by_material;
     std::vector<std::string> order;
     for (const SuiteRow& r : rows) {
@@ -186,9 +196,13 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
   cmd->add_option("--hertz-layer", args->hertz_layer,
                   "The spheres' and the capsule's surface contact in series with the sub-cell layer, as a scenario's "
                   "tool.hertz_layer: 'on' (default with surface contact) or 'off'");
+  cmd->add_option("--contact-stiffness", args->contact_stiffness,
+                  "The hertz-run case's penalty, as a scenario's tool.contact_stiffness: N/m for a point of the "
+                  "median mass (default 200, the scenario's default)");
   cmd->add_option("--cases", args->cases,
-                  "Only these cases, comma-separated: uniaxial, cantilever, hertz, probe, line-load (default: all; "
-                  "line-load needs --line-load-reference)")
+                  "Only these cases, comma-separated: uniaxial, cantilever, hertz (small strain), hertz-run (the "
+                  "equilibrium a run settles into), probe, line-load (default: all; line-load needs "
+                  "--line-load-reference)")
       ->delimiter(',');
   cmd->add_option("--line-load-reference", args->line_load_reference,
                   "Adds the line-load case (a capsule R 5 mm across a block, pressed 1, 2, 4 mm) compared with "

@@ -67,7 +67,7 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
     const auto mesh_if = [&](bool wanted, const Vec3& size) { return wanted ? mesh_box(size, h) : TetMesh{}; };
     const TetMesh block_mesh = mesh_if(options.runs("uniaxial"), block);
     const TetMesh beam_mesh = mesh_if(options.runs("cantilever"), beam);
-    const TetMesh slab_mesh = mesh_if(options.runs("hertz") || options.runs("probe"), slab);
+    const TetMesh slab_mesh = mesh_if(options.runs("hertz") || options.runs("hertz-run") || options.runs("probe"), slab);
     const TetMesh line_mesh = mesh_if(options.runs("line-load"), options.line_load_block);
     for (size_t material = 0; material < options.poisson_ratios.size(); ++material) {
       const auto& nu = options.poisson_ratios[material];
@@ -99,6 +99,17 @@ std::vector<SuiteRow> run_validation_suite(const SuiteOptions& options,
         for (size_t i = 0; i < depths.size(); ++i) {
           char test[48];
           std::snprintf(test, sizeof test, "hertz d/R=%.2g", depth_ratios[i]);
+          add(test, hz.points, hz.force[i], hz.hertz[i], true);
+        }
+      }
+      if (options.runs("hertz-run")) {
+        std::vector<double> depths;
+        for (double r : depth_ratios) depths.push_back(r * options.indenter_radius);
+        const IndentationResult hz = sphere_indentation(slab_mesh, m, options.indenter_radius, depths, options.contact,
+                                                          options.hertz_layer, AsRun{options.run_contact_stiffness});
+        for (size_t i = 0; i < depths.size(); ++i) {
+          char test[48];
+          std::snprintf(test, sizeof test, "hertz as run d/R=%.2g", depth_ratios[i]);
           add(test, hz.points, hz.force[i], hz.hertz[i], true);
         }
       }

@@ -11,6 +11,7 @@
 #include "core/model/stiffness.h"
 #include "core/physics/force_law.h"
 #include "core/util/error.h"
+#include "core/validation/run_equilibrium.h"
 #include "core/validation/static_solve.h"
 
 namespace organsim {
@@ -375,15 +376,16 @@ std::pair<double, int32_t> point_indentation(const Model& m, const StaticSolver&
 namespace {
 
 // A block with its bottom face clamped, its stiffness factored once for every
-// pose of a tool pressed into its top, and the tool's penalty: 1000x the
-// stiffest point, so its compliance is 1e-3 of the solid's.
+// pose of a tool pressed into its top (unless not `factored`: the solves as
+// run need none), and the tool's penalty: 1000x the stiffest point, so its
+// compliance is 1e-3 of the solid's.
 struct ClampedBlock {
-  ClampedBlock(const TetMesh& mesh, const Material& material)
+  ClampedBlock(const TetMesh& mesh, const Material& material, bool factored = true)
       : model(free_model(mesh, material)), box(bounding_box(model)), bottom(face(model, box, 2, -1)) {
     clamp(supports, bottom, Vec3::Zero());
     const std::vector<double> diagonal = stiffness_diagonal(model);
     k_contact = 1e3 * *std::max_element(diagonal.begin(), diagonal.end());
-    solver = std::make_unique<StaticSolver>(model, supports.prescribed);
+    if (factored) solver = std::make_unique<StaticSolver>(model, supports.prescribed);
   }
   const Model model;
   const Box box;
@@ -467,12 +469,43 @@ Vec3 base_reaction(const ClampedBlock& b, const SurfaceContact& c) {
   return force;
 }
 
+// The block as a run's Model: its bottom face (within the box's tolerance) fixed.
+Model clamped_model(const TetMesh& block, const Material& material, const Box& box) {
+  ModelOptions options;
+  FixedSelector bottom;
+  bottom.kind = FixedSelector::Kind::Box;
+  bottom.min = box.min - Vec3::Constant(box.tol);
+  bottom.max = Vec3(box.max.x(), box.max.y(), box.min.z()) + Vec3::Constant(box.tol);
+  options.fixed.push_back(bottom);
+  return build_model(block, material, options, "validation mesh");
+}
+
+// The held sphere's equilibrium in a run (held_tool_equilibrium) on the
+// clamped block: the force it pushes the tissue with along -z, and the
+// points or triangles touching.
+std::pair<double, int32_t> indentation_as_run(const Model& model, const Box& box, const Vec3& centre, double radius,
+                                              ToolContact contact, bool hertz_layer, const AsRun& as_run) {
+  BackendTool tool;
+  tool.present = true;
+  tool.radius = radius;
+  tool.contact_stiffness = as_run.contact_stiffness;
+  tool.contact = contact;
+  tool.hertz_layer = hertz_layer && contact == ToolContact::Surface;
+  // Lowered from where it clears the top face.
+  const Vec3 from(centre.x(), centre.y(), box.max.z() + 1.05 * radius);
+  const HeldToolEquilibrium e = held_tool_equilibrium(model, tool, from, centre);
+  return {e.reaction.force.z(), e.reaction.contacts};
+}
+
 }  // namespace
 
 IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
-                                     const std::vector<double>& depths, ToolContact contact, bool hertz_layer) {
-  const ClampedBlock b(block, material);
-  const ContactLayer layer = hertz_layer ? contact_layer(b.model) : ContactLayer{};
+                                     const std::vector<double>& depths, ToolContact contact, bool hertz_layer,
+                                     std::optional<AsRun> as_run) {
+  const bool small_strain = !as_run;
+  const ClampedBlock b(block, material, small_strain);
+  const ContactLayer layer = hertz_layer && small_strain ? contact_layer(b.model) : ContactLayer{};
+  const Model run_model = small_strain ? Model{} : clamped_model(block, material, b.box);
   const EffectiveElasticity e = effective_elasticity(material);
   const double e_star = e.young_modulus / (1 - e.poisson_ratio * e.poisson_ratio);
   IndentationResult r;
@@ -482,7 +515,9 @@ IndentationResult sphere_indentation(const TetMesh& block, const Material& mater
                       b.box.max.z() + radius - depth);
     double force = 0;
     int32_t touching = 0;
-    if (contact == ToolContact::Surface && hertz_layer) {
+    if (!small_strain) {
+      std::tie(force, touching) = indentation_as_run(run_model, b.box, centre, radius, contact, hertz_layer, *as_run);
+    } else if (contact == ToolContact::Surface && hertz_layer) {
       const LayeredContact c = layered_contact(b, layer, {centre, centre, radius},
                                                [](const SurfaceContact& s) { return -s.force.z(); });
       force = c.force;

@@ -1,7 +1,8 @@
 #pragma once
 // The validation cases: textbook elasticity problems posed on a tet mesh and
-// solved for the Model's small-strain static response (static_solve.h), each
-// with the theory it is compared with. SI units. docs/validation.md shows the
+// solved for the Model's small-strain static response (static_solve.h), or
+// for the indentation also as a run settles (run_equilibrium.h), each with
+// the theory it is compared with. SI units. docs/validation.md shows the
 // tables `organsim validate` makes from them.
 //
 // Theory uses effective_elasticity(material) (core/model/stiffness.h).
@@ -9,6 +10,7 @@
 // selectors: the case states its supports) and finds faces from the mesh's
 // bounding box, so any mesh of the right box works: CGAL meshes in the
 // command, small structured ones in the tests.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,9 +62,18 @@ struct IndentationResult {
 };
 // `hertz_layer`: the surface contact in series with the sub-cell Hertz
 // layer (a scenario's tool.hertz_layer; force_law::hertz_layer_offset).
+// `as_run`: instead of the small-strain static response (above), the
+// equilibrium a run settles into (run_equilibrium.h: the force law at the
+// deformed shape, the backends' own contact pass) with a run's penalty,
+// `as_run->contact_stiffness` as a scenario's tool.contact_stiffness (N/m
+// for a point of the median mass); its compliance is part of the result.
+struct AsRun {
+  double contact_stiffness = 0;
+};
 IndentationResult sphere_indentation(const TetMesh& block, const Material& material, double radius,
                                      const std::vector<double>& depths,
-                                     ToolContact contact = ToolContact::Surface, bool hertz_layer = false);
+                                     ToolContact contact = ToolContact::Surface, bool hertz_layer = false,
+                                     std::optional<AsRun> as_run = std::nullopt);
 
 // A line load: a rigid frictionless capsule of `radius` lying along y across
 // the middle of the block's top face (bottom face clamped), its axis 2R

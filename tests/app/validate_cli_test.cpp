@@ -34,9 +34,9 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
     EXPECT_GT(row["points"].get<int>(), 0);
   }
   for (const char* t : {"uniaxial E", "uniaxial nu", "cantilever tip load", "cantilever guided", "hertz d/R=0.1",
-                        "hertz probe d/R=0.2"})
+                        "hertz as run d/R=0.1", "hertz probe d/R=0.2"})
     EXPECT_TRUE(tests.count(t)) << t;
-  EXPECT_EQ(j["rows"].size(), 2u * 8u);  // 2 materials x 8 quantities
+  EXPECT_EQ(j["rows"].size(), 2u * 11u);  // 2 materials x 11 quantities
   // The measured E and nu against what was asked (E 10 kPa, the default;
   // nu 1/4 for the springs alone, 0.4): at these 20 mm cells E is 0.80 and
   // 0.83 of the asked value (it converges from below as the cells shrink,
@@ -59,7 +59,7 @@ TEST(ValidateCli, WritesTablesAndPlotForEveryCase) {
   }
   EXPECT_EQ(checked, 4);  // E and nu for both materials
   const std::string csv = test::slurp(dir / "out" / "validation.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 16);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 22);
   const std::string png = test::slurp(dir / "out" / "validation.png");
   ASSERT_GT(png.size(), 8u);
   EXPECT_EQ(png.substr(1, 3), "PNG");
@@ -168,12 +168,22 @@ TEST(ValidateCli, UnknownCaseOrALineLoadWithoutItsReferenceIsAUsageError) {
   const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_bad_cases";
   const auto unknown = test::run_organsim("validate --cases hertz,bending -o " + (dir / "out").string(), dir / "log");
   EXPECT_EQ(unknown.exit_code, 2);
-  EXPECT_NE(unknown.err.find("--cases: expected some of uniaxial, cantilever, hertz, probe, line-load, got 'bending'"),
+  EXPECT_NE(unknown.err.find("--cases: expected some of uniaxial, cantilever, hertz, hertz-run, probe, line-load, got "
+                                   "'bending'"),
             std::string::npos)
       << unknown.err;
   const auto alone = test::run_organsim("validate --cases line-load -o " + (dir / "out").string(), dir / "log");
   EXPECT_EQ(alone.exit_code, 2);
   EXPECT_NE(alone.err.find("--line-load-reference"), std::string::npos) << alone.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "validation.json"));
+}
+
+TEST(ValidateCli, NonPositiveContactStiffnessIsAUsageError) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "validate_cli_bad_stiffness";
+  const auto r = test::run_organsim("validate --cases hertz-run --contact-stiffness 0 -o " + (dir / "out").string(),
+                                    dir / "log");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--contact-stiffness: expected a stiffness in N/m (> 0), got 0"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "validation.json"));
 }
 
