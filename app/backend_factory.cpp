@@ -3,7 +3,7 @@
 #include "core/gl/egl_context.h"
 #include "core/gl/gl_backend.h"
 #include "core/sim/cpu_backend.h"
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/util/error.h"
 
 namespace organsim::app {
@@ -22,7 +22,7 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
       throw Error(ErrorKind::Usage, std::string("integrator ") + integrator_name(s.integrator) + " runs on the cpu backend in double precision only "
                                     "(its reference; asked: " + precision +
                                         (s.cpu_kernel.empty() ? "" : ", kernel " + s.cpu_kernel) + ")");
-    return make_implicit_backend(model, tool, s.implicit, s.integrator);
+    return make_reference_backend(model, tool, s.integrator, s.implicit);
   }
   if (precision == "double") {
     o.precision = Precision::Double;
@@ -33,12 +33,7 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
   }
   o.threads = s.threads;
   o.live_share = s.cpu_live_share;
-  if (s.cpu_kernel == "generic") {
-    o.kernel = CpuKernel::Generic;
-  } else if (!s.cpu_kernel.empty()) {
-    o.kernel = CpuKernel::Simd;
-    o.simd = s.cpu_kernel;
-  }
+  o.simd = s.cpu_kernel;
   return make_cpu_backend(model, tool, o);
 }
 

@@ -37,7 +37,7 @@ Material bench_material(double poisson_ratio) {
   return m;
 }
 
-// "simd (avx2)", "generic", ... from a CPU backend's device line ("...,
+// "simd (avx2)", "simd (sse4)", ... from a CPU backend's device line ("...,
 // simd (avx2) kernel"): what follows its last ", " up to " kernel".
 std::string kernel_of(const std::string& device) {
   const std::string suffix = " kernel";

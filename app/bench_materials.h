@@ -36,7 +36,7 @@ struct MaterialBenchRow {
   int32_t points = 0, springs = 0, tets = 0, sutures = 0;
   double dt = 0, dt_crit = 0;  // s
   std::string device;    // the backend's device line after the timing
-  std::string kernel;    // "simd (avx2)", ... or "generic": the CPU kernel this row ran on; "glsl" on gl
+  std::string kernel;    // "simd (avx2)", ...: the CPU kernel this row ran on; "glsl" on gl
   std::vector<std::string> passes;
   BenchTiming timing;
 };

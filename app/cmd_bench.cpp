@@ -159,7 +159,7 @@ struct Row {
   double mesh_seconds = 0;
   double dt = 0, dt_crit = 0;  // s: the step used and the model's critical step
   std::string backend, precision, device;
-  std::string kernel;   // cpu: the kernel's target ("avx2", ...) or "generic"; gl: empty
+  std::string kernel;   // cpu: the kernel's target ("avx2", ...); gl: empty
   BenchTiming timing;
   BenchTiming scatter;  // the plain scatter step, same model and precision, 1 thread
   Plan plan;
@@ -575,8 +575,8 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
   cmd->add_option("--threads", args->threads, "CPU threads (0: the backend's choice)")->check(CLI::NonNegativeNumber);
   auto simd = std::make_shared<std::string>();
   cmd->add_option("--simd", *simd,
-                  "Comma-separated cpu kernels to time side by side: SIMD targets (e.g. avx3,avx2,sse4,scalar), "
-                  "or generic (default: every target this CPU runs)");
+                  "Comma-separated SIMD targets of the cpu kernel to time side by side (e.g. avx3,avx2,sse4,scalar; "
+                  "default: every target this CPU runs)");
   cmd->add_option("--gl-threads-per-point", args->gl_threads_per_point,
                   "GL invocations sharing one point's gathers, 1 to 16 (0: 1 on a software renderer, 8 on a GPU)")
       ->check(CLI::Range(0, 16));
@@ -616,7 +616,7 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
     args->backends = split_list(*backends);
     args->simd = split_list(*simd);
     for (const std::string& k : args->simd)
-      if (k != "generic") simd_target_named(k, "bench --simd");
+      simd_target_named(k, "bench --simd");
     if (args->materials) {
       if (sizes_option->count() == 0) args->sizes = {7750};  // the paper's liver
       if (args->backends.size() > 1) {

@@ -3,11 +3,11 @@
 // a caller needs it, its energy) as a small function of plain numbers,
 // templated on the number type. Every evaluation of the physics calls these:
 // the double-precision reference (core/sim/reference_forces.cpp), the
-// generic CPU kernel and the scatter step in their precision, the energy of
+// scatter step in its precision, the energy of
 // the blow-up monitor, the shear element's reference and energy, and every
 // output that reports a force (the ParaView series' tool force). The
 // simd kernel evaluates the same formulas on 1 to 16 lanes and is tested
-// against the generic kernel point by point; the GLSL twin of this file is
+// against the reference point by point; the GLSL twin of this file is
 // shaders/force_law.glsl (step.comp and its companions include it).
 // docs/physics.md derives each formula. SI units: m, N, Pa, s.
 //

@@ -1,6 +1,6 @@
 #pragma once
 // What a run reports of its integrator: the force log's meta.integrator and
-// the implicit solver's warning (core/sim/implicit_backend.h).
+// the implicit solver's warning (core/sim/reference_backend.h).
 #include <nlohmann/json.hpp>
 
 #include <string>

@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/sim/cpu_backend.h"
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/reference_forces.h"
 #include "core/util/error.h"
 #include "core/util/format.h"
@@ -34,7 +34,7 @@ SettleResult settle(const Model& model, const SettleOptions& options) {
   cpu.precision = Precision::Double;
   cpu.threads = options.threads;
   const auto backend = solves_implicitly(options.integrator)
-                           ? make_implicit_backend(model, BackendTool{}, options.implicit, options.integrator)
+                           ? make_reference_backend(model, BackendTool{}, options.integrator, options.implicit)
                            : make_cpu_backend(model, BackendTool{}, cpu);
 
   double heaviest_weight = 0;

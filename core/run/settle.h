@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/model/model.h"
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 
 namespace organsim {
 

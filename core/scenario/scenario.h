@@ -15,7 +15,7 @@
 
 #include "core/model/material.h"
 #include "core/scenario/events.h"
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/step_plan.h"
 #include "core/scenario/outputs.h"
 #include "core/scenario/tool_spec.h"
@@ -49,7 +49,7 @@ struct TimeDef {
   int32_t substeps = 10;   // steps per tick
   double settle = 0;       // s before t = 0 to come to rest under gravity, no tool (0: start from the rest shape)
   // "integrator": "verlet" (explicit, dt below dt_crit) or "implicit_euler"
-  // (any dt; core/sim/implicit_backend.h), whose solver settings are
+  // (any dt; core/sim/reference_backend.h), whose solver settings are
   // "newton_iterations", "cg_tolerance", "cg_max_iterations" and
   // "preconditioner" ("block_jacobi" or "rest_cholesky").
   Integrator integrator = Integrator::Verlet;

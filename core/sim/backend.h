@@ -54,7 +54,7 @@ struct Plan {
 };
 
 // What an implicit integrator's linear solves did so far in a run (the
-// force log's meta and the progress line; core/sim/implicit_backend.h).
+// force log's meta and the progress line; core/sim/reference_backend.h).
 struct IntegratorStats {
   std::vector<int32_t> cg_iterations;  // per step, summed over its Newton iterations
   double max_residual = 0;             // the largest final relative CG residual of any solve

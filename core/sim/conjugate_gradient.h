@@ -1,7 +1,7 @@
 #pragma once
 // Preconditioned conjugate gradients on the free coordinates of a symmetric
 // positive (semi-)definite system: the implicit integrator's linear solve
-// (core/sim/implicit_backend.h).
+// (core/sim/reference_backend.h).
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>

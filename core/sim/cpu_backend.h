@@ -1,16 +1,11 @@
 #pragma once
-// The CPU backend. Its generic kernel in double precision is the reference
-// every other path is tested against. Springs are gathered per point through
-// the Model's layout (no atomics, deterministic for any thread count) and
-// force evaluation is fused with Verlet integration.
-//
-// Kernels, chosen at construction (and again at every rebuild):
-// - simd: one source on Google Highway for every instruction set
-//   (cpu_kernel_simd.h), the best this CPU has unless `simd` names a lower
-//   one; several times faster than generic;
-// - generic: portable C++ the compiler vectorises, any precision, any layout;
-//   the double-precision reference.
-// `Auto` takes simd where it can and says so in device() and plan().
+// The CPU backend: position Verlet with drag fused with the force passes in
+// one SIMD kernel written on Google Highway (cpu_kernel_simd.h), float or
+// double, on the best instruction set this CPU runs unless `simd` names a
+// lower one, with the thread count chosen by timing. Springs are gathered per
+// point through the Model's layout (no atomics, deterministic for any thread
+// count). It is tested against the reference backend (reference_backend.h:
+// the same step in double on the reference forces).
 #include <functional>
 #include <memory>
 #include <string>
@@ -21,8 +16,6 @@ namespace organsim {
 
 enum class Precision { Double, Float };
 
-enum class CpuKernel { Auto, Generic, Simd };
-
 struct CpuBackendOptions {
   Precision precision = Precision::Double;
   // 0: chosen by timing a few steps on 1 thread and on all hardware threads
@@ -30,11 +23,9 @@ struct CpuBackendOptions {
   // now and then, one step on the other count (thread_choice.h). Results are
   // bit-identical for any count.
   int32_t threads = 0;
-  // Simd when it cannot run here (an unsupported
-  // model) is an Error(Backend) naming why; Auto never fails.
-  CpuKernel kernel = CpuKernel::Auto;
-  // The simd kernel's target by name (simd_targets_compiled()); empty: the
-  // default (ORGANSIM_SIMD, else the best this CPU runs).
+  // The kernel's target by name (simd_targets_compiled()); empty: the
+  // default (ORGANSIM_SIMD, else the best this CPU runs). A model the kernel
+  // cannot run (simd_kernel_unsupported) is an Error(Backend) naming why.
   std::string simd = "";
   // A live loop's share of the clock (organsim serve; 0: not live). With
   // threads 0 it steps on fewer than all hardware threads, leaving a core

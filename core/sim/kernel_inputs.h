@@ -1,5 +1,5 @@
 #pragma once
-// What the CPU backend hands its kernels (generic and simd, float and double)
+// What the CPU backend hands its simd kernel (every target, float and double)
 // for one substep, and what each chunk hands back.
 #include <cstdint>
 

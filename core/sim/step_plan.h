@@ -25,7 +25,7 @@ enum class Pass : uint8_t {
   SurfaceContact,  // the tool against the surface triangles (broad phase, then each touching triangle's penalty)
   ToolContact,     // the tool's push penalty or pull attachments, and its reaction
   Integrate,       // position Verlet with drag
-  // Implicit Euler (core/sim/implicit_backend.h), in place of Integrate:
+  // Implicit Euler (core/sim/reference_backend.h), in place of Integrate:
   Linearise,          // the force law's tangent blocks K, D at the step's state (and the contact's)
   ConjugateGradient,  // (M + h D + h^2 K) dv = h (f - h K v) by preconditioned CG
   VelocityUpdate,     // v += dv, x += h v on the free points (then, with Newton iterations, the passes again)
@@ -38,7 +38,7 @@ enum class Pass : uint8_t {
 enum class Integrator : uint8_t { Verlet, ImplicitEuler, ImplicitDamping };
 // "verlet", "implicit_euler", "implicit_damping".
 const char* integrator_name(Integrator integrator);
-// Whether a step solves a linear system (core/sim/implicit_backend.h).
+// Whether a step solves a linear system (core/sim/reference_backend.h).
 inline bool solves_implicitly(Integrator integrator) { return integrator != Integrator::Verlet; }
 
 // The per-tet term of a model: at most one of these (core/model/stiffness.h).

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/util/error.h"
 
 namespace organsim {
@@ -29,7 +29,7 @@ HeldToolEquilibrium held_tool_equilibrium(const Model& model, const BackendTool&
   options.cg_tolerance = 1e-8;
   options.cg_max_iterations = 500;
   options.preconditioner = Preconditioner::RestCholesky;
-  const auto backend = make_implicit_backend(model, tool, options, Integrator::ImplicitEuler);
+  const auto backend = make_reference_backend(model, tool, Integrator::ImplicitEuler, options);
   TickRequest request;
   request.dt = kStep;
   request.substeps = 1;

@@ -10,7 +10,7 @@
 // quasi-static run gives, found in seconds instead of a second of
 // simulated time.
 //
-// Found by the implicit reference (core/sim/implicit_backend.h) at a step so
+// Found by the implicit reference (core/sim/reference_backend.h) at a step so
 // long (1 s) that the mass term is negligible and each step is a Newton
 // solve of f(x) = 0, with the Newton iterations' line search and the rest
 // Cholesky preconditioner: the tool is lowered to its pose over the first

@@ -2,9 +2,10 @@
 // `backend:` line of `organsim run --plan` (at the start) and the run's own
 // device lines (`run:` at the start, `device: ... (at the end)` when it
 // changed), before and after the scenario's topology events (cut, tear,
-// sutures). A scenario that falls to the generic kernel runs several times
-// slower (docs/bench.md, `organsim bench --materials`), so a change of kernel
-// must be a decision written in kExpectedKernels, not an accident.
+// sutures). The CPU backend has one kernel and refuses a plan it cannot run
+// (simd_kernel_unsupported), so every shipped scenario must run on it from
+// start to end: a change of kernel must be a decision written in
+// kExpectedKernels, not an accident.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -48,8 +49,8 @@ constexpr ScenarioKernel kExpectedKernels[] = {
     {"palpation", "simd", "simd"},
 };
 
-// "simd" from "..., simd (avx2) kernel)" or "..., generic kernel (at the
-// end)": the first word after the last ", " before " kernel" on `line` (the
+// "simd" from "..., simd (avx2) kernel)" or "..., simd (sse4) kernel (at
+// the end)": the first word after the last ", " before " kernel" on `line` (the
 // kernel, not its target); "" when the line names no kernel.
 std::string kernel_on(const std::string& line) {
   const size_t at = line.rfind(" kernel");

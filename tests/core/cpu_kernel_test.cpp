@@ -1,9 +1,9 @@
 // The simd float kernel, on every target compiled in that this CPU runs
-// (each its own test case), against the double-precision reference (the
-// generic kernel in double): forces per point on random meshes, 1000-step
+// (each its own test case), against the double-precision reference
+// (reference_backend.h's Verlet): forces per point on random meshes, 1000-step
 // trajectories for every scene variant, threads, the rest state, a rebuild
 // after a cut, each with every per-tet term (volume per tet or nodal, shear
-// element); and which kernel a model gets, and a plan the kernel refuses.
+// element); and the models and plans the kernel refuses.
 #include <gtest/gtest.h>
 
 #include <omp.h>
@@ -55,8 +55,7 @@ TEST_P(CpuKernel, OneStepForcesMatchTheDoubleReferenceOnRandomMeshes) {
 
 TEST_P(CpuKernel, ThousandStepTrajectoriesTrackTheDoubleReferenceInEverySceneVariant) {
   // 1000 float steps: rounding of ~6e-8 per step accumulates (and the
-  // contact amplifies it); the generic float kernel shows the same drift
-  // (Gather.FloatTracksDoubleReference). Measured 1.2e-7 to 5.5e-7 of the
+  // contact amplifies it). Measured 1.2e-7 to 5.5e-7 of the
   // box edge (6-27 nm on 5 cm) with the per-tet term, 1.9e-7 to 5.3e-7
   // with the nodal term; tolerance 1e-5 of it (0.5 um, against
   // deformations of 0.8-27 mm here). The reaction sums the same per-point
@@ -80,7 +79,7 @@ TEST_P(CpuKernel, KeepsTrackingTheReferenceAfterACut) {
   testing::expect_cut_run_tracks_the_reference(fast(), 1e-5 * kSize);
 }
 
-TEST(CpuKernelChoice, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
+TEST(CpuKernelChoice, TheKernelRunsEveryModelItSupportsAndRefusesTheRestByName) {
   const Model wide = random_model(1, 3, VolumeTerm::PerTet, true);
   const Model nodal = random_model(1, 3, VolumeTerm::Nodal, true);
   const Model narrow = random_model(1, 3, VolumeTerm::PerTet, true, 2);  // chunks of 2: no target has 2 float lanes
@@ -89,10 +88,18 @@ TEST(CpuKernelChoice, EachModelGoesToTheKernelThatSupportsItAndSaysWhich) {
   EXPECT_EQ(simd_kernel_unsupported(make_step_plan(wide, {}), wide.layout.chunk_size, best), "");
   EXPECT_EQ(simd_kernel_unsupported(make_step_plan(nodal, {}), nodal.layout.chunk_size, best), "");
 
-  // Float on an unsupported layout falls back to the generic kernel, and says so.
-  EXPECT_NE(make_cpu_backend(narrow, {}, {Precision::Float, 1})->device().find("generic kernel"), std::string::npos);
-  // Asked for by name where it cannot run: an error naming why, never a quiet fallback.
-  EXPECT_THROW(make_cpu_backend(narrow, {}, testing::fast_kernel(best.name, Precision::Float)), Error);
+  // A layout it cannot run, by default or asked for by name: an error naming
+  // why, never a quiet fallback.
+  for (const CpuBackendOptions& options : {CpuBackendOptions{Precision::Float, 1},
+                                           testing::fast_kernel(best.name, Precision::Double)}) {
+    try {
+      make_cpu_backend(narrow, {}, options);
+      ADD_FAILURE() << "a layout of chunks of 2 must be refused";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Backend);
+      EXPECT_NE(std::string(e.what()).find("chunk size 2"), std::string::npos) << e.what();
+    }
+  }
   for (const Model* model : {&wide, &nodal}) {
     const std::string auto_float = make_cpu_backend(*model, {}, {Precision::Float, 1})->device();
     EXPECT_NE(auto_float.find("simd (" + best.name + ") kernel"), std::string::npos) << auto_float;

@@ -6,11 +6,14 @@
 // element (smoothed, or per tet) at a Poisson ratio below 1/4.
 #include <gtest/gtest.h>
 
+#include <memory>
+#include <optional>
 #include <random>
 #include <vector>
 
 #include "core/sim/cpu_backend.h"
 #include "core/sim/cpu_kernel_simd.h"
+#include "core/sim/reference_backend.h"
 #include "core/run/run.h"
 #include "tests/core/test_models.h"
 
@@ -26,13 +29,22 @@ inline std::vector<std::string> fast_kernels() {
   return out;
 }
 inline CpuBackendOptions fast_kernel(const std::string& kernel, Precision precision, int threads = 1) {
-  return {precision, threads, CpuKernel::Simd, kernel};
+  return {precision, threads, kernel};
 }
-// What device() says of that kernel.
-inline std::string kernel_label(const CpuBackendOptions& options) {
-  if (options.kernel == CpuKernel::Generic) return "generic kernel";
-  return "simd (" + options.simd + ") kernel";
-}
+
+// What a test steps: the CPU backend with its options, or (without) the
+// reference backend's Verlet (reference_backend.h), the judge of the kernel.
+struct Stepper {
+  std::optional<CpuBackendOptions> cpu;
+  Stepper() = default;
+  Stepper(const CpuBackendOptions& options) : cpu(options) {}  // NOLINT: implicit, so options read as a stepper
+  std::unique_ptr<Backend> make(const Model& model, const BackendTool& tool = {}) const {
+    return cpu ? make_cpu_backend(model, tool, *cpu) : make_reference_backend(model, tool, Integrator::Verlet);
+  }
+  // What device() says of its kernel.
+  std::string label() const { return cpu ? "simd (" + cpu->simd + ") kernel" : "Verlet (reference, double)"; }
+};
+inline const Stepper kReference;
 // gtest's name for a kernel's test case.
 inline std::string kernel_test_name(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
 
@@ -102,9 +114,9 @@ inline void moving_state(const Model& model, unsigned seed, double dt, std::vect
 }
 
 // Positions after one step of dt from (x, x_prev).
-inline std::vector<Vec3> one_step(const Model& model, const CpuBackendOptions& options, const std::vector<Vec3>& x,
+inline std::vector<Vec3> one_step(const Model& model, const Stepper& stepper, const std::vector<Vec3>& x,
                                   const std::vector<Vec3>& x_prev, double dt) {
-  auto backend = make_cpu_backend(model, {}, options);
+  auto backend = stepper.make(model);
   backend->set_state(x, x_prev);
   run_ticks(*backend, 1, dt, 1);
   std::vector<Vec3> after;
@@ -113,7 +125,7 @@ inline std::vector<Vec3> one_step(const Model& model, const CpuBackendOptions& o
 }
 
 // One step of dt = 1e-4 s from a deformed, moving state (moving_state) on
-// the reference (the generic double kernel) and on `options`, for each
+// the reference (reference_backend.h's Verlet) and on `options`, for each
 // term, seeds 1-3 and boxes of 3, 6 and 12 cells (12 cells, about
 // 10k tets, open more tet batches at once than the packing keeps open, so
 // its closing path runs too): calls check(model, x, x_prev, dt, ref, got)
@@ -129,7 +141,7 @@ inline void for_each_one_step_against_the_reference(const CpuBackendOptions& opt
         const Model model = random_model(seed, cells, volume, true);
         std::vector<Vec3> x, x_prev;
         moving_state(model, seed, dt, x, x_prev);
-        const auto ref = one_step(model, {Precision::Double, 1, CpuKernel::Generic}, x, x_prev, dt);
+        const auto ref = one_step(model, kReference, x, x_prev, dt);
         const auto got = one_step(model, options, x, x_prev, dt);
         check(model, x, x_prev, dt, ref, got);
       }
@@ -144,8 +156,8 @@ inline void for_each_one_step_against_the_reference(const CpuBackendOptions& opt
 enum class Scene { Lean, Full, Push, PushPoints, Capsule, CapsulePoints, Pull };
 
 // 1000 steps (50 ticks of 20) of a scene; returns the positions and the last reaction.
-inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBackendOptions& options, Reaction& last,
-                            int ticks = 50) {
+inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const Stepper& stepper, Reaction& last,
+                                   int ticks = 50) {
   BackendTool tool;
   if (scene == Scene::Push) tool = {true, ToolMode::Push, 0.02, 500, ToolContact::Surface};
   if (scene == Scene::PushPoints) tool = {true, ToolMode::Push, 0.02, 500, ToolContact::Points};
@@ -156,7 +168,7 @@ inline std::vector<Vec3> run_scene(const Model& model, Scene scene, const CpuBac
     tool.end_b = Vec3(0.03, 0, 0.012);
   }
   if (scene == Scene::Pull) tool = {true, ToolMode::Pull, 0.01, 200};
-  auto backend = make_cpu_backend(model, tool, options);
+  auto backend = stepper.make(model, tool);
   const Vec3 top(0.025, 0.025, kSize);
   if (scene == Scene::Lean) {
     // No load at all: start stretched 5 % upwards and let it ring.
@@ -208,8 +220,7 @@ inline const char* scene_name(Scene s) {
   return "";
 }
 
-// Every scene variant on `options` against the generic double kernel (the
-// reference), 1000 steps each, with `volume` in all but the lean scene
+// Every scene variant on `options` against the reference, 1000 steps each, with `volume` in all but the lean scene
 // (springs only, so run only with the per-tet term): the scene must deform
 // the model; positions must agree within `position_tol` m and, with a
 // tool, the contacts exactly and the reaction force within `reaction_tol`
@@ -223,7 +234,7 @@ inline void expect_scenes_track_the_reference(const CpuBackendOptions& options, 
     SCOPED_TRACE(volume_term_name(volume));
     const Model model = random_model(7, 5, lean ? VolumeTerm::None : volume, !lean);
     Reaction rd, rf;
-    const auto xd = run_scene(model, scene, {Precision::Double, 1, CpuKernel::Generic}, rd);
+    const auto xd = run_scene(model, scene, kReference, rd);
     const auto xf = run_scene(model, scene, options, rf);
     double worst = 0, moved = 0;
     for (size_t i = 0; i < xd.size(); ++i) {
@@ -294,7 +305,7 @@ inline void expect_rest_state_stays_put(const CpuBackendOptions& options) {
 
 // A push into the top of a box (no jitter) that is cut through at
 // x = 0.025 after 10 ticks, then pushed 20 ticks more (600 steps), with
-// each term, on the generic double kernel (the reference) and on
+// each term, on the reference and on
 // `options`: the cut's sides must part in the reference, and positions
 // must agree within `position_tol` m.
 inline void expect_cut_run_tracks_the_reference(const CpuBackendOptions& options, double position_tol) {
@@ -306,17 +317,17 @@ inline void expect_cut_run_tracks_the_reference(const CpuBackendOptions& options
     ASSERT_GT(cut.npoint(), model.npoint());
     BackendTool tool{true, ToolMode::Push, 0.02, 500};
     std::vector<Vec3> x[2];
-    const CpuBackendOptions run_options[2] = {{Precision::Double, 1, CpuKernel::Generic}, options};
+    const Stepper run_options[2] = {kReference, options};
     for (int k = 0; k < 2; ++k) {
       TickRequest request;
       request.dt = 5e-5;
       request.substeps = 20;
       request.tool_active = true;
       request.tool_from = request.tool_to = Vec3(0.025, 0.025, kSize + 0.01);
-      auto backend = make_cpu_backend(model, tool, run_options[k]);
+      auto backend = run_options[k].make(model, tool);
       for (int i = 0; i < 10; ++i) backend->tick(request);
       backend->rebuild(cut);
-      EXPECT_NE(backend->device().find(kernel_label(run_options[k])), std::string::npos)
+      EXPECT_NE(backend->device().find(run_options[k].label()), std::string::npos)
           << backend->device();
       // The tool pushes into the cut's top edge, so the sides part.
       request.tool_to = Vec3(0.025, 0.025, kSize - 0.01);

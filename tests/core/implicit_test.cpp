@@ -1,4 +1,4 @@
-// Implicit Euler (core/sim/implicit_backend.h, implicit_system.h,
+// Implicit Euler (core/sim/reference_backend.h, implicit_system.h,
 // conjugate_gradient.h): its tangent against finite differences of the
 // reference forces, one step against a dense direct solve of the same
 // system, the single spring's amplification against its closed form,
@@ -15,7 +15,7 @@
 #include <utility>
 
 #include "core/run/integrator_report.h"
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/implicit_system.h"
 #include "core/sim/reference_forces.h"
 #include "core/stability/blowup_monitor.h"
@@ -171,7 +171,7 @@ TEST(ImplicitEuler, OneStepMatchesADenseDirectSolveOfTheSameSystem) {
     ImplicitOptions options;
     options.cg_tolerance = 1e-12;
     options.cg_max_iterations = 1000;
-    auto backend = make_implicit_backend(m, {}, options);
+    auto backend = make_reference_backend(m, {}, Integrator::ImplicitEuler, options);
     std::vector<Vec3> prev(m.npoint());
     for (int32_t i = 0; i < m.npoint(); ++i) prev[i] = b.x[i] - h * b.v[i];
     backend->set_state(b.x, prev);
@@ -229,7 +229,7 @@ TEST(ImplicitEuler, SingleSpringFollowsBackwardEulersAmplificationExactly) {
       Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, -rest)}, {m, m}, {{0, 1}}, k, d, {0});
       ImplicitOptions options;
       options.cg_tolerance = 1e-14;
-      auto backend = make_implicit_backend(model, {}, options);
+      auto backend = make_reference_backend(model, {}, Integrator::ImplicitEuler, options);
       double x = 0.01, v = 0;  // stretch below rest, m; velocity along -z, m/s
       backend->set_state({Vec3::Zero(), Vec3(0, 0, -rest - x)}, {Vec3::Zero(), Vec3(0, 0, -rest - x)});
       TickRequest request;
@@ -264,7 +264,7 @@ TEST(ImplicitEuler, NewtonResidualFallsQuadraticallyNearTheSolution) {
   options.newton_iterations = 4;
   options.cg_tolerance = 1e-13;
   options.cg_max_iterations = 2000;
-  auto backend = make_implicit_backend(b.model, {}, options);
+  auto backend = make_reference_backend(b.model, {}, Integrator::ImplicitEuler, options);
   backend->set_state(b.x, b.x);
   TickRequest request;
   request.dt = 5e-3;
@@ -287,7 +287,7 @@ TEST(ImplicitEuler, StiffModelAtHundredTimesDtCritSettlesToTheStaticSolution) {
   const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3::Constant(0.04), 3, 3, 3), material,
                                   testing::fixed_bottom_options(g));
   const double dt_crit = estimate_critical_step(model).dt_crit;
-  auto backend = make_implicit_backend(model, {});
+  auto backend = make_reference_backend(model, {}, Integrator::ImplicitEuler);
   TickRequest request;
   request.dt = 100 * dt_crit;
   request.substeps = 1;
@@ -317,7 +317,7 @@ TEST(ImplicitEuler, UndampedEnergyNeverRisesAtLargeSteps) {
   const DeformedBox b = deformed_box(soft_material(0.45, 0), 8e-4, 9);
   const Model& m = b.model;
   const double h = 20 * estimate_critical_step(m).dt_crit;
-  auto backend = make_implicit_backend(m, {});
+  auto backend = make_reference_backend(m, {}, Integrator::ImplicitEuler);
   backend->set_state(b.x, b.x);
   TickRequest request;
   request.dt = h;
@@ -347,7 +347,7 @@ TEST(ImplicitEuler, ACgThatCannotConvergeIsCountedAndWarned) {
   ImplicitOptions options;
   options.cg_tolerance = 0;
   options.cg_max_iterations = 2;
-  auto backend = make_implicit_backend(b.model, {}, options);
+  auto backend = make_reference_backend(b.model, {}, Integrator::ImplicitEuler, options);
   backend->set_state(b.x, b.x);
   testing::run_ticks(*backend, 5, 1e-3, 2);
   const IntegratorStats& s = *backend->integrator_stats();
@@ -363,7 +363,7 @@ TEST(ImplicitEuler, ACgThatCannotConvergeIsCountedAndWarned) {
 
   options.cg_tolerance = 1e-5;
   options.cg_max_iterations = 500;
-  auto converging = make_implicit_backend(b.model, {}, options);
+  auto converging = make_reference_backend(b.model, {}, Integrator::ImplicitEuler, options);
   converging->set_state(b.x, b.x);
   testing::run_ticks(*converging, 5, 1e-3, 2);
   EXPECT_EQ(converging->integrator_stats()->unconverged_steps, 0);
@@ -384,7 +384,7 @@ TEST(ImplicitEuler, RestCholeskyAndBlockJacobiAgreeAndTheFactorNeedsFewerIterati
     options.preconditioner = k == 0 ? Preconditioner::BlockJacobi : Preconditioner::RestCholesky;
     options.cg_tolerance = 1e-9;
     options.cg_max_iterations = 2000;
-    auto backend = make_implicit_backend(model, {}, options);
+    auto backend = make_reference_backend(model, {}, Integrator::ImplicitEuler, options);
     testing::run_ticks(*backend, 20, 1e-3, 1);
     backend->positions(end[k]);
     for (int32_t it : backend->integrator_stats()->cg_iterations) iterations[k] += it;
@@ -408,7 +408,7 @@ TEST(ImplicitDamping, SingleSpringFollowsItsClosedFormAndOnlyTheUndampedLimitBou
   Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, -rest)}, {m, m}, {{0, 1}}, k, d, {0});
   ImplicitOptions options;
   options.cg_tolerance = 1e-14;
-  auto backend = make_implicit_backend(model, {}, options, Integrator::ImplicitDamping);
+  auto backend = make_reference_backend(model, {}, Integrator::ImplicitDamping, options);
   EXPECT_TRUE(backend->step_plan().has(Pass::ConjugateGradient));
   double x = 0.01, v = 0;
   backend->set_state({Vec3::Zero(), Vec3(0, 0, -rest - x)}, {Vec3::Zero(), Vec3(0, 0, -rest - x)});
@@ -475,7 +475,7 @@ TEST(ImplicitEuler, AReleasedCantileverLosesEnergyAtBackwardEulersRate) {
   options.fixed = {root};
   const Model model = build_model(make_box_tet_mesh(Vec3::Zero(), Vec3(0.08, 0.02, 0.02), 8, 2, 2), material, options);
   // The equilibrium: implicit Euler at long steps damps every mode away.
-  auto settle = make_implicit_backend(model, {});
+  auto settle = make_reference_backend(model, {}, Integrator::ImplicitEuler);
   testing::run_ticks(*settle, 200, 0.01, 1);
   std::vector<Vec3> eq;
   settle->positions(eq);
@@ -506,7 +506,7 @@ TEST(ImplicitEuler, AReleasedCantileverLosesEnergyAtBackwardEulersRate) {
   EXPECT_NEAR(verlet_left, 1, 0.02) << "Verlet without dampers keeps the energy";
   for (const double h : {1e-3, 4e-3}) {
     const int steps = static_cast<int>(std::lround(period / h));
-    auto implicit = make_implicit_backend(model, {});
+    auto implicit = make_reference_backend(model, {}, Integrator::ImplicitEuler);
     const double left = energy_left(model, *implicit, h, steps, equilibrium);
     const double predicted = std::pow(1 + h * h * omega * omega, -(steps + 1));
     std::cout << "cantilever: period " << period << " s (omega " << omega << " rad/s), Verlet keeps " << verlet_left
@@ -520,18 +520,17 @@ TEST(ImplicitEuler, OptionsOutOfRangeAreRefused) {
   const Model model = testing::make_spring_model({Vec3(0, 0, 0), Vec3(0, 0, -0.1)}, {1, 1}, {{0, 1}}, 1, 0, {0});
   ImplicitOptions bad;
   bad.newton_iterations = 0;
-  EXPECT_THROW(make_implicit_backend(model, {}, bad), Error);
+  EXPECT_THROW(make_reference_backend(model, {}, Integrator::ImplicitEuler, bad), Error);
   bad = {};
   bad.cg_max_iterations = 0;
-  EXPECT_THROW(make_implicit_backend(model, {}, bad), Error);
+  EXPECT_THROW(make_reference_backend(model, {}, Integrator::ImplicitEuler, bad), Error);
   BackendTool tool;
   tool.present = true;
   tool.friction.mu_s = tool.friction.mu_k = 0.3;
   ImplicitOptions newton;
   newton.newton_iterations = 2;
-  EXPECT_THROW(make_implicit_backend(model, tool, newton), Error);
-  EXPECT_THROW(make_implicit_backend(model, {}, newton, Integrator::ImplicitDamping), Error);
-  EXPECT_THROW(make_implicit_backend(model, {}, {}, Integrator::Verlet), Error);
+  EXPECT_THROW(make_reference_backend(model, tool, Integrator::ImplicitEuler, newton), Error);
+  EXPECT_THROW(make_reference_backend(model, {}, Integrator::ImplicitDamping, newton), Error);
 }
 
 }  // namespace

@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "core/run/run.h"
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 #include "tests/core/suture_test_util.h"
 #include "tests/core/topology_test_util.h"
 
@@ -25,7 +25,7 @@ void implicit_at_the_tick(Scenario& s) {
 }
 
 RunResult run_implicit(const Scenario& s, const Model& model, testing::TopologyRecorder& rec, const std::string& name) {
-  auto backend = make_implicit_backend(model, backend_tool(s), s.time.implicit, s.time.integrator);
+  auto backend = make_reference_backend(model, backend_tool(s), s.time.integrator, s.time.implicit);
   RunOptions run;
   run.outdir = fs::path(ORGANSIM_TEST_TMP) / name;
   run.observers = {&rec};

@@ -1,6 +1,6 @@
 // The averaged nodal volume term (Model::point_volume_k, docs/physics.md):
-// its energy and forces, the generic CPU kernel and the scatter step against
-// the double reference, the rest state, topology rebuilds, and dt_crit
+// its energy and forces, the reference backend, the CPU kernel and the
+// scatter step against the double reference force, the rest state, topology rebuilds, and dt_crit
 // against the integrator. The simd kernel's nodal term is tested with
 // the kernels (cpu_kernel_test.cpp, cpu_kernel_double_test.cpp).
 #include <gtest/gtest.h>
@@ -94,10 +94,11 @@ TEST(NodalVolume, ReferenceForceIsMinusTheEnergyGradient) {
   }
 }
 
-// The generic kernel (double) against the reference: one step from a
-// deformed, moving state, for several chunk sizes (padding, lane groups).
-TEST(NodalVolume, GenericKernelMatchesTheReferenceOnRandomMeshes) {
-  testing::expect_generic_kernel_matches_reference(
+// The reference backend and the kernel against Verlet on the reference
+// force: one step from a deformed, moving state, for two chunk sizes
+// (padding, lane groups).
+TEST(NodalVolume, StepsMatchTheReferenceForceOnRandomMeshes) {
+  testing::expect_steps_match_the_reference_force(
       [](unsigned seed, int32_t chunk) { return nodal_model(seed, 5, chunk, Vec3(0.3, -1, -9.81)); });
 }
 
@@ -107,7 +108,7 @@ TEST(NodalVolume, GenericKernelMatchesTheReferenceOnRandomMeshes) {
 TEST(NodalVolume, RestStateIsExactlyForceFree) {
   const Model model = nodal_model(4, 5);
   for (Precision precision : {Precision::Double, Precision::Float}) {
-    auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+    auto backend = make_cpu_backend(model, {}, {precision, 1});
     testing::run_ticks(*backend, 100, 1e-4, 10);
     std::vector<Vec3> x;
     backend->positions(x);
@@ -119,9 +120,9 @@ TEST(NodalVolume, RestStateIsExactlyForceFree) {
 
 // The plain scatter step that bench times runs the same physics: 200 steps
 // of both in double from the same deformed state agree to rounding.
-TEST(NodalVolume, ScatterStepMatchesTheGenericKernel) {
+TEST(NodalVolume, ScatterStepMatchesTheReference) {
   const Model model = nodal_model(5, 4, kDefaultChunkSize, Vec3(0, 0, -9.81));
-  const testing::PathDifference d = testing::scatter_against_generic(model, 200, 1e-4);
+  const testing::PathDifference d = testing::scatter_against_reference(model, 200, 1e-4);
   ASSERT_GT(d.motion, 1e-6);
   // Different summation order over 200 steps: ~1e-12 of the motion.
   EXPECT_LT(d.worst, 1e-9 * d.motion);
@@ -145,7 +146,7 @@ TEST(NodalVolume, RebuildRecomputesNodalRestVolumes) {
     EXPECT_NEAR(cut.point_rest_volume[p] + cut.point_rest_volume[o], model.point_rest_volume[o], 1e-18) << p;
     EXPECT_LT(cut.point_rest_volume[o], model.point_rest_volume[o]) << o;
   }
-  auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Generic});
+  auto backend = make_cpu_backend(model, {}, {Precision::Float, 1});
   backend->rebuild(cut);
   testing::run_ticks(*backend, 20, 1e-4, 5);
   std::vector<Vec3> x;

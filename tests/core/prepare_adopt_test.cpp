@@ -2,7 +2,8 @@
 // tick's path, Backend::adopt on it), as the run loop does for a change its
 // worker builds: the tables prepared on another thread while the backend
 // ticks the previous version give, once adopted, exactly the run of a
-// rebuild at that tick, on every CPU kernel and precision.
+// rebuild at that tick, on the reference backend and on every target and
+// precision of the CPU backend's kernel.
 #include <gtest/gtest.h>
 
 #include <future>
@@ -27,9 +28,9 @@ struct Trajectory {
 // ticks more into the cut's top edge. `prepare_early`: the cut's tables are
 // prepared on another thread while the first 10 ticks run and adopted after
 // them; else rebuild() at the tick.
-Trajectory cut_run(const Model& model, const Model& cut, const CpuBackendOptions& options, bool prepare_early) {
+Trajectory cut_run(const Model& model, const Model& cut, const testing::Stepper& stepper, bool prepare_early) {
   const BackendTool tool{true, ToolMode::Push, 0.02, 500};
-  auto backend = make_cpu_backend(model, tool, options);
+  auto backend = stepper.make(model, tool);
   std::future<std::unique_ptr<PreparedModel>> prepared;
   if (prepare_early) prepared = std::async(std::launch::async, [&] { return backend->prepare(cut); });
   TickRequest request;
@@ -51,23 +52,21 @@ Trajectory cut_run(const Model& model, const Model& cut, const CpuBackendOptions
 }
 
 TEST(PrepareAdopt, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
-  std::vector<CpuBackendOptions> kernels = {{Precision::Double, 1, CpuKernel::Generic},
-                                            {Precision::Float, 1, CpuKernel::Generic}};
+  std::vector<testing::Stepper> steppers = {testing::kReference};
   for (const SimdTarget& target : simd_targets_supported()) {
-    kernels.push_back({Precision::Double, 1, CpuKernel::Simd, target.name});
-    kernels.push_back({Precision::Float, 1, CpuKernel::Simd, target.name});
+    steppers.push_back(testing::fast_kernel(target.name, Precision::Double));
+    steppers.push_back(testing::fast_kernel(target.name, Precision::Float));
   }
   for (testing::VolumeTerm volume : testing::kEveryTerm) {
     // No jitter, so that x = 0.025 (between cells 1 and 2) is a plane of tet faces.
     const Model model = testing::random_model(4, 4, volume, true, kDefaultChunkSize, 0);
     const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.025));
     ASSERT_GT(cut.npoint(), model.npoint());
-    for (const CpuBackendOptions& options : kernels) {
-      SCOPED_TRACE(std::string(testing::volume_term_name(volume)) +
-                   (options.precision == Precision::Double ? ", double" : ", float") +
-                   (options.kernel == CpuKernel::Simd ? ", simd " + options.simd : std::string(", generic")));
-      const Trajectory rebuilt = cut_run(model, cut, options, false);
-      const Trajectory adopted = cut_run(model, cut, options, true);
+    for (const testing::Stepper& stepper : steppers) {
+      SCOPED_TRACE(std::string(testing::volume_term_name(volume)) + ", " + stepper.label() +
+                   (stepper.cpu && stepper.cpu->precision == Precision::Float ? ", float" : ", double"));
+      const Trajectory rebuilt = cut_run(model, cut, stepper, false);
+      const Trajectory adopted = cut_run(model, cut, stepper, true);
       // The same arithmetic on the same state: nothing may differ in any bit.
       ASSERT_EQ(rebuilt.x.size(), static_cast<size_t>(cut.npoint()));
       EXPECT_EQ(adopted.x, rebuilt.x);
@@ -85,9 +84,12 @@ TEST(PrepareAdopt, TablesPreparedWhileTickingAdoptExactlyAsARebuildAtTheTick) {
 
 TEST(PrepareAdopt, AVersionPreparedElsewhereIsRefused) {
   const Model model = testing::random_model(4, 2, testing::VolumeTerm::PerTet, false);
-  auto backend = make_cpu_backend(model, {}, {Precision::Double, 1, CpuKernel::Generic});
-  auto other = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Generic});
+  auto backend = make_cpu_backend(model, {}, {Precision::Double, 1});
+  auto other = make_cpu_backend(model, {}, {Precision::Float, 1});
+  auto reference = testing::kReference.make(model);
   EXPECT_THROW(backend->adopt(other->prepare(model)), Error);
+  EXPECT_THROW(backend->adopt(reference->prepare(model)), Error);
+  EXPECT_THROW(reference->adopt(backend->prepare(model)), Error);
   EXPECT_THROW(backend->adopt(std::make_unique<PreparedModel>(model)), Error);
 }
 

@@ -2,8 +2,8 @@
 // D = sym(Fdot F^-1); core/model/shear_element.h, docs/physics.md): on one
 // tet it is tau times the element's stiffness at small strain, zero under
 // rigid motion of a strained tet, and dissipative for any deformation; a
-// nu-0 block stops ringing with it; the generic kernel and the scatter step
-// match the reference with it; and dt_crit includes it.
+// nu-0 block stops ringing with it; the reference backend, the kernel and
+// the scatter step match the reference force with it; and dt_crit includes it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +12,7 @@
 #include "core/model/shear_element.h"
 #include "core/model/stiffness.h"
 #include "core/sim/cpu_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/reference_forces.h"
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
@@ -200,7 +201,7 @@ TEST(ShearElementDamper, StopsTheRingingOfANuZeroBlock) {
     std::vector<Vec3> stretched = model.rest_position;
     for (Vec3& p : stretched) p.z() *= 1.02;
     const double start = elastic_energy(model, stretched);
-    auto backend = make_cpu_backend(model, {}, {Precision::Double, 1, CpuKernel::Generic});
+    auto backend = make_reference_backend(model, {}, Integrator::Verlet);
     backend->set_state(stretched, stretched);
     remaining[damped] = energy_after(*backend, model, steps, dt) / start;
   }
@@ -209,13 +210,13 @@ TEST(ShearElementDamper, StopsTheRingingOfANuZeroBlock) {
   EXPECT_LT(remaining[1], 1e-2);
 }
 
-// The generic kernel (double and float) and the scatter step against the
-// reference with the damper carrying most of the force: a moving state
+// The reference backend's step, the kernel's (double and float) and the
+// scatter step against Verlet on the reference force with the damper carrying most of the force: a moving state
 // (velocities ~0.2 m/s, 1 mm displacements) and the same velocities on a
 // block crushed to 0.3 of its height (J < J_min: the clamped 1 / J_d). The
 // damper's share of the force is checked first, so the comparison is about
 // it; tolerances as in force_law_checks.h.
-TEST(ShearElementDamper, GenericKernelAndScatterStepMatchTheReference) {
+TEST(ShearElementDamper, StepsAndScatterStepMatchTheReferenceForce) {
   for (ShearFormulation formulation : {ShearFormulation::Smoothed, ShearFormulation::PerTet}) {
     SCOPED_TRACE(shear_formulation_name(formulation));
     const double dt = 1e-4;
@@ -234,8 +235,10 @@ TEST(ShearElementDamper, GenericKernelAndScatterStepMatchTheReference) {
       reference_internal_forces(model, now, v, total);
       std::cout << "damper share " << largest_norm(damping_force(model, now, v)) / largest_norm(total) << "\n";
       EXPECT_GT(largest_norm(damping_force(model, now, v)), 0.5 * largest_norm(total));
+      const testing::StepError r = testing::reference_step_error(model, now, prev, dt);
+      EXPECT_LT(r.worst, 1e-15 + 1e-12 * r.largest) << "reference";
       for (Precision precision : {Precision::Double, Precision::Float}) {
-        const testing::StepError e = testing::generic_step_error(model, now, prev, dt, precision);
+        const testing::StepError e = testing::kernel_step_error(model, now, prev, dt, precision);
         const bool dbl = precision == Precision::Double;
         EXPECT_LT(e.worst, dbl ? 1e-15 + 1e-12 * e.largest : 1e-8 + 1e-4 * e.largest) << (dbl ? "double" : "float");
       }
@@ -243,7 +246,7 @@ TEST(ShearElementDamper, GenericKernelAndScatterStepMatchTheReference) {
     // From rest under gravity the sag's velocities load the damper: 200 steps
     // of both in double agree to rounding.
     const Model gravity_model = build_model(testing::jittered_box(4, 0.05, 0.25, 4), m, testing::fixed_bottom_options(Vec3(0, 0, -9.81)));
-    const testing::PathDifference d = testing::scatter_against_generic(gravity_model, 200, dt);
+    const testing::PathDifference d = testing::scatter_against_reference(gravity_model, 200, dt);
     ASSERT_GT(d.motion, 1e-6);
     EXPECT_LT(d.worst, 1e-9 * d.motion);
   }

@@ -1,8 +1,8 @@
 // The per-tet shear element for Poisson ratios below 1/4 (Model::tet_shear_k,
 // core/model/shear_element.h, docs/physics.md): the material mapping, its
 // energy and forces (finite differences, rotation invariance, small-strain
-// moduli), the generic CPU kernel and the scatter step against the double
-// reference, the rest state, topology rebuilds, dt_crit and its Gershgorin
+// moduli), the reference backend, the CPU kernel and the scatter step
+// against the double reference force, the rest state, topology rebuilds, dt_crit and its Gershgorin
 // bound against the exact spectrum, and the simd kernel running it.
 #include <gtest/gtest.h>
 
@@ -147,8 +147,8 @@ TEST(ShearElement, ReferenceForceIsMinusTheEnergyGradient) {
 // lowest again at s = 0 and -1, and let a liver at nu = 0 collapse under its
 // own weight); the reference force is its gradient there too, on both sides
 // of J = force_law::kShearElementMinJ (central differences as above, 1e-6 of the
-// largest force); and one generic-kernel step from the crushed state agrees
-// with it (double, 1e-12 of the force increment).
+// largest force); and one kernel step from the crushed state agrees with it
+// (double, 1e-12 of the force increment).
 TEST(ShearElement, ResistsCompressionUpToAndThroughInversion) {
   const Model model = shear_model(6, 3, 0.0);
   auto crushed = [&](double s) {
@@ -176,13 +176,13 @@ TEST(ShearElement, ResistsCompressionUpToAndThroughInversion) {
         EXPECT_NEAR(force[i][k], -gradient, 1e-6 * scale) << "stretch " << s << " point " << i << " axis " << k;
       }
     }
-    const testing::StepError e = testing::generic_step_error(model, x, x, 1e-4, Precision::Double);
+    const testing::StepError e = testing::kernel_step_error(model, x, x, 1e-4, Precision::Double);
     EXPECT_LT(e.worst, 1e-15 + 1e-12 * e.largest) << "stretch " << s;
   }
 }
 
 // A rigid rotation (50 degrees) and translation strains nothing: no force,
-// in the reference and in the generic kernel in both precisions. The scale
+// in the reference and in the kernel in both precisions. The scale
 // is the force of a 1 % stretch; the rotation's must be below 1e-9 of it in
 // double and 1e-4 in float (rotated positions rounded to ~6e-8 relative).
 TEST(ShearElement, RigidRotationHasNoForce) {
@@ -209,7 +209,7 @@ TEST(ShearElement, RigidRotationHasNoForce) {
     const Model free_model = build_model(testing::jittered_box(3, 0.05, 0.25, 4), shear_material(0.0, formulation), {});
     ASSERT_EQ(free_model.rest_position, model.rest_position);  // the same mesh, no fixed points
     for (Precision precision : {Precision::Double, Precision::Float}) {
-      auto backend = make_cpu_backend(free_model, {}, {precision, 1, CpuKernel::Generic});
+      auto backend = make_cpu_backend(free_model, {}, {precision, 1});
       backend->set_state(rotated, rotated);
       testing::run_ticks(*backend, 1, dt, 1);
       std::vector<Vec3> after;
@@ -224,23 +224,23 @@ TEST(ShearElement, RigidRotationHasNoForce) {
   }
 }
 
-// The generic kernel (double and float) against the reference: one step
-// from a deformed, moving state, for several chunk sizes (padding, lane
+// The reference backend and the kernel (double and float) against Verlet on
+// the reference force: one step from a deformed, moving state, for two chunk sizes (padding, lane
 // groups), with gravity, in both formulations. Tolerances as in
 // force_law_checks.h (double: summation order, 1e-12 of the force
 // increment; float: rounding of positions, 1e-4 of it plus 1e-8 m); the
 // smoothed part's extra sums (P(Fbar) over ~20 tets per point, then 4
 // corners) are of the same order as the per-tet ones and need no more.
-TEST(ShearElement, GenericKernelMatchesTheReferenceOnRandomMeshes) {
+TEST(ShearElement, StepsMatchTheReferenceForceOnRandomMeshes) {
   for (ShearFormulation formulation : kFormulations) {
     SCOPED_TRACE(shear_formulation_name(formulation));
-    testing::expect_generic_kernel_matches_reference([formulation](unsigned seed, int32_t chunk) {
+    testing::expect_steps_match_the_reference_force([formulation](unsigned seed, int32_t chunk) {
       return shear_model(seed, 5, 0.1, chunk, Vec3(0.3, -1, -9.81), formulation);
     });
   }
 }
 
-// The smoothed part is what the generic kernel's comparison above is about:
+// The smoothed part is what the comparison above is about:
 // on its random states it moves the force by much more than the tolerance
 // (the two formulations' forces differ by over 1 % of the largest force).
 TEST(ShearElement, SmoothedAndPerTetForcesDifferOnTheTestStates) {
@@ -265,7 +265,7 @@ TEST(ShearElement, RestStateIsExactlyForceFree) {
   for (ShearFormulation formulation : kFormulations) {
     const Model model = shear_model(4, 5, 0.05, kDefaultChunkSize, Vec3::Zero(), formulation);
     for (Precision precision : {Precision::Double, Precision::Float}) {
-      auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+      auto backend = make_cpu_backend(model, {}, {precision, 1});
       testing::run_ticks(*backend, 100, 1e-4, 10);
       std::vector<Vec3> x;
       backend->positions(x);
@@ -290,7 +290,7 @@ TEST(ShearElement, TwoThreadsAreBitIdenticalToOne) {
     for (Precision precision : {Precision::Double, Precision::Float}) {
       std::vector<Vec3> out[2];
       for (int threads : {1, 2}) {
-        auto backend = make_cpu_backend(model, {}, {precision, threads, CpuKernel::Generic});
+        auto backend = make_cpu_backend(model, {}, {precision, threads});
         backend->set_state(x, x_prev);
         testing::run_ticks(*backend, 20, dt, 10);
         backend->positions(out[threads - 1]);
@@ -304,10 +304,10 @@ TEST(ShearElement, TwoThreadsAreBitIdenticalToOne) {
 
 // The scatter step that bench times runs the same physics: 200 steps of both
 // in double from rest under gravity agree to rounding, in both formulations.
-TEST(ShearElement, ScatterStepMatchesTheGenericKernel) {
+TEST(ShearElement, ScatterStepMatchesTheReference) {
   for (ShearFormulation formulation : kFormulations) {
     const Model model = shear_model(5, 4, 0.1, kDefaultChunkSize, Vec3(0, 0, -9.81), formulation);
-    const testing::PathDifference d = testing::scatter_against_generic(model, 200, 1e-4);
+    const testing::PathDifference d = testing::scatter_against_reference(model, 200, 1e-4);
     ASSERT_GT(d.motion, 1e-6);
     // Summation order over 200 steps: ~1e-12 of the motion.
     EXPECT_LT(d.worst, 1e-9 * d.motion) << shear_formulation_name(formulation);
@@ -332,7 +332,7 @@ TEST(ShearElement, RebuildAfterACutKeepsTheElement) {
       for (int i = 0; i < 4; ++i) EXPECT_LT((cut.tet_shape_gradient[t][i] - model.tet_shape_gradient[t][i]).norm(), 1e-9) << t;
     }
     for (Precision precision : {Precision::Double, Precision::Float}) {
-      auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+      auto backend = make_cpu_backend(model, {}, {precision, 1});
       backend->rebuild(cut);
       testing::run_ticks(*backend, 20, 1e-4, 5);
       std::vector<Vec3> x;
@@ -341,14 +341,14 @@ TEST(ShearElement, RebuildAfterACutKeepsTheElement) {
     }
     // The cut model's K_a (smoothed) are those of its own tets: the kernel
     // rebuilt from it matches the reference on a deformed, moving state
-    // (tolerances as in GenericKernelMatchesTheReferenceOnRandomMeshes).
+    // (tolerances as in StepsMatchTheReferenceForceOnRandomMeshes).
     EXPECT_EQ(cut.has_smoothed_shear(), formulation == ShearFormulation::Smoothed);
     {
       const double dt = 1e-4;
       std::vector<Vec3> x, x_prev;
       testing::random_state(cut, 3, dt, x, x_prev);
       for (Precision precision : {Precision::Double, Precision::Float}) {
-        auto backend = make_cpu_backend(model, {}, {precision, 1, CpuKernel::Generic});
+        auto backend = make_cpu_backend(model, {}, {precision, 1});
         backend->rebuild(cut);
         backend->set_state(x, x_prev);
         testing::run_ticks(*backend, 1, dt, 1);
@@ -455,7 +455,7 @@ TEST(ShearElement, ModelsWithItRunOnTheSimdKernel) {
     SCOPED_TRACE(shear_formulation_name(formulation));
     const Model model = shear_model(1, 3, 0.1, kDefaultChunkSize, Vec3::Zero(), formulation);
     EXPECT_EQ(simd_kernel_unsupported(model), "");
-    auto backend = make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Auto});
+    auto backend = make_cpu_backend(model, {}, {Precision::Float, 1});
     const std::string kernel = "simd (" + default_simd_target().name + ") kernel";
     EXPECT_NE(backend->device().find(kernel), std::string::npos) << backend->device();
     const Plan plan = backend->plan();

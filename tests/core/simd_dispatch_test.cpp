@@ -74,7 +74,7 @@ TEST_F(SimdDispatch, ForcingALowerTargetTakesEffectAndIsNamed) {
   EXPECT_EQ(default_simd_target(), supported.front());
   // The option wins over the variable.
   setenv("ORGANSIM_SIMD", "bogus", 1);
-  EXPECT_NE(make_cpu_backend(model, {}, {Precision::Double, 1, CpuKernel::Simd, lowest.name})->device().find(lowest.name),
+  EXPECT_NE(make_cpu_backend(model, {}, {Precision::Double, 1, lowest.name})->device().find(lowest.name),
             std::string::npos);
 }
 
@@ -100,7 +100,7 @@ TEST_F(SimdDispatch, AnUnknownOrUnsupportedTargetIsAClearError) {
   const std::string unsupported = error_of([&] { simd_target_named(best.name, "--simd"); });
   EXPECT_NE(unsupported.find("cannot run the " + best.name), std::string::npos) << unsupported;
   EXPECT_NE(unsupported.find("--simd"), std::string::npos) << unsupported;
-  EXPECT_THROW(make_cpu_backend(model, {}, {Precision::Float, 1, CpuKernel::Simd, best.name}), Error);
+  EXPECT_THROW(make_cpu_backend(model, {}, {Precision::Float, 1, best.name}), Error);
 }
 
 }  // namespace

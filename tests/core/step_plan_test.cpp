@@ -6,6 +6,7 @@
 #include "core/model/model_rebuild.h"
 #include "core/sim/cpu_backend.h"
 #include "core/sim/cpu_kernel_simd.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/step_plan.h"
 #include "tests/core/test_models.h"
 
@@ -74,17 +75,18 @@ TEST(StepPlan, PassesFollowTheModelAndTheTool) {
   }
 }
 
-// Every kernel runs from the plan and names its passes as the plan does, in
-// its order, whichever kernel and precision the backend picked.
-TEST(StepPlan, EveryCpuKernelNamesThePlansPasses) {
+// The kernel (in both precisions) and the reference backend run from the
+// plan and name its passes as the plan does, in its order.
+TEST(StepPlan, TheKernelAndTheReferenceNameThePlansPasses) {
   for (const Scene& scene : scenes()) {
     const Model model = scene_model(scene);
-    for (const Precision precision : {Precision::Double, Precision::Float}) {
-      for (const CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Auto}) {
-        auto backend = make_cpu_backend(model, scene.tool, {precision, 1, kernel});
-        EXPECT_EQ(names(backend->step_plan().passes), names(scene.expected)) << scene.what;
-        EXPECT_EQ(names(backend->plan()), names(scene.expected)) << scene.what << ", " << backend->device();
-      }
+    std::vector<std::unique_ptr<Backend>> backends;
+    backends.push_back(make_reference_backend(model, scene.tool, Integrator::Verlet));
+    for (const Precision precision : {Precision::Double, Precision::Float})
+      backends.push_back(make_cpu_backend(model, scene.tool, {precision, 1}));
+    for (const auto& backend : backends) {
+      EXPECT_EQ(names(backend->step_plan().passes), names(scene.expected)) << scene.what;
+      EXPECT_EQ(names(backend->plan()), names(scene.expected)) << scene.what << ", " << backend->device();
     }
   }
 }
@@ -94,7 +96,7 @@ TEST(StepPlan, EveryCpuKernelNamesThePlansPasses) {
 TEST(StepPlan, RebuildWithSuturesRecomputesThePlan) {
   const Scene scene = scenes()[2];
   const Model model = scene_model(scene);
-  auto backend = make_cpu_backend(model, scene.tool, {Precision::Float, 1, CpuKernel::Auto});
+  auto backend = make_cpu_backend(model, scene.tool, {Precision::Float, 1});
   Suture suture;
   suture.ends = {0, model.npoint() - 1};
   suture.k = 10;

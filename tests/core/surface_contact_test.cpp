@@ -9,6 +9,7 @@
 
 #include "core/physics/force_law.h"
 #include "core/sim/cpu_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/reference_forces.h"
 #include "tests/core/contact_test_util.h"
 
@@ -86,7 +87,7 @@ TEST(SurfaceContact, ReactionIsMinusTheAppliedSum) {
 }
 
 // The tissue receives what the backend reports, with the opposite sign: one
-// substep of the generic double kernel from rest with the sphere pressed in,
+// substep of the reference backend and of the double kernel from rest with the sphere pressed in,
 // each point's contact force recovered from its motion (m (x' - x) / dt^2
 // minus the internal force, which is zero at rest without gravity) must
 // match the reference's, and the reaction must be minus their sum.
@@ -95,8 +96,10 @@ TEST(SurfaceContact, BackendAppliesTheReferenceForcesAndReportsMinusTheirSum) {
   const BackendTool tool{true, ToolMode::Push, 0.01, kK, ToolContact::Surface};
   const Vec3 center(0.52 * kSize, 0.47 * kSize, kSize + 0.008);
   const double dt = 1e-4;
-  for (CpuKernel kernel : {CpuKernel::Generic, CpuKernel::Auto}) {
-    auto backend = make_cpu_backend(m, tool, {Precision::Double, 1, kernel});
+  std::vector<std::unique_ptr<Backend>> backends;
+  backends.push_back(make_reference_backend(m, tool, Integrator::Verlet));
+  backends.push_back(make_cpu_backend(m, tool, {Precision::Double, 1}));
+  for (auto& backend : backends) {
     const Reaction got = backend->tick(testing::one_step_at(dt, center));
     const Contact want = at_rest(m, center, tool.radius);
     const testing::Applied applied = testing::applied_in_one_step(m, *backend, dt, want.force);
@@ -201,42 +204,40 @@ TEST(SurfaceContact, SlidingAtConstantDepthGivesASmoothForceWithTheHertzLayer) {
 // The surface contact's positions and box tests are split over the step's
 // threads, its penalties summed on one: a sphere pressed in and sliding gives
 // the same reactions and positions, bit for bit, on 1, 2 and 3 threads (3
-// splits the triangles unevenly), in both precisions on both kernels.
+// splits the triangles unevenly), in both precisions.
 TEST(SurfaceContact, ThreadsGiveOneThreadsResultBitForBit) {
   const Model m = box(6);
   const BackendTool tool{true, ToolMode::Push, 0.008, kK, ToolContact::Surface};
-  for (const Precision precision : {Precision::Float, Precision::Double})
-    for (const CpuKernel kernel : {CpuKernel::Auto, CpuKernel::Generic}) {
-      std::vector<Vec3> first_force, first_positions;
-      for (const int32_t threads : {1, 2, 3}) {
-        SCOPED_TRACE(std::to_string(threads) + " threads, " + (precision == Precision::Float ? "float" : "double") +
-                     (kernel == CpuKernel::Generic ? ", generic kernel" : ""));
-        auto backend = make_cpu_backend(m, tool, {precision, threads, kernel});
-        TickRequest r;
-        r.dt = 1e-4;
-        r.substeps = 4;
-        r.tool_active = true;
-        const Vec3 a(0.3 * kSize, 0.4 * kSize, kSize + tool.radius + 0.001), b(0.7 * kSize, 0.6 * kSize, kSize + 0.006);
-        std::vector<Vec3> force;
-        int32_t touching = 0;
-        for (int n = 0; n < 150; ++n) {
-          r.tool_from = a + (n / 150.0) * (b - a);
-          r.tool_to = a + ((n + 1) / 150.0) * (b - a);
-          const Reaction reaction = backend->tick(r);
-          force.push_back(reaction.force);
-          touching = std::max(touching, reaction.contacts);
-        }
-        std::vector<Vec3> positions;
-        backend->positions(positions);
-        EXPECT_GT(touching, 6);  // several triangles' corners: the split matters
-        if (threads == 1) {
-          first_force = force, first_positions = positions;
-          continue;
-        }
-        EXPECT_TRUE(force == first_force);
-        EXPECT_TRUE(positions == first_positions);
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    std::vector<Vec3> first_force, first_positions;
+    for (const int32_t threads : {1, 2, 3}) {
+      SCOPED_TRACE(std::to_string(threads) + " threads, " + (precision == Precision::Float ? "float" : "double"));
+      auto backend = make_cpu_backend(m, tool, {precision, threads});
+      TickRequest r;
+      r.dt = 1e-4;
+      r.substeps = 4;
+      r.tool_active = true;
+      const Vec3 a(0.3 * kSize, 0.4 * kSize, kSize + tool.radius + 0.001), b(0.7 * kSize, 0.6 * kSize, kSize + 0.006);
+      std::vector<Vec3> force;
+      int32_t touching = 0;
+      for (int n = 0; n < 150; ++n) {
+        r.tool_from = a + (n / 150.0) * (b - a);
+        r.tool_to = a + ((n + 1) / 150.0) * (b - a);
+        const Reaction reaction = backend->tick(r);
+        force.push_back(reaction.force);
+        touching = std::max(touching, reaction.contacts);
       }
+      std::vector<Vec3> positions;
+      backend->positions(positions);
+      EXPECT_GT(touching, 6);  // several triangles' corners: the split matters
+      if (threads == 1) {
+        first_force = force, first_positions = positions;
+        continue;
+      }
+      EXPECT_TRUE(force == first_force);
+      EXPECT_TRUE(positions == first_positions);
     }
+  }
 }
 
 // The surface the contact uses is the Model's boundary, re-extracted by a

@@ -54,7 +54,7 @@ inline Model make_spring_model(const std::vector<Vec3>& points, const std::vecto
     m.spring_d.push_back(d);
   }
   m.gravity = gravity;
-  m.layout = build_gather_layout(m, 4, 4);
+  m.layout = build_gather_layout(m, 16, 4);  // chunks of one register of the widest target's floats
   return m;
 }
 

@@ -10,7 +10,7 @@
 #include "core/mesh/tet_mesh.h"
 #include "core/model/model.h"
 #include "core/sim/backend.h"
-#include "core/sim/cpu_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/sim/reference_forces.h"
 #include "core/run/run.h"
 #include "core/sim/run_observer.h"
@@ -175,7 +175,7 @@ inline TrajectoryDifference reference_and_gl_from(const Model& model, const std:
 
 // reference_and_gl_from with the double CPU backend as the reference.
 inline TrajectoryDifference cpu_and_gl_from(const Model& model, const std::vector<Vec3>& start, double dt, int ticks) {
-  auto cpu = make_cpu_backend(model, {}, {Precision::Double, 1});
+  auto cpu = make_reference_backend(model, {}, Integrator::Verlet);
   cpu->set_state(start, start);
   return reference_and_gl_from(model, start, dt, ticks, [&](const TickRequest& request, std::vector<Vec3>& x) {
     cpu->tick(request);
@@ -210,7 +210,7 @@ struct CpuAndGlRuns {
 inline CpuAndGlRuns run_on_cpu_and_gl(const Scenario& s, const Model& model, const std::string& name,
                                       int32_t threads_per_point = 0) {
   CpuAndGlRuns r;
-  auto cpu = make_cpu_backend(model, backend_tool(s), {Precision::Double, 1});
+  auto cpu = make_reference_backend(model, backend_tool(s), Integrator::Verlet);
   GlBackendOptions gl_options;
   gl_options.threads_per_point = threads_per_point;
   GlBackend gl(model, backend_tool(s), gl_options);

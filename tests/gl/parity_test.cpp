@@ -24,7 +24,7 @@
 #include "core/gl/gl_backend.h"
 #include "core/gl/gl_model_pack.h"
 #include "shaders/bindings.glsl.h"
-#include "core/sim/cpu_backend.h"
+#include "core/sim/reference_backend.h"
 #include "gl_test_scenes.h"
 
 namespace organsim {
@@ -49,7 +49,7 @@ struct Comparison {
 Comparison compare(const Model& model, const BackendTool& tool, const std::function<TickRequest(int)>& request_at,
                    const Attachment* attachment = nullptr, int32_t threads_per_point = 0) {
   // One thread: the machine is shared and OpenMP spinning under load is slow.
-  auto cpu = make_cpu_backend(model, tool, {Precision::Double, 1});
+  auto cpu = make_reference_backend(model, tool, Integrator::Verlet);
 
   GlBackendOptions options;
   options.threads_per_point = threads_per_point;
@@ -188,7 +188,7 @@ TEST(GlParity, TurningCapsuleMatchesTheDoubleReference) {
 // coefficient is high enough that no point slips: which point slips first
 // at a substep turns on the last bits, so past a slip float follows double
 // in what the grasp does, not tick by tick
-// (Grasper.KernelsPrecisionsAndThreadsFollowTheDoubleReference measures it
+// (Grasper.PrecisionsAndThreadsFollowTheDoubleReference measures it
 // on the CPU). Looser than the sphere's: the jaws lie nearly parallel to
 // the faces, where a capsule's closest point on a triangle jumps along the
 // jaw as float and double break near-ties differently (docs/physics.md, the

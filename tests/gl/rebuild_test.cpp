@@ -10,7 +10,7 @@
 
 #include "core/gl/gl_backend.h"
 #include "core/model/model_rebuild.h"
-#include "core/sim/cpu_backend.h"
+#include "core/sim/reference_backend.h"
 #include "core/util/error.h"
 #include "gl_test_scenes.h"
 #include "tests/core/test_models.h"
@@ -74,7 +74,7 @@ TEST(GlRebuild, MatchesTheCpuReferenceAcrossACut) {
   const Model model = gl_test::box_model(4, 4, 2, true, 20000, Vec3(0, 0, -9.81));
   const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.05));
   ASSERT_GT(cut.npoint(), model.npoint());
-  auto cpu = make_cpu_backend(model, {}, {Precision::Double, 1});
+  auto cpu = make_reference_backend(model, {}, Integrator::Verlet);
   GlBackend gl(model, {}, {});
   run(*cpu, 20);
   run(gl, 20);
@@ -111,7 +111,7 @@ TEST(GlRebuild, TheHertzLayerFollowsTheCpuReferenceAcrossACut) {
   const Model cut = rebuild_model(model, testing::split_across_plane_x(model, 0.05));
   BackendTool tool{true, ToolMode::Push, 0.01, 500};
   tool.hertz_layer = true;
-  auto cpu = make_cpu_backend(model, tool, {Precision::Double, 1});
+  auto cpu = make_reference_backend(model, tool, Integrator::Verlet);
   GlBackend gl(model, tool, {});
   TickRequest r = tool_held_at(Vec3(0.05, 0.05, 0.058));
   std::vector<Vec3> cpu_force, gl_force;

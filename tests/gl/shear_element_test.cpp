@@ -175,7 +175,7 @@ TEST(GlShearElement, ForceAfterACutMatchesTheReference) {
 // reference within 1e-5 of the bounding-box diagonal, the tolerance and
 // reasoning of parity_test.cpp (float positions random-walk ~1e-6 of the
 // diagonal; a wrong or missing element moves points by millimetres). The
-// reference: the double CPU backend (its generic kernel), for both forms.
+// reference: the reference backend (Verlet in double), for both forms.
 TEST(GlShearElement, TrajectoryMatchesTheCpuReference) {
   for (const ShearFormulation formulation : kFormulations) {
     const Model model = gl_test::poisson_box(0.05, Vec3(0, 0, -9.81), Material{}.spring_damping_time, formulation);

@@ -1,4 +1,4 @@
-#include "core/sim/implicit_backend.h"
+#include "core/sim/reference_backend.h"
 
 #include <Eigen/SparseCholesky>
 #include <array>
@@ -34,24 +34,24 @@ void unflat(const Eigen::VectorXd& v, std::vector<Vec3>& out) {
 
 // Everything derived from one Model version (prepare() builds it on the
 // change worker's thread; it reads nothing of the run).
-struct ImplicitTables {
+struct ReferenceTables {
   const Model* model = nullptr;
   StepPlan plan;
-  std::unique_ptr<ImplicitSystem> system;
+  std::unique_ptr<ImplicitSystem> system;  // implicit integrators only
   SurfaceContact<double> surface;
   std::vector<double> tool_scale;
   std::array<std::vector<double>, 3> rest;  // X per axis (the surface pass reads streams)
   Eigen::VectorXd free;                     // 1 per free coordinate, 0 per fixed one
 };
 
-struct ImplicitPrepared final : PreparedModel {
-  explicit ImplicitPrepared(const Model& next) : PreparedModel(next) {}
-  ImplicitTables tables;
+struct ReferencePrepared final : PreparedModel {
+  explicit ReferencePrepared(const Model& next) : PreparedModel(next) {}
+  ReferenceTables tables;
 };
 
-class ImplicitBackend final : public Backend {
+class ReferenceBackend final : public Backend {
  public:
-  ImplicitBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options, Integrator integrator)
+  ReferenceBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options, Integrator integrator)
       : tool_(tool), options_(options), integrator_(integrator) {
     t_ = pack(model);
     x_ = model.rest_position;
@@ -62,6 +62,7 @@ class ImplicitBackend final : public Backend {
 
   std::string name() const override { return "cpu"; }
   std::string device() const override {
+    if (!implicit()) return "CPU, 1 thread, Verlet (reference, double)";
     return std::string("CPU, 1 thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") +
            " (reference, double; " + preconditioner_name(options_.preconditioner) + "-preconditioned CG)";
   }
@@ -69,7 +70,7 @@ class ImplicitBackend final : public Backend {
   const StepPlan& step_plan() const override { return t_.plan; }
   int32_t reaction_latency_ticks() const override { return 0; }
   double time() const override { return time_; }
-  const IntegratorStats* integrator_stats() const override { return &stats_; }
+  const IntegratorStats* integrator_stats() const override { return implicit() ? &stats_ : nullptr; }
 
   Plan plan() const override {
     Plan plan;
@@ -78,6 +79,12 @@ class ImplicitBackend final : public Backend {
     if (t_.plan.sutures > 0)
       plan.per_tick.push_back({"suture-rest", std::to_string(t_.plan.sutures) + " sutures' rest lengths from their schedule"});
     const size_t n = static_cast<size_t>(m.npoint());
+    if (!implicit()) {
+      plan.buffers.push_back({"x, x - x_prev, f", 3 * 3 * n * sizeof(double)});
+      plan.dispatches_per_step = 0;
+      plan.syncs_per_step = 0;
+      return plan;
+    }
     plan.buffers.push_back({"x, x - x_prev, dv, CG vectors (r, z, p, q, rhs)", 8 * 3 * n * sizeof(double)});
     plan.buffers.push_back({"spring tangents (u, axial, transverse, d)", static_cast<size_t>(m.nspring()) * 6 * sizeof(double)});
     if (m.has_volume()) plan.buffers.push_back({"tet volume gradients", static_cast<size_t>(m.ntet()) * 12 * sizeof(double)});
@@ -100,7 +107,7 @@ class ImplicitBackend final : public Backend {
                " surface triangles, as the CPU backend's pass, each touching triangle's normal stiffness recorded";
       case Pass::ToolContact: {
         // With implicit damping the contact, like every elastic force, stays explicit.
-        const std::string in_system = damping_only() ? " (explicit)" : t_.plan.tool == ToolTerm::Pull
+        const std::string in_system = !implicit() ? "" : damping_only() ? " (explicit)" : t_.plan.tool == ToolTerm::Pull
                                                                             ? ", k s I each in the system"
                                                                             : ", k n n^T each in the system";
         return (t_.plan.tool == ToolTerm::Pull ? "grasp attachment springs" : "the tool's penalties on the points") +
@@ -123,7 +130,8 @@ class ImplicitBackend final : public Backend {
                                           ? ", then up to " + std::to_string(options_.newton_iterations - 1) +
                                                 " Newton iterations with a backtracking line search"
                                           : std::string(" (one linearised solve per step)"));
-      case Pass::Integrate: break;  // Verlet's; not in an implicit plan
+      case Pass::Integrate:
+        return "position Verlet with drag: d' = d + dt^2 f(x, d / dt) / m, x' = x + d' (reference)";
     }
     return "";
   }
@@ -141,18 +149,18 @@ class ImplicitBackend final : public Backend {
   }
 
   std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
-    auto prepared = std::make_unique<ImplicitPrepared>(next);
+    auto prepared = std::make_unique<ReferencePrepared>(next);
     prepared->tables = pack(next);
     return prepared;
   }
 
   void adopt(std::unique_ptr<PreparedModel> prepared) override {
-    auto* p = dynamic_cast<ImplicitPrepared*>(prepared.get());
-    if (!p) throw Error(ErrorKind::Backend, "cpu backend (implicit): adopt() of a version it did not prepare");
+    auto* p = dynamic_cast<ReferencePrepared*>(prepared.get());
+    if (!p) throw Error(ErrorKind::Backend, "cpu backend (reference): adopt() of a version it did not prepare");
     const Model& next = p->model();
     const size_t old_n = x_.size(), n = static_cast<size_t>(next.npoint());
     if (n < old_n || next.origin.size() != n)
-      throw Error(ErrorKind::Backend, "cpu backend (implicit): rebuild from a Model with " + std::to_string(n) +
+      throw Error(ErrorKind::Backend, "cpu backend (reference): rebuild from a Model with " + std::to_string(n) +
                                           " points after " + std::to_string(old_n) + " (points are append-only)");
     // An appended point starts where its origin is, with its velocity.
     x_.resize(n), d_.resize(n);
@@ -170,18 +178,19 @@ class ImplicitBackend final : public Backend {
     Reaction reaction;
     for (int32_t s = 0; s < request.substeps; ++s) {
       const ToolPlacement placed = request.tool_at(tool_, s);
-      reaction = step(h, tick_start, request.tool_active ? t_.plan.tool : ToolTerm::None, placed);
+      const ToolTerm tool = request.tool_active ? t_.plan.tool : ToolTerm::None;
+      reaction = implicit() ? step(h, tick_start, tool, placed) : verlet_step(h, tick_start, tool, placed);
       time_ += h;
     }
     return reaction;
   }
 
  private:
-  ImplicitTables pack(const Model& model) const {
-    ImplicitTables t;
+  ReferenceTables pack(const Model& model) const {
+    ReferenceTables t;
     t.model = &model;
     t.plan = make_step_plan(model, tool_, integrator_);
-    t.system = std::make_unique<ImplicitSystem>(model);
+    if (implicit()) t.system = std::make_unique<ImplicitSystem>(model);
     const int32_t n = model.npoint();
     t.tool_scale.resize(n);
     for (int32_t i = 0; i < n; ++i) t.tool_scale[i] = model.tool_scale(i);
@@ -194,7 +203,7 @@ class ImplicitBackend final : public Backend {
       if (model.fixed[i]) t.free.segment<3>(3 * i).setZero();
     if (t.plan.tool == ToolTerm::Surface) {
       t.surface.pack(model, t.tool_scale, static_cast<size_t>(n), tool_.hertz_layer);
-      t.surface.record_touches(true);
+      t.surface.record_touches(implicit());
     }
     return t;
   }
@@ -259,6 +268,26 @@ class ImplicitBackend final : public Backend {
     }
     for (const auto& stick : t_.surface.sticks())
       point_block(stick.point, stick.k * (Eigen::Matrix3d::Identity() - stick.n * stick.n.transpose()));
+    return reaction;
+  }
+
+  // One position Verlet step of h from the state (x_, d_ = h v), as the
+  // CPU backend's kernel steps it: a fixed point's increment (nonzero only
+  // when set_state gave it one) moves its dampers for this step, then is 0.
+  Reaction verlet_step(double h, double t, ToolTerm tool, const ToolPlacement& placed) {
+    const Model& m = *t_.model;
+    const int32_t n = m.npoint();
+    v_.resize(n);
+    for (int32_t i = 0; i < n; ++i) v_[i] = d_[i] / h;
+    const Reaction reaction = forces(x_, v_, t, tool, placed, f_, contact_);
+    for (int32_t i = 0; i < n; ++i) {
+      if (m.fixed[i]) {
+        d_[i].setZero();
+        continue;
+      }
+      d_[i] += h * h * m.inv_mass[i] * f_[i];
+      x_[i] += d_[i];
+    }
     return reaction;
   }
 
@@ -390,12 +419,13 @@ class ImplicitBackend final : public Backend {
     factor_h_ = h;
   }
 
+  bool implicit() const { return solves_implicitly(integrator_); }
   bool damping_only() const { return integrator_ == Integrator::ImplicitDamping; }
 
   BackendTool tool_;
   ImplicitOptions options_;
   Integrator integrator_;
-  ImplicitTables t_;
+  ReferenceTables t_;
   std::vector<Vec3> x_, d_;  // positions and the last step's increment h v
   Eigen::VectorXd dv_;       // the last solve's dv: the next one's warm start
   Attachment attachment_;
@@ -406,14 +436,14 @@ class ImplicitBackend final : public Backend {
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> factor_;
   double factor_h_ = 0;
   std::vector<int32_t> free_index_;  // the factor's coordinates
+  std::vector<Vec3> v_, f_;             // Verlet: the step's velocities and forces
+  std::vector<ContactBlock> contact_;   // Verlet: the contact's blocks (unused)
 };
 
 }  // namespace
 
-std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
-                                               const ImplicitOptions& options, Integrator integrator) {
-  if (!solves_implicitly(integrator))
-    throw Error(ErrorKind::Usage, "make_implicit_backend: the integrator is verlet (the cpu backend's)");
+std::unique_ptr<Backend> make_reference_backend(const Model& model, const BackendTool& tool, Integrator integrator,
+                                                const ImplicitOptions& options) {
   if (options.newton_iterations > 1 && integrator == Integrator::ImplicitDamping)
     throw Error(ErrorKind::Usage, "implicit damping: newton_iterations must be 1 (its system is linear in v and "
                                   "solved exactly)");
@@ -429,7 +459,7 @@ std::unique_ptr<Backend> make_implicit_backend(const Model& model, const Backend
     throw Error(ErrorKind::Usage,
                 "implicit Euler: newton_iterations > 1 with a tool that has friction is not supported (the "
                 "friction anchors advance at every evaluation of the contact); use newton_iterations 1");
-  return std::make_unique<ImplicitBackend>(model, tool, options, integrator);
+  return std::make_unique<ReferenceBackend>(model, tool, options, integrator);
 }
 
 }  // namespace organsim

@@ -1,10 +1,18 @@
 #pragma once
-// The implicit (backward Euler) integrator on the CPU in double precision:
-// the reference for implicit integration, as the generic kernel is for
-// Verlet. Each step evaluates the force law (the reference forces,
-// core/sim/reference_forces.h, and the surface contact pass the CPU backend
-// runs) at the step's start, linearises it (core/sim/implicit_system.h) and
-// solves
+// The reference: every integrator on the CPU in double precision on one
+// thread, on the reference forces (core/sim/reference_forces.h, a plain
+// scatter of the force law) and the surface contact pass the CPU backend
+// runs (core/sim/surface_contact.h, which keeps friction's anchors). Every
+// other path is tested against it: the simd kernel in both precisions and
+// on every target, the GL backend, the scatter step.
+//
+// Verlet: the CPU backend's position Verlet with drag, on positions x and
+// the step's increment d = x_t - x_{t-1} (velocity d / dt for the
+// dampers): d' = d + dt^2 f(x, d / dt) / m with the drag -alpha m d / dt in
+// f, x' = x + d'; fixed points stay put.
+//
+// Implicit Euler: each step evaluates the force law at the step's start,
+// linearises it (core/sim/implicit_system.h) and solves
 //   (M + h D + h^2 K) dv = h (f - h K v)
 // by preconditioned conjugate gradients, warm-started from the last step's
 // dv, with the fixed points projected out; then v += dv, x += h v. With
@@ -31,7 +39,7 @@ enum class Preconditioner : uint8_t {
 const char* preconditioner_name(Preconditioner preconditioner);
 
 // The solver's settings (scenario `time`); which implicit integrator is
-// make_implicit_backend's argument, as time.integrator is the scenario's.
+// make_reference_backend's argument, as time.integrator is the scenario's.
 struct ImplicitOptions {
   int32_t newton_iterations = 1;  // linearised solves per step (1: SOFA's one-step form)
   double cg_tolerance = 1e-5;     // relative residual |b - A dv| / |b| a solve stops at
@@ -46,10 +54,9 @@ struct ImplicitOptions {
 // `integrator` ImplicitEuler: (M + h D + h^2 K) dv = h (f - h K v).
 // ImplicitDamping: (M + h D) dv = h f, the elastic and contact forces taken
 // at the step's start (symplectic Euler for them, stable below the
-// undamped 2/omega_max), the dampers and drag at its end. Verlet is refused
-// (the CPU backend's).
-std::unique_ptr<Backend> make_implicit_backend(const Model& model, const BackendTool& tool,
-                                               const ImplicitOptions& options = {},
-                                               Integrator integrator = Integrator::ImplicitEuler);
+// undamped 2/omega_max), the dampers and drag at its end. `options` are the
+// implicit solver's (Verlet uses none of them).
+std::unique_ptr<Backend> make_reference_backend(const Model& model, const BackendTool& tool, Integrator integrator,
+                                                const ImplicitOptions& options = {});
 
 }  // namespace organsim
