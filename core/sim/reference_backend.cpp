@@ -209,25 +209,26 @@ class ReferenceBackend final : public Backend {
   }
 
   // f(x, v) on every point: the internal forces, the drag -alpha m v and the
-  // tool's; `contact` gets the tool's stiffness blocks; returns the reaction.
+  // tool's; `contact` (the implicit integrators'; null under Verlet) gets
+  // the tool's stiffness blocks; returns the reaction.
   Reaction forces(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t, ToolTerm tool,
-                  const ToolPlacement& placed, std::vector<Vec3>& f, std::vector<ContactBlock>& contact) {
+                  const ToolPlacement& placed, std::vector<Vec3>& f, std::vector<ContactBlock>* contact) {
     const Model& m = *t_.model;
     reference_internal_forces(m, x, v, f, t);
     for (int32_t i = 0; i < m.npoint(); ++i) f[i] -= m.viscous_damping * m.mass[i] * v[i];
-    contact.clear();
+    if (contact) contact->clear();
     const double k = tool_.contact_stiffness;
     const auto point_block = [&](int32_t p, const Eigen::Matrix3d& block) {
       ContactBlock c;
       c.point[0] = p;
       c.w[0] = 1;
       c.k = block;
-      contact.push_back(c);
+      contact->push_back(c);
     };
     switch (tool) {
       case ToolTerm::None: return {};
       case ToolTerm::Push: {
-        for (int32_t i = 0; i < m.npoint(); ++i) {
+        for (int32_t i = 0; contact && i < m.npoint(); ++i) {
           const Vec3 offset = x[i] - force_law::segment_closest_point(x[i], placed.a, placed.b);
           const double dist = offset.norm();
           if (!(dist < placed.radius)) continue;
@@ -237,7 +238,8 @@ class ReferenceBackend final : public Backend {
         return reference_push_forces(x, placed, k, f, t_.tool_scale);
       }
       case ToolTerm::Pull:
-        for (int32_t p : attachment_.points) point_block(p, k * t_.tool_scale[p] * Eigen::Matrix3d::Identity());
+        if (contact)
+          for (int32_t p : attachment_.points) point_block(p, k * t_.tool_scale[p] * Eigen::Matrix3d::Identity());
         return reference_pull_forces(x, attachment_, placed.origin, k, f, t_.tool_scale);
       case ToolTerm::Surface: break;
     }
@@ -260,11 +262,12 @@ class ReferenceBackend final : public Backend {
       ++reaction.contacts;
     }
     reaction.grip = t_.surface.grip();
+    if (!contact) return reaction;
     for (const auto& touch : t_.surface.touches()) {
       ContactBlock c;
       for (int j = 0; j < 3; ++j) c.point[j] = touch.point[j], c.w[j] = touch.w[j];
       c.k = force_law::penalty_normal_stiffness(touch.k, touch.n);
-      contact.push_back(c);
+      contact->push_back(c);
     }
     for (const auto& stick : t_.surface.sticks())
       point_block(stick.point, stick.k * (Eigen::Matrix3d::Identity() - stick.n * stick.n.transpose()));
@@ -279,7 +282,7 @@ class ReferenceBackend final : public Backend {
     const int32_t n = m.npoint();
     v_.resize(n);
     for (int32_t i = 0; i < n; ++i) v_[i] = d_[i] / h;
-    const Reaction reaction = forces(x_, v_, t, tool, placed, f_, contact_);
+    const Reaction reaction = forces(x_, v_, t, tool, placed, f_, nullptr);
     for (int32_t i = 0; i < n; ++i) {
       if (m.fixed[i]) {
         d_[i].setZero();
@@ -300,7 +303,7 @@ class ReferenceBackend final : public Backend {
     std::vector<Vec3> v0(n), f, v1;
     for (int32_t i = 0; i < n; ++i) v0[i] = m.fixed[i] ? Vec3::Zero() : Vec3(d_[i] / h);
     std::vector<ContactBlock> contact;
-    const Reaction reaction = forces(x_, v0, t, tool, placed, f, contact);
+    const Reaction reaction = forces(x_, v0, t, tool, placed, f, &contact);
     system.linearise(x_, v0, t, std::move(contact));
     const Eigen::VectorXd v0f = flat(v0);
     // Implicit damping: no K in the system, none in the right-hand side.
@@ -350,7 +353,7 @@ class ReferenceBackend final : public Backend {
       x = x_;
       for (int32_t i = 0; i < m.npoint(); ++i)
         if (!m.fixed[i]) x[i] += h * vv[i];
-      forces(x, vv, t, tool, placed, f, contact);
+      forces(x, vv, t, tool, placed, f, &contact);
       if (linearise) t_.system->linearise(x, vv, t, contact);
       return Eigen::VectorXd((mass.cwiseProduct(vel - v0) - h * flat(f)).cwiseProduct(t_.free));
     };
@@ -436,8 +439,7 @@ class ReferenceBackend final : public Backend {
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> factor_;
   double factor_h_ = 0;
   std::vector<int32_t> free_index_;  // the factor's coordinates
-  std::vector<Vec3> v_, f_;             // Verlet: the step's velocities and forces
-  std::vector<ContactBlock> contact_;   // Verlet: the contact's blocks (unused)
+  std::vector<Vec3> v_, f_;  // Verlet: the step's velocities and forces
 };
 
 }  // namespace
