@@ -235,6 +235,66 @@ HWY_INLINE void gather_block(const Real* base, const int32_t* q, int v0, V<Real>
 
 #endif  // blocks
 
+// ---- 256-bit quads of doubles (AVX2 and AVX-512) ------------------------------
+// A double record is one 32-byte quad: on targets with 256-bit registers
+// four points are read with one load each and a 4 x 4 transpose (two
+// unpacks and two lane swaps per pair), and a force is added with one
+// 256-bit load, add and store, where the generic block code needs two of
+// each.
+#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_AVX3
+
+// (x, y, z, w) of the quads at base + Scale q[0..3], value j of point i in
+// lane i of out[j].
+template <int Scale>
+HWY_INLINE void quad_gather4(const double* base, const int32_t* q, __m256d (&out)[4]) {
+  const __m256d r0 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[0]));
+  const __m256d r1 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[1]));
+  const __m256d r2 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[2]));
+  const __m256d r3 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[3]));
+  // t0 = (x0 x1 | z0 z1), t1 = (y0 y1 | w0 w1), t2, t3 likewise for points 2, 3.
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+  out[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  out[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+  out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+// The quads (x_i, y_i, z_i, 0) of lanes i = 0..3 of x, y, z.
+HWY_INLINE void quad_transpose3(__m256d x, __m256d y, __m256d z, __m256d (&quad)[4]) {
+  const __m256d zero = _mm256_setzero_pd();
+  // a = (x0 y0 | x2 y2), b = (x1 y1 | x3 y3), c = (z0 0 | z2 0), d = (z1 0 | z3 0)
+  const __m256d a = _mm256_unpacklo_pd(x, y), b = _mm256_unpackhi_pd(x, y);
+  const __m256d c = _mm256_unpacklo_pd(z, zero), d = _mm256_unpackhi_pd(z, zero);
+  quad[0] = _mm256_permute2f128_pd(a, c, 0x20);
+  quad[1] = _mm256_permute2f128_pd(b, d, 0x20);
+  quad[2] = _mm256_permute2f128_pd(a, c, 0x31);
+  quad[3] = _mm256_permute2f128_pd(b, d, 0x31);
+}
+#endif
+
+// AVX2's double records in those quads (AVX-512's own are below).
+#undef ORGANSIM_SIMD_AVX2
+#if HWY_TARGET == HWY_AVX2
+#define ORGANSIM_SIMD_AVX2 1
+template <int Scale>
+HWY_INLINE void avx2_gather4(const double* base, const int32_t* q, V<double> (&a)[4]) {
+  __m256d out[4];
+  quad_gather4<Scale>(base, q, out);
+  for (int j = 0; j < 4; ++j) a[j].raw = out[j];
+}
+// Adds lane l of (x, y, z) to the 32-byte force of point q[l]; all four
+// loaded before any is stored.
+HWY_INLINE void avx2_scatter_add(double* force, const int32_t* q, const V<double> (&f)[3]) {
+  __m256d quad[4], sum[4];
+  quad_transpose3(f[0].raw, f[1].raw, f[2].raw, quad);
+  for (int i = 0; i < 4; ++i) sum[i] = _mm256_add_pd(_mm256_loadu_pd(force + q[i]), quad[i]);
+  for (int i = 0; i < 4; ++i) _mm256_storeu_pd(force + q[i], sum[i]);
+}
+#else
+#define ORGANSIM_SIMD_AVX2 0
+#endif
+
 // ---- AVX-512 specialisations ----------------------------------------------------
 // The record reads and writes in AVX-512's own shuffles (two-source
 // permutes, whole 32-byte records per load, a 512-bit store of two
@@ -290,19 +350,14 @@ HWY_INLINE void avx3_gather8(const float* rec, const int32_t* q, V<float> (&a)[8
 }
 
 // Adds lane l of (x, y, z) to the 32-byte force of point q[l], made per
-// 256-bit half (4 x 4 transposes); all eight loaded before any is stored.
+// 256-bit half; all eight loaded before any is stored.
 HWY_INLINE void avx3_scatter_add(double* force, const int32_t* q, const V<double> (&f)[3]) {
   __m256d sum[8];
-  const __m256d xs[2] = {_mm512_castpd512_pd256(f[0].raw), _mm512_extractf64x4_pd(f[0].raw, 1)};
-  const __m256d ys[2] = {_mm512_castpd512_pd256(f[1].raw), _mm512_extractf64x4_pd(f[1].raw, 1)};
-  const __m256d zs[2] = {_mm512_castpd512_pd256(f[2].raw), _mm512_extractf64x4_pd(f[2].raw, 1)};
   for (int h = 0; h < 2; ++h) {
-    const __m256d zero = _mm256_setzero_pd();
-    // a = (x0 y0 | x2 y2), b = (x1 y1 | x3 y3), c = (z0 0 | z2 0), d = (z1 0 | z3 0)
-    const __m256d a = _mm256_unpacklo_pd(xs[h], ys[h]), b = _mm256_unpackhi_pd(xs[h], ys[h]);
-    const __m256d c = _mm256_unpacklo_pd(zs[h], zero), d = _mm256_unpackhi_pd(zs[h], zero);
-    const __m256d quad[4] = {_mm256_permute2f128_pd(a, c, 0x20), _mm256_permute2f128_pd(b, d, 0x20),
-                             _mm256_permute2f128_pd(a, c, 0x31), _mm256_permute2f128_pd(b, d, 0x31)};
+    __m256d quad[4];
+    quad_transpose3(h ? _mm512_extractf64x4_pd(f[0].raw, 1) : _mm512_castpd512_pd256(f[0].raw),
+                    h ? _mm512_extractf64x4_pd(f[1].raw, 1) : _mm512_castpd512_pd256(f[1].raw),
+                    h ? _mm512_extractf64x4_pd(f[2].raw, 1) : _mm512_castpd512_pd256(f[2].raw), quad);
     for (int i = 0; i < 4; ++i) sum[4 * h + i] = _mm256_add_pd(_mm256_loadu_pd(force + q[4 * h + i]), quad[i]);
   }
   for (int l = 0; l < 8; ++l) _mm256_storeu_pd(force + q[l], sum[l]);
@@ -454,6 +509,12 @@ HWY_INLINE void scatter_add(Real* force, const int32_t* q, const V<Real> (&f)[3]
   for (int32_t l = 0; l < N; ++l)
     for (int j = 0; j < 3; ++j) force[q[l] + j] += lanes[j][l];
 #else
+#if ORGANSIM_SIMD_AVX2
+  if constexpr (sizeof(Real) == 8) {
+    avx2_scatter_add(force, q, f);
+    return;
+  }
+#endif
   constexpr int32_t P = kPerBlock<Real>, N = kLanes<Real>;
   const hn::Full128<Real> d128;
   const V<Real> a[4] = {f[0], f[1], f[2], zero<Real>()};
@@ -500,6 +561,9 @@ HWY_INLINE void gather_xd(const Real* rec, const Real* inc, const int32_t* q, V3
 #if ORGANSIM_SIMD_AVX3
     avx3_gather4<Scale>(rec, q, a);
     avx3_gather4<Scale>(inc, q, b);
+#elif ORGANSIM_SIMD_AVX2
+    avx2_gather4<Scale>(rec, q, a);
+    avx2_gather4<Scale>(inc, q, b);
 #else
     gather_values<Scale, 4>(rec, q, a);
     gather_values<Scale, 4>(inc, q, b);
@@ -529,6 +593,9 @@ HWY_INLINE void gather_xw(const Real* rec, const int32_t* q, V3<Real>& x, V<Real
   V<Real> a[4];
 #if ORGANSIM_SIMD_AVX3
   if constexpr (sizeof(Real) == 8) avx3_gather4<Scale>(rec, q, a);
+  else gather_values<Scale, 4>(rec, q, a);
+#elif ORGANSIM_SIMD_AVX2
+  if constexpr (sizeof(Real) == 8) avx2_gather4<Scale>(rec, q, a);
   else gather_values<Scale, 4>(rec, q, a);
 #else
   gather_values<Scale, 4>(rec, q, a);
