@@ -85,13 +85,25 @@ HWY_INLINE VV fnmadd(VV a, VV b, VV c) {
   return hn::NegMulAdd(a, b, c);
 }
 // Lanes of a where m is set, b elsewhere; a where m is set, zero elsewhere.
+// Highway's one-lane SCALAR target selects with a branch, which data such
+// as a suture's slack or taut state mispredicts (the sutured step took
+// 1.8x the unsutured one there); the mask's bits select without one.
 template <class M, class VV>
 HWY_INLINE VV select(M m, VV a, VV b) {
+#if HWY_TARGET == HWY_SCALAR
+  const auto bits = hn::VecFromMask(hn::DFromV<VV>(), m);
+  return hn::Or(hn::And(bits, a), hn::AndNot(bits, b));
+#else
   return hn::IfThenElse(m, a, b);
+#endif
 }
 template <class M, class VV>
 HWY_INLINE VV keep(M m, VV a) {
+#if HWY_TARGET == HWY_SCALAR
+  return hn::And(hn::VecFromMask(hn::DFromV<VV>(), m), a);
+#else
   return hn::IfThenElseZero(m, a);
+#endif
 }
 
 // 1/|l| for |l|^2 = len2 > 0, 0 otherwise (padding, coincident ends): the
