@@ -22,7 +22,6 @@
 #include "core/stability/blowup_monitor.h"
 #include "core/stability/critical_step.h"
 #include "core/util/error.h"
-#include "core/util/format.h"
 
 namespace organsim::app {
 
@@ -274,13 +273,8 @@ void run_command(const RunArgs& args) {
               << (result.grasped_points == 0 ? " (none within grasp_radius: the tool pulled nothing)" : "") << "\n";
   }
   if (!result.forces_path.empty()) std::cout << "force log: " << result.forces_path.string() << "\n";
-  if (result.meta.extra.contains("integrator") && result.meta.extra["integrator"].contains("cg_iterations_median")) {
-    const auto& i = result.meta.extra["integrator"];
-    std::cout << "implicit: CG iterations per step median " << i["cg_iterations_median"].get<int>() << ", max "
-              << i["cg_iterations_max"].get<int>() << "; largest final residual "
-              << format_number(i["cg_residual_max"].get<double>()) << "; "
-              << i["cg_unconverged_steps"].get<int64_t>() << " steps stopped at cg_max_iterations\n";
-  }
+  if (const std::string line = integrator_summary(result.meta.extra.value("integrator", nlohmann::json())); !line.empty())
+    std::cout << "implicit: " << line << "\n";
   std::cout << "outputs:  " << outdir.string() << "\n";
   print_output_files(std::cout, outdir);
   if (const std::string warning = integrator_warning(*backend); !warning.empty())

@@ -24,6 +24,7 @@
 #include "app/stop_signals.h"
 #include "core/live/live_session.h"
 #include "core/live/session_scenario.h"
+#include "core/run/integrator_report.h"
 #include "core/run/prepare_run.h"
 #include "core/run/run.h"
 #include "core/util/atomic_file.h"
@@ -221,8 +222,13 @@ void serve_command(const ServeArgs& args) {
             << l["latency"]["count"] << " poses (receipt to force reply)\n";
   std::cout << "traffic:  " << l["poses_received"] << " poses received, " << l["poses_applied"] << " applied, "
             << l["link"]["replies_sent"] << " replies sent, " << l["link"]["replies_dropped"] << " dropped\n";
+  if (const std::string line = integrator_summary(result.meta.extra.value("integrator", nlohmann::json())); !line.empty())
+    std::cout << "implicit: " << line << "\n";
   std::cout << "force log: " << result.forces_path.string() << "\n";
   std::cout << "session:  " << session_path.string() << " (organsim run " << session_path.string() << " replays it)\n";
+  // As `organsim run`: the record is whole, the exit status says the solves fell short.
+  if (const std::string warning = integrator_warning(*backend); !warning.empty())
+    throw Error(ErrorKind::SolverWarning, warning);
 }
 
 const bool registered = register_command("serve", 25, [](CLI::App& root) {

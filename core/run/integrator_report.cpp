@@ -40,6 +40,14 @@ std::string integrator_warning(const Backend& backend) {
          "): raise time.cg_max_iterations, loosen time.cg_tolerance or try time.preconditioner \"rest_cholesky\"";
 }
 
+std::string integrator_summary(const nlohmann::json& meta) {
+  if (!meta.is_object() || !meta.contains("cg_iterations_median")) return "";
+  return "CG iterations per step median " + std::to_string(meta["cg_iterations_median"].get<int>()) + ", max " +
+         std::to_string(meta["cg_iterations_max"].get<int>()) + "; largest final residual " +
+         format_number(meta["cg_residual_max"].get<double>()) + "; " +
+         std::to_string(meta["cg_unconverged_steps"].get<int64_t>()) + " steps stopped at cg_max_iterations";
+}
+
 std::string integrator_progress(const Backend& backend) {
   const IntegratorStats* s = backend.integrator_stats();
   if (!s || s->unconverged_steps == 0) return "";

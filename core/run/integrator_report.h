@@ -22,6 +22,11 @@ inline constexpr double kUnconvergedShareWarning = 0.01;
 // steps (or the integrator is explicit); else the warning, naming the count.
 std::string integrator_warning(const Backend& backend);
 
+// The summary line a command prints after an implicit run, from its
+// integrator_meta(): "CG iterations per step median M, max X; largest
+// final residual R; N steps stopped at cg_max_iterations"; "" for Verlet.
+std::string integrator_summary(const nlohmann::json& meta);
+
 // "CG at its limit in N of M steps" for the progress line; "" when none.
 std::string integrator_progress(const Backend& backend);
 

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <thread>
@@ -324,6 +325,77 @@ TEST(Serve, AClientThatNeverReadsDoesNotStallTheLoop) {
   const int64_t sent = live["link"]["replies_sent"], dropped = live["link"]["replies_dropped"];
   EXPECT_GT(dropped, 0) << "replies that do not fit must be dropped";
   EXPECT_EQ(sent + dropped, 1000) << "one reply per tick to the one client, sent or dropped";
+}
+
+// gentle_push under implicit Euler at one 1 ms step per tick (the reference
+// backend, double), with `time` fields added to its own.
+fs::path implicit_scene(const fs::path& dir, const nlohmann::json& time_fields) {
+  fs::create_directories(dir);
+  const fs::path stress = fs::path(ORGANSIM_SOURCE_DIR) / "scenarios" / "stress";
+  nlohmann::json s = read_json(kScenario);
+  s["mesh"]["tet"] = (stress / "box.mesh").string();
+  s["time"] = {{"duration", 1.0}, {"dt", 0.001}, {"substeps", 1}, {"integrator", "implicit_euler"}};
+  s["time"].update(time_fields);
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  return dir / "scene.json";
+}
+
+// Streams `ticks` poses at 1 kHz from 50 to 47 mm above the box's base
+// (the sphere 3 mm into its top at the end); the session lasts as many ticks.
+void stream_press(ServeProcess& serve, int ticks) {
+  const int port = serve.port();
+  ASSERT_GT(port, 0) << serve.stderr_text();
+  IgtlTestClient client;
+  ASSERT_TRUE(client.connect_to(port));
+  const auto start = Clock::now();
+  for (int k = 0; k < ticks; ++k) {
+    std::this_thread::sleep_until(start + std::chrono::microseconds(1000 * k));
+    if (!client.send_pose("Tool", {20.0f, 20.0f, 50.0f - 3.0f * static_cast<float>(k + 1) / static_cast<float>(ticks)}) ||
+        !client.read_replies(0))
+      break;
+  }
+  client.read_until_closed(120);
+}
+
+TEST(Serve, AnImplicitSceneIsServedWithItsSolvesInTheMetaAndReplaysBitForBit) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_implicit";
+  fs::remove_all(dir);
+  const fs::path scene = implicit_scene(dir, nlohmann::json::object());
+  {
+    ServeProcess serve({scene.string(), "-o", (dir / "out").string(), "--duration", "0.3"}, dir);
+    stream_press(serve, 300);
+    ASSERT_EQ(serve.wait(), 0) << serve.stderr_text();
+    EXPECT_NE(serve.stdout_text().find("implicit: CG iterations per step median"), std::string::npos)
+        << serve.stdout_text();
+  }
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  const nlohmann::json& integrator = log["meta"]["integrator"];
+  EXPECT_EQ(integrator["name"], "implicit_euler");
+  EXPECT_EQ(integrator["steps"], 300);
+  EXPECT_GE(integrator["cg_iterations_median"].get<int>(), 1);
+  EXPECT_EQ(integrator["cg_unconverged_steps"], 0);
+  const nlohmann::json& samples = log["samples"];
+  ASSERT_EQ(samples["t"].size(), 300u);
+  EXPECT_GT(samples["force"].back()[2].get<double>(), 0.01) << "the sphere 3 mm into the box pushes back";
+  EXPECT_EQ(read_json(dir / "out/session.json")["time"]["integrator"], "implicit_euler");
+  expect_replay_identical(dir);
+}
+
+TEST(Serve, AnImplicitSessionWhoseSolvesFallShortEndsWithTheWarningStatusAndItsRecordWhole) {
+  // One CG iteration per step cannot reach a 1e-12 tolerance: every step is unconverged.
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "serve_implicit_unconverged";
+  fs::remove_all(dir);
+  const fs::path scene = implicit_scene(dir, {{"cg_max_iterations", 1}, {"cg_tolerance", 1e-12}});
+  ServeProcess serve({scene.string(), "-o", (dir / "out").string(), "--duration", "0.05"}, dir);
+  stream_press(serve, 50);
+  EXPECT_EQ(serve.wait(), 9) << serve.stderr_text();  // ErrorKind::SolverWarning, as organsim run
+  EXPECT_NE(serve.stderr_text().find("warning: implicit Euler: the conjugate gradients stopped at cg_max_iterations = 1"),
+            std::string::npos)
+      << serve.stderr_text();
+  const nlohmann::json log = read_json(dir / "out/forces.json");
+  EXPECT_EQ(log["samples"]["t"].size(), 50u);
+  EXPECT_EQ(log["meta"]["integrator"]["cg_unconverged_steps"], 50);
+  EXPECT_TRUE(fs::exists(dir / "out/session.json"));
 }
 
 TEST(Serve, ABlowUpStopsTheSessionTellsTheClientAndKeepsTheRecord) {
