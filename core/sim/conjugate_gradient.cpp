@@ -3,22 +3,24 @@
 namespace organsim {
 
 CgResult conjugate_gradient(const LinearOperator& A, const LinearOperator& precondition, const Eigen::VectorXd& b,
-                            const Eigen::VectorXd& free, double tolerance, int32_t max_iterations, Eigen::VectorXd& x) {
+                            const Eigen::VectorXd& free, double tolerance, int32_t max_iterations, Eigen::VectorXd& x,
+                            CgWorkspace& work) {
   CgResult result;
   x = x.cwiseProduct(free);
-  const Eigen::VectorXd bf = b.cwiseProduct(free);
+  Eigen::VectorXd &bf = work.b, &r = work.r, &z = work.z, &p = work.p, &q = work.q;
+  bf = b.cwiseProduct(free);
   const double bnorm = bf.norm();
   if (!(bnorm > 0)) {
     x.setZero();
     result.converged = true;
     return result;
   }
-  Eigen::VectorXd q(x.size()), z(x.size());
+  q.resize(x.size()), z.resize(x.size());
   A(x, q);
-  Eigen::VectorXd r = bf - q.cwiseProduct(free);
+  r = bf - q.cwiseProduct(free);
   precondition(r, z);
   z = z.cwiseProduct(free);
-  Eigen::VectorXd p = z;
+  p = z;
   double rz = r.dot(z);
   double rnorm = r.norm();
   while (result.iterations < max_iterations && rnorm > tolerance * bnorm) {

@@ -17,6 +17,12 @@ struct CgResult {
   bool converged = false;  // residual <= tolerance
 };
 
+// The solver's vectors, kept by the caller between solves: once sized, a
+// solve allocates nothing.
+struct CgWorkspace {
+  Eigen::VectorXd b, r, z, p, q;
+};
+
 // Solves A x = b restricted to the coordinates where `free` is 1 (0: held,
 // x there is set to 0 and A's rows and columns are dropped), starting from
 // x's value (a warm start), with the preconditioner z = P r (an
@@ -24,6 +30,7 @@ struct CgResult {
 // |b - A x| <= tolerance |b| or after max_iterations, or when A shows a
 // direction of non-positive curvature (then converged is false).
 CgResult conjugate_gradient(const LinearOperator& A, const LinearOperator& precondition, const Eigen::VectorXd& b,
-                            const Eigen::VectorXd& free, double tolerance, int32_t max_iterations, Eigen::VectorXd& x);
+                            const Eigen::VectorXd& free, double tolerance, int32_t max_iterations, Eigen::VectorXd& x,
+                            CgWorkspace& work);
 
 }  // namespace organsim

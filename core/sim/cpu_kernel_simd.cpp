@@ -556,8 +556,13 @@ void tet_slice(Data<Real>& D, int slice) {
 template <class Real, ElementTerm Element, bool Gravity, ToolTerm Tool, bool Sutures>
 void step_all(Data<Real>& D, const KernelStepInputs<Real>& in, int threads, std::vector<ChunkReaction>& partial) {
   const int32_t nchunk = D.nchunk;
-#pragma omp parallel num_threads(threads)
-  {
+  // The passes as worksharing loops, in a parallel region on several
+  // threads and on their own on one: libgomp allocates a team for every
+  // region, even of one thread, and a haptic tick does not wait on the
+  // allocator (CpuBackend.ATickAllocatesNothingOnceSizedOnOneThreadAndTwo).
+  // Called inside another parallel region, the loops keep a region of
+  // their own, so that they never share out over the caller's team.
+  const auto passes = [&] {
     if constexpr (Element == ElementTerm::NodalVolume) {
       // Every nodal volume before any pressure, every pressure before any force.
 #pragma omp for schedule(static)
@@ -583,6 +588,12 @@ void step_all(Data<Real>& D, const KernelStepInputs<Real>& in, int threads, std:
       chunk_step<Real, Element, Gravity, Tool, Sutures>(D, in, c, r);
       if constexpr (Tool != ToolTerm::None) partial[c] = r;
     }
+  };
+  if (threads > 1 || omp_in_parallel()) {
+#pragma omp parallel num_threads(threads)
+    passes();
+  } else {
+    passes();
   }
 }
 

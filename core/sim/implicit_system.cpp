@@ -1,7 +1,5 @@
 #include "core/sim/implicit_system.h"
 
-#include <utility>
-
 #include "core/model/rest_stiffness.h"
 #include "core/physics/force_law.h"
 
@@ -31,7 +29,7 @@ ImplicitSystem::ImplicitSystem(const Model& model) : model_(model) {
 }
 
 void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t,
-                               std::vector<ContactBlock> contact) {
+                               const std::vector<ContactBlock>& contact) {
   const Model& m = model_;
   springs_.assign(m.nspring(), {});
   for (int32_t s = 0; s < m.nspring(); ++s) {
@@ -58,7 +56,7 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
       volume_gradient_[e] = {-(g1 + g2 + g3) / 6, g1 / 6, g2 / 6, g3 / 6};
     }
   }
-  contact_ = std::move(contact);
+  contact_ = contact;
 }
 
 void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen::VectorXd& p,

@@ -39,7 +39,9 @@ class ImplicitSystem {
 
   // The tangent at positions x and velocities v (npoint), the sutures' rest
   // lengths at time t, with the contact's blocks.
-  void linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t, std::vector<ContactBlock> contact);
+  // The blocks are copied into a vector the system keeps (no allocation
+  // once it has held as many).
+  void linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t, const std::vector<ContactBlock>& contact);
 
   // out = (M m_coef + D alpha + K beta) p over all 3 npoint coordinates
   // (fixed points included: the caller projects them out).

@@ -22,9 +22,13 @@ const char* preconditioner_name(Preconditioner preconditioner) {
 
 namespace {
 
-Eigen::VectorXd flat(const std::vector<Vec3>& v) {
-  Eigen::VectorXd out(3 * static_cast<Eigen::Index>(v.size()));
+void flat(const std::vector<Vec3>& v, Eigen::VectorXd& out) {
+  out.resize(3 * static_cast<Eigen::Index>(v.size()));
   for (size_t i = 0; i < v.size(); ++i) out.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
+}
+Eigen::VectorXd flat(const std::vector<Vec3>& v) {
+  Eigen::VectorXd out;
+  flat(v, out);
   return out;
 }
 void unflat(const Eigen::VectorXd& v, std::vector<Vec3>& out) {
@@ -58,6 +62,8 @@ class ReferenceBackend final : public Backend {
     d_.assign(model.npoint(), Vec3::Zero());
     dv_ = Eigen::VectorXd::Zero(3 * model.npoint());
     stats_.cg_max_iterations = options.cg_max_iterations;
+    // A step's count appended without an allocation for the first 2^16 steps (then by doubling).
+    if (implicit()) stats_.cg_iterations.reserve(size_t{1} << 16);
   }
 
   std::string name() const override { return "cpu"; }
@@ -294,41 +300,50 @@ class ReferenceBackend final : public Backend {
     return reaction;
   }
 
-  // One backward Euler step of h from the state (x_, d_ = h v).
+  // One backward Euler step of h from the state (x_, d_ = h v). Its
+  // vectors are members: once sized, a step with one Newton iteration
+  // allocates nothing (ImplicitEuler.AStepAllocatesNothingOnceSized).
   Reaction step(double h, double t, ToolTerm tool, const ToolPlacement& placed) {
     const Model& m = *t_.model;
     const int32_t n = m.npoint();
     ImplicitSystem& system = *t_.system;
     const Eigen::VectorXd& free = t_.free;
-    std::vector<Vec3> v0(n), f, v1;
-    for (int32_t i = 0; i < n; ++i) v0[i] = m.fixed[i] ? Vec3::Zero() : Vec3(d_[i] / h);
-    std::vector<ContactBlock> contact;
-    const Reaction reaction = forces(x_, v0, t, tool, placed, f, &contact);
-    system.linearise(x_, v0, t, std::move(contact));
-    const Eigen::VectorXd v0f = flat(v0);
+    v_.resize(n);
+    for (int32_t i = 0; i < n; ++i) v_[i] = m.fixed[i] ? Vec3::Zero() : Vec3(d_[i] / h);
+    const Reaction reaction = forces(x_, v_, t, tool, placed, f_, &contact_);
+    system.linearise(x_, v_, t, contact_);
+    flat(v_, v0_);
     // Implicit damping: no K in the system, none in the right-hand side.
     const double beta = damping_only() ? 0 : h * h;
-    Eigen::VectorXd kv = Eigen::VectorXd::Zero(v0f.size());
-    if (beta != 0) system.apply(0, 0, 1, v0f, kv);
-    const Eigen::VectorXd rhs = h * flat(f) - beta * kv;
+    kv_.setZero(v0_.size());
+    if (beta != 0) system.apply(0, 0, 1, v0_, kv_);
+    flat(f_, rhs_);
+    rhs_ = h * rhs_ - beta * kv_;
     int32_t iterations = 0;
     double residual = 0;
     bool converged = true;
+    const LinearOperator precondition = preconditioner(h, beta);
+    // One reference captured: std::function keeps it without an allocation.
+    const struct {
+      const ImplicitSystem* system;
+      double h, beta;
+    } op{&system, h, beta};
+    const LinearOperator product = [&op](const Eigen::VectorXd& p, Eigen::VectorXd& y) {
+      op.system->apply(1, op.h, op.beta, p, y);
+    };
     const auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-      const CgResult r = conjugate_gradient(
-          [&](const Eigen::VectorXd& p, Eigen::VectorXd& y) { system.apply(1, h, beta, p, y); },
-          preconditioner(h, beta), b, free, options_.cg_tolerance, options_.cg_max_iterations, x);
+      const CgResult r =
+          conjugate_gradient(product, precondition, b, free, options_.cg_tolerance, options_.cg_max_iterations, x, cg_);
       iterations += r.iterations;
       residual = std::max(residual, r.residual);
       converged = converged && r.converged;
     };
-    solve(rhs, dv_);
-    Eigen::VectorXd v = v0f + dv_;
-    if (options_.newton_iterations > 1) newton(h, t, tool, placed, v0f, v, solve);
-    unflat(v, v1);
+    solve(rhs_, dv_);
+    v1_ = v0_ + dv_;
+    if (options_.newton_iterations > 1) newton(h, t, tool, placed, v0_, v1_, solve);
     for (int32_t i = 0; i < n; ++i) {
       if (m.fixed[i]) continue;
-      d_[i] = h * v1[i];
+      d_[i] = h * Vec3(v1_.segment<3>(3 * static_cast<Eigen::Index>(i)));
       x_[i] += d_[i];
     }
     stats_.cg_iterations.push_back(iterations);
@@ -380,11 +395,18 @@ class ReferenceBackend final : public Backend {
     if (options_.preconditioner == Preconditioner::RestCholesky) {
       if (!factor_ || factor_h_ != h) factor_rest_system(h, beta);
       return [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
-        Eigen::VectorXd rf(free_index_.size());
-        for (size_t i = 0; i < free_index_.size(); ++i) rf[static_cast<Eigen::Index>(i)] = r[free_index_[i]];
-        const Eigen::VectorXd zf = factor_->solve(rf);
-        z = Eigen::VectorXd::Zero(r.size());
-        for (size_t i = 0; i < free_index_.size(); ++i) z[free_index_[i]] = zf[static_cast<Eigen::Index>(i)];
+        rf_.resize(static_cast<Eigen::Index>(free_index_.size()));
+        for (size_t i = 0; i < free_index_.size(); ++i) rf_[static_cast<Eigen::Index>(i)] = r[free_index_[i]];
+        // factor_->solve(rf_) written out as Eigen's own steps, allocating
+        // nothing: solve() evaluates into a temporary, and vectorD()
+        // returns a copy (its inverse is kept from the factoring instead).
+        yf_.noalias() = factor_->permutationP() * rf_;
+        factor_->matrixL().solveInPlace(yf_);
+        yf_.array() *= factor_inverse_d_.array();
+        factor_->matrixU().solveInPlace(yf_);
+        zf_.noalias() = factor_->permutationPinv() * yf_;
+        z.setZero(r.size());
+        for (size_t i = 0; i < free_index_.size(); ++i) z[free_index_[i]] = zf_[static_cast<Eigen::Index>(i)];
       };
     }
     t_.system->diagonal_blocks(1, h, beta, blocks_);
@@ -419,6 +441,7 @@ class ReferenceBackend final : public Backend {
     factor_ = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>(a);
     if (factor_->info() != Eigen::Success)
       throw Error(ErrorKind::Numerical, "implicit Euler: the rest system M + h D + h^2 K could not be factored");
+    factor_inverse_d_ = factor_->vectorD().cwiseInverse();
     factor_h_ = h;
   }
 
@@ -437,9 +460,16 @@ class ReferenceBackend final : public Backend {
   std::array<std::vector<double>, 3> u_;  // the surface pass's displacement streams
   std::vector<Eigen::Matrix3d> blocks_;    // block Jacobi's inverses
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> factor_;
+  Eigen::VectorXd factor_inverse_d_;  // 1 / the factor's D
   double factor_h_ = 0;
   std::vector<int32_t> free_index_;  // the factor's coordinates
-  std::vector<Vec3> v_, f_;  // Verlet: the step's velocities and forces
+  std::vector<Vec3> v_, f_;  // the step's velocities (implicit: at its start) and forces
+  // The implicit step's: contact blocks, v at the start and the end, K v,
+  // the right-hand side, the CG's vectors, the factor's right-hand side,
+  // its permuted solve and the solution.
+  std::vector<ContactBlock> contact_;
+  Eigen::VectorXd v0_, v1_, kv_, rhs_, rf_, yf_, zf_;
+  CgWorkspace cg_;
 };
 
 }  // namespace

@@ -25,7 +25,8 @@ void reference_internal_forces(const Model& model, const std::vector<Vec3>& x, c
   // Volume: f_i = -p dV/dx_i with the tet's pressure p = k_v (V - V_r), or
   // with the nodal term the mean of its corners' nodal pressures.
   if (model.has_volume()) {
-    std::vector<double> q;
+    // Kept per thread between calls, so that a step allocates nothing once sized.
+    thread_local std::vector<double> q;
     if (model.has_nodal_volume()) nodal_pressures(model, x, q);
     for (int32_t t = 0; t < model.ntet(); ++t) {
       const Tet& tet = model.tet_points[t];

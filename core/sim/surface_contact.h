@@ -129,15 +129,22 @@ class SurfaceContact {
         hi[axis] = std::max({hi[axis], seg_a[j][axis], seg_b[j][axis]});
       }
     }
-#pragma omp parallel num_threads(threads) if (threads > 1)
-    {
-      // Each thread its share of the points, then of the triangles (the
-      // loops are functions of their own so that they vectorise as in a
-      // serial build).
-      const int32_t n = omp_get_num_threads(), i = omp_get_thread_num();
-      gather_positions(i * npoint / n, (i + 1) * npoint / n, rest, u);
+    // Each thread its share of the points, then of the triangles (the loops
+    // are functions of their own so that they vectorise as in a serial
+    // build). One thread runs them outside a parallel region: libgomp
+    // allocates a team for every region, even an inactive one, and a
+    // haptic tick does not wait on the allocator.
+    if (threads > 1) {
+#pragma omp parallel num_threads(threads)
+      {
+        const int32_t n = omp_get_num_threads(), i = omp_get_thread_num();
+        gather_positions(i * npoint / n, (i + 1) * npoint / n, rest, u);
 #pragma omp barrier
-      box_tests(i * ntri / n, (i + 1) * ntri / n, lo, hi, r2);
+        box_tests(i * ntri / n, (i + 1) * ntri / n, lo, hi, r2);
+      }
+    } else {
+      gather_positions(0, npoint, rest, u);
+      box_tests(0, ntri, lo, hi, r2);
     }
     // Each touching triangle's penalty w_j f to its corners; with the Hertz
     // layer, once the layer is solved over all of them (pending_).
