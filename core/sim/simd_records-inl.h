@@ -249,39 +249,36 @@ HWY_INLINE void gather_block(const Real* base, const int32_t* q, int v0, V<Real>
 
 // ---- 256-bit quads of doubles (AVX2 and AVX-512) ------------------------------
 // A double record is one 32-byte quad: on targets with 256-bit registers
-// four points are read with one load each and a 4 x 4 transpose (two
-// unpacks and two lane swaps per pair), and a force is added with one
-// 256-bit load, add and store, where the generic block code needs two of
-// each.
+// four points are read with one load each and a 4 x 4 transpose, and a
+// force is added with one 256-bit load, add and store, where the generic
+// block code needs two of each.
 #if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_AVX3
 
-// (x, y, z, w) of the quads at base + Scale q[0..3], value j of point i in
-// lane i of out[j].
-template <int Scale>
-HWY_INLINE void quad_gather4(const double* base, const int32_t* q, __m256d (&out)[4]) {
-  const __m256d r0 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[0]));
-  const __m256d r1 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[1]));
-  const __m256d r2 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[2]));
-  const __m256d r3 = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[3]));
-  // t0 = (x0 x1 | z0 z1), t1 = (y0 y1 | w0 w1), t2, t3 likewise for points 2, 3.
-  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+// The 4 x 4 transpose of doubles, its own inverse: lane i of out[j] is
+// lane j of in[i] (two unpacks and two lane swaps per pair of rows).
+HWY_INLINE void quad_transpose(const __m256d (&in)[4], __m256d (&out)[4]) {
+  // t0 = (a0 b0 | a2 b2), t1 = (a1 b1 | a3 b3) for rows a, b = in[0], in[1]; t2, t3 for in[2], in[3].
+  const __m256d t0 = _mm256_unpacklo_pd(in[0], in[1]), t1 = _mm256_unpackhi_pd(in[0], in[1]);
+  const __m256d t2 = _mm256_unpacklo_pd(in[2], in[3]), t3 = _mm256_unpackhi_pd(in[2], in[3]);
   out[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
   out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
   out[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
   out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
 }
 
+// (x, y, z, w) of the quads at base + Scale q[0..3], value j of point i in
+// lane i of out[j].
+template <int Scale>
+HWY_INLINE void quad_gather4(const double* base, const int32_t* q, __m256d (&out)[4]) {
+  __m256d r[4];
+  for (int i = 0; i < 4; ++i) r[i] = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[i]));
+  quad_transpose(r, out);
+}
+
 // The quads (x_i, y_i, z_i, 0) of lanes i = 0..3 of x, y, z.
 HWY_INLINE void quad_transpose3(__m256d x, __m256d y, __m256d z, __m256d (&quad)[4]) {
-  const __m256d zero = _mm256_setzero_pd();
-  // a = (x0 y0 | x2 y2), b = (x1 y1 | x3 y3), c = (z0 0 | z2 0), d = (z1 0 | z3 0)
-  const __m256d a = _mm256_unpacklo_pd(x, y), b = _mm256_unpackhi_pd(x, y);
-  const __m256d c = _mm256_unpacklo_pd(z, zero), d = _mm256_unpackhi_pd(z, zero);
-  quad[0] = _mm256_permute2f128_pd(a, c, 0x20);
-  quad[1] = _mm256_permute2f128_pd(b, d, 0x20);
-  quad[2] = _mm256_permute2f128_pd(a, c, 0x31);
-  quad[3] = _mm256_permute2f128_pd(b, d, 0x31);
+  const __m256d rows[4] = {x, y, z, _mm256_setzero_pd()};
+  quad_transpose(rows, quad);
 }
 #endif
 
