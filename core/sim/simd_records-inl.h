@@ -251,34 +251,43 @@ HWY_INLINE void gather_block(const Real* base, const int32_t* q, int v0, V<Real>
 // A double record is one 32-byte quad: on targets with 256-bit registers
 // four points are read with one load each and a 4 x 4 transpose, and a
 // force is added with one 256-bit load, add and store, where the generic
-// block code needs two of each.
+// block code needs two of each. In Highway's ops on 256-bit vectors, which
+// these targets have (AVX2's full register, half of AVX-512's).
 #if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_AVX3
+using QuadTag = hn::Full256<double>;
+using Quad = hn::Vec<QuadTag>;
 
-// The 4 x 4 transpose of doubles, its own inverse: lane i of out[j] is
-// lane j of in[i] (two unpacks and two lane swaps per pair of rows).
-HWY_INLINE void quad_transpose(const __m256d (&in)[4], __m256d (&out)[4]) {
+// The 4 x 4 transpose, its own inverse: lane i of out[j] is lane j of
+// in[i] (interleaves inside the 128-bit blocks, then block swaps).
+HWY_INLINE void quad_transpose(const Quad (&in)[4], Quad (&out)[4]) {
+  const QuadTag d;
   // t0 = (a0 b0 | a2 b2), t1 = (a1 b1 | a3 b3) for rows a, b = in[0], in[1]; t2, t3 for in[2], in[3].
-  const __m256d t0 = _mm256_unpacklo_pd(in[0], in[1]), t1 = _mm256_unpackhi_pd(in[0], in[1]);
-  const __m256d t2 = _mm256_unpacklo_pd(in[2], in[3]), t3 = _mm256_unpackhi_pd(in[2], in[3]);
-  out[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
-  out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
-  out[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
-  out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+  const Quad t0 = hn::InterleaveLower(d, in[0], in[1]), t1 = hn::InterleaveUpper(d, in[0], in[1]);
+  const Quad t2 = hn::InterleaveLower(d, in[2], in[3]), t3 = hn::InterleaveUpper(d, in[2], in[3]);
+  out[0] = hn::ConcatLowerLower(d, t2, t0);
+  out[1] = hn::ConcatLowerLower(d, t3, t1);
+  out[2] = hn::ConcatUpperUpper(d, t2, t0);
+  out[3] = hn::ConcatUpperUpper(d, t3, t1);
 }
 
 // (x, y, z, w) of the quads at base + Scale q[0..3], value j of point i in
 // lane i of out[j].
 template <int Scale>
-HWY_INLINE void quad_gather4(const double* base, const int32_t* q, __m256d (&out)[4]) {
-  __m256d r[4];
-  for (int i = 0; i < 4; ++i) r[i] = _mm256_loadu_pd(base + Scale * static_cast<ptrdiff_t>(q[i]));
+HWY_INLINE void quad_gather4(const double* base, const int32_t* q, Quad (&out)[4]) {
+  const QuadTag d;
+  Quad r[4];
+  for (int i = 0; i < 4; ++i) r[i] = hn::LoadU(d, base + Scale * static_cast<ptrdiff_t>(q[i]));
   quad_transpose(r, out);
 }
 
-// The quads (x_i, y_i, z_i, 0) of lanes i = 0..3 of x, y, z.
-HWY_INLINE void quad_transpose3(__m256d x, __m256d y, __m256d z, __m256d (&quad)[4]) {
-  const __m256d rows[4] = {x, y, z, _mm256_setzero_pd()};
+// The sums of the forces (x, y, z, 0) at force + q[i] and lane i of x, y,
+// z, into sum[0..3].
+HWY_INLINE void quad_add_forces(const double* force, const int32_t* q, Quad x, Quad y, Quad z, Quad* sum) {
+  const QuadTag d;
+  const Quad rows[4] = {x, y, z, hn::Zero(d)};
+  Quad quad[4];
   quad_transpose(rows, quad);
+  for (int i = 0; i < 4; ++i) sum[i] = hn::Add(hn::LoadU(d, force + q[i]), quad[i]);
 }
 #endif
 
@@ -286,19 +295,12 @@ HWY_INLINE void quad_transpose3(__m256d x, __m256d y, __m256d z, __m256d (&quad)
 #undef ORGANSIM_SIMD_AVX2
 #if HWY_TARGET == HWY_AVX2
 #define ORGANSIM_SIMD_AVX2 1
-template <int Scale>
-HWY_INLINE void avx2_gather4(const double* base, const int32_t* q, V<double> (&a)[4]) {
-  __m256d out[4];
-  quad_gather4<Scale>(base, q, out);
-  for (int j = 0; j < 4; ++j) a[j].raw = out[j];
-}
 // Adds lane l of (x, y, z) to the 32-byte force of point q[l]; all four
 // loaded before any is stored.
 HWY_INLINE void avx2_scatter_add(double* force, const int32_t* q, const V<double> (&f)[3]) {
-  __m256d quad[4], sum[4];
-  quad_transpose3(f[0].raw, f[1].raw, f[2].raw, quad);
-  for (int i = 0; i < 4; ++i) sum[i] = _mm256_add_pd(_mm256_loadu_pd(force + q[i]), quad[i]);
-  for (int i = 0; i < 4; ++i) _mm256_storeu_pd(force + q[i], sum[i]);
+  Quad sum[4];
+  quad_add_forces(force, q, f[0], f[1], f[2], sum);
+  for (int i = 0; i < 4; ++i) hn::StoreU(sum[i], QuadTag(), force + q[i]);
 }
 #else
 #define ORGANSIM_SIMD_AVX2 0
@@ -361,15 +363,11 @@ HWY_INLINE void avx3_gather8(const float* rec, const int32_t* q, V<float> (&a)[8
 // Adds lane l of (x, y, z) to the 32-byte force of point q[l], made per
 // 256-bit half; all eight loaded before any is stored.
 HWY_INLINE void avx3_scatter_add(double* force, const int32_t* q, const V<double> (&f)[3]) {
-  __m256d sum[8];
-  for (int h = 0; h < 2; ++h) {
-    __m256d quad[4];
-    quad_transpose3(h ? _mm512_extractf64x4_pd(f[0].raw, 1) : _mm512_castpd512_pd256(f[0].raw),
-                    h ? _mm512_extractf64x4_pd(f[1].raw, 1) : _mm512_castpd512_pd256(f[1].raw),
-                    h ? _mm512_extractf64x4_pd(f[2].raw, 1) : _mm512_castpd512_pd256(f[2].raw), quad);
-    for (int i = 0; i < 4; ++i) sum[4 * h + i] = _mm256_add_pd(_mm256_loadu_pd(force + q[4 * h + i]), quad[i]);
-  }
-  for (int l = 0; l < 8; ++l) _mm256_storeu_pd(force + q[l], sum[l]);
+  const QuadTag dh;
+  Quad sum[8];
+  quad_add_forces(force, q, hn::LowerHalf(dh, f[0]), hn::LowerHalf(dh, f[1]), hn::LowerHalf(dh, f[2]), sum);
+  quad_add_forces(force, q + 4, hn::UpperHalf(dh, f[0]), hn::UpperHalf(dh, f[1]), hn::UpperHalf(dh, f[2]), sum + 4);
+  for (int l = 0; l < 8; ++l) hn::StoreU(sum[l], dh, force + q[l]);
 }
 
 // The records (x, y, z, 0, dx, dy, dz, 0) of 16 consecutive points: each
@@ -571,8 +569,8 @@ HWY_INLINE void gather_xd(const Real* rec, const Real* inc, const int32_t* q, V3
     avx3_gather4<Scale>(rec, q, a);
     avx3_gather4<Scale>(inc, q, b);
 #elif ORGANSIM_SIMD_AVX2
-    avx2_gather4<Scale>(rec, q, a);
-    avx2_gather4<Scale>(inc, q, b);
+    quad_gather4<Scale>(rec, q, a);
+    quad_gather4<Scale>(inc, q, b);
 #else
     gather_values<Scale, 4>(rec, q, a);
     gather_values<Scale, 4>(inc, q, b);
@@ -604,7 +602,7 @@ HWY_INLINE void gather_xw(const Real* rec, const int32_t* q, V3<Real>& x, V<Real
   if constexpr (sizeof(Real) == 8) avx3_gather4<Scale>(rec, q, a);
   else gather_values<Scale, 4>(rec, q, a);
 #elif ORGANSIM_SIMD_AVX2
-  if constexpr (sizeof(Real) == 8) avx2_gather4<Scale>(rec, q, a);
+  if constexpr (sizeof(Real) == 8) quad_gather4<Scale>(rec, q, a);
   else gather_values<Scale, 4>(rec, q, a);
 #else
   gather_values<Scale, 4>(rec, q, a);
