@@ -1,5 +1,7 @@
 #include "app/backend_factory.h"
 
+#include <omp.h>
+
 #include "core/gl/egl_context.h"
 #include "core/gl/gl_backend.h"
 #include "core/sim/cpu_backend.h"
@@ -22,7 +24,8 @@ std::unique_ptr<Backend> make_cpu(const BackendSelection& s, const Model& model,
       throw Error(ErrorKind::Usage, std::string("integrator ") + integrator_name(s.integrator) + " runs on the cpu backend in double precision only "
                                     "(its reference; asked: " + precision +
                                         (s.cpu_kernel.empty() ? "" : ", kernel " + s.cpu_kernel) + ")");
-    return make_reference_backend(model, tool, s.integrator, s.implicit);
+    // Its results do not depend on the thread count: all hardware threads unless asked.
+    return make_reference_backend(model, tool, s.integrator, s.implicit, s.threads > 0 ? s.threads : omp_get_max_threads());
   }
   if (precision == "double") {
     o.precision = Precision::Double;

@@ -60,6 +60,7 @@ struct IntegratorStats {
   double max_residual = 0;             // the largest final relative CG residual of any solve
   int64_t unconverged_steps = 0;       // steps with a solve that stopped above its tolerance
   int32_t cg_max_iterations = 0;       // the limit a solve stops at
+  double cg_seconds = 0;               // wall time inside the solves (organsim bench: per CG iteration)
   // With Newton iterations: |M (v1 - v0) - h f(x0 + h v1, v1)| on the free
   // coordinates after the first solve and after each Newton step, of the
   // last step (N s); empty with one linearised solve per step.

@@ -1,7 +1,14 @@
 #include "core/sim/implicit_system.h"
 
+#include <omp.h>
+
+#include <algorithm>
+#include <limits>
+#include <type_traits>
+
 #include "core/model/rest_stiffness.h"
 #include "core/physics/force_law.h"
+#include "core/util/error.h"
 
 namespace organsim {
 
@@ -16,46 +23,100 @@ Eigen::Map<Eigen::Vector3d> at(Eigen::VectorXd& v, int32_t p) { return Eigen::Ma
 
 }  // namespace
 
-ImplicitSystem::ImplicitSystem(const Model& model) : model_(model) {
+ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads)
+    : model_(model), threads_(std::max<int32_t>(threads, 1)), patch_row_(static_cast<size_t>(threads_)) {
   if (model.has_shear_element()) {
     shear_k_ = row_major(model, rest_stiffness(model, RestTerms::ShearElement));
     shear_d_ = row_major(model, rest_damping(model, RestTerms::ShearElement));
   }
+  const int32_t n = model.npoint();
+  // Counting sorts by point: each row lists its elements in element order.
+  const auto incidence = [n](int32_t nelement, int arity, const auto& point_of, bool with_corner,
+                             std::vector<int32_t>& start, std::vector<int32_t>& entry) {
+    start.assign(n + 1, 0);
+    for (int32_t e = 0; e < nelement; ++e)
+      for (int c = 0; c < arity; ++c) ++start[point_of(e, c) + 1];
+    for (int32_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    entry.resize(static_cast<size_t>(start[n]));
+    std::vector<int32_t> fill(start.begin(), start.end() - 1);
+    for (int32_t e = 0; e < nelement; ++e)
+      for (int c = 0; c < arity; ++c) entry[fill[point_of(e, c)]++] = with_corner ? arity * e + c : e;
+  };
+  incidence(model.nspring(), 2, [&](int32_t s, int c) { return model.spring_ends[s][c]; }, false, spring_start_,
+            spring_of_point_);
+  if (model.has_volume())
+    incidence(model.ntet(), 4, [&](int32_t t, int c) { return model.tet_points[t][c]; }, true, corner_start_,
+              corner_of_point_);
   if (model.has_nodal_volume()) {
-    tets_of_point_.assign(model.npoint(), {});
-    for (int32_t t = 0; t < model.ntet(); ++t)
-      for (int32_t p : model.tet_points[t]) tets_of_point_[p].push_back(t);
+    patch_start_.assign(n + 1, 0);
+    patch_slot_.resize(4 * corner_of_point_.size());
+    std::vector<int32_t> patch;
+    for (int32_t i = 0; i < n; ++i) {
+      patch.clear();
+      for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
+        for (int j = 0; j < 4; ++j) {
+          const int32_t a = model.tet_points[corner_of_point_[k] >> 2][j];
+          auto found = std::find(patch.begin(), patch.end(), a);
+          if (found == patch.end()) found = patch.insert(patch.end(), a);
+          if (patch.size() > std::numeric_limits<uint16_t>::max())
+            throw Error(ErrorKind::Input, "implicit Euler: point " + std::to_string(i) + " shares tets with over " +
+                                              std::to_string(std::numeric_limits<uint16_t>::max()) + " points");
+          patch_slot_[4 * static_cast<size_t>(k) + j] = static_cast<uint16_t>(found - patch.begin());
+        }
+      patch_point_.insert(patch_point_.end(), patch.begin(), patch.end());
+      patch_start_[i + 1] = static_cast<int32_t>(patch_point_.size());
+    }
+  }
+  for (Eigen::VectorXd& part : part_out_) part.resize(3 * n);
+  tet_term_.resize(model.has_volume() ? model.ntet() : 0);
+  node_term_.resize(model.has_nodal_volume() ? n : 0);
+}
+
+template <class Body>
+void ImplicitSystem::for_each(int32_t n, const Body& body) const {
+  // A body that takes a second argument gets its thread's slot (0 ..
+  // threads_ - 1) for per-thread scratch.
+  const auto call = [&body](int32_t i, int slot) {
+    if constexpr (std::is_invocable_v<Body, int32_t, int>)
+      body(i, slot);
+    else
+      body(i);
+  };
+  if (threads_ > 1 && !omp_in_parallel()) {
+#pragma omp parallel for schedule(static) num_threads(threads_)
+    for (int32_t i = 0; i < n; ++i) call(i, omp_get_thread_num());
+  } else {
+    for (int32_t i = 0; i < n; ++i) call(i, 0);
   }
 }
 
 void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t,
                                const std::vector<ContactBlock>& contact) {
   const Model& m = model_;
-  springs_.assign(m.nspring(), {});
-  for (int32_t s = 0; s < m.nspring(); ++s) {
+  springs_.resize(m.nspring());
+  for_each(m.nspring(), [&](int32_t s) {
+    springs_[s] = {};
     const auto [a, b] = m.spring_ends[s];
     const Vec3 l = x[b] - x[a];
     const double length = l.norm();
-    if (!(length > 0)) continue;  // coincident ends: no direction, no force, no stiffness
+    if (!(length > 0)) return;  // coincident ends: no direction, no force, no stiffness
     const Vec3 u = l / length;
     const double rest = m.spring_rest_at(s, t);
     double tension = force_law::spring_tension(m.spring_k[s], m.spring_d[s], length, rest, (v[b] - v[a]).dot(u));
     // A slack suture (or one its damper would turn into a push) exerts nothing, so it stiffens nothing.
-    if (s >= m.first_suture() && force_law::suture_tension(tension, length, rest) == 0) continue;
+    if (s >= m.first_suture() && force_law::suture_tension(tension, length, rest) == 0) return;
     const double transverse = force_law::spring_transverse_stiffness(tension, length);
     springs_[s] = {u, m.spring_k[s] - transverse, transverse, m.spring_d[s]};
-  }
-  volume_gradient_.clear();
-  if (m.has_volume()) {
-    volume_gradient_.resize(m.ntet());
-    for (int32_t e = 0; e < m.ntet(); ++e) {
+  });
+  volume_gradient_.resize(m.has_volume() ? m.ntet() : 0);
+  if (m.has_volume())
+    for_each(m.ntet(), [&](int32_t e) {
       const Tet& tet = m.tet_points[e];
       const Vec3 e1 = x[tet[1]] - x[tet[0]], e2 = x[tet[2]] - x[tet[0]], e3 = x[tet[3]] - x[tet[0]];
       Vec3 g1, g2, g3;  // 6 dV/dx_k
       force_law::tet_volume_gradients6(e1, e2, e3, g1, g2, g3);
       volume_gradient_[e] = {-(g1 + g2 + g3) / 6, g1 / 6, g2 / 6, g3 / 6};
-    }
-  }
+    });
   contact_ = contact;
 }
 
@@ -64,47 +125,73 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
   const Model& m = model_;
   const int32_t n = m.npoint();
   out.resize(3 * n);
-  for (int32_t i = 0; i < n; ++i) at(out, i) = (m_coef + alpha * m.viscous_damping) * m.mass[i] * at(p, i);
-  for (int32_t s = 0; s < m.nspring(); ++s) {
-    const SpringTangent& g = springs_[s];
-    const auto [a, b] = m.spring_ends[s];
-    const Vec3 delta = at(p, a) - at(p, b);
-    const Vec3 y = (alpha * g.d + beta * g.axial) * g.u.dot(delta) * g.u + beta * g.transverse * delta;
-    at(out, a) += y;
-    at(out, b) -= y;
-  }
-  if (m.has_volume() && beta != 0) {
-    const bool nodal = m.has_nodal_volume();
-    if (nodal) tet_scratch_.resize(m.ntet()), node_scratch_.assign(n, 0.0);
-    for (int32_t e = 0; e < m.ntet(); ++e) {
+  const bool volume = m.has_volume() && beta != 0, nodal = volume && m.has_nodal_volume();
+  // The nodal term first needs every node's k_a (dV_a . p), dV_a . p =
+  // the sum over a's tets of dV_t . p / 4.
+  if (nodal) {
+    for_each(m.ntet(), [&](int32_t e) {
       const Tet& tet = m.tet_points[e];
       double s = 0;
       for (int i = 0; i < 4; ++i) s += volume_gradient_[e][i].dot(at(p, tet[i]));
+      tet_term_[e] = s;
+    });
+    for_each(n, [&](int32_t a) {
+      double s = 0;
+      for (int32_t k = corner_start_[a]; k < corner_start_[a + 1]; ++k) s += tet_term_[corner_of_point_[k] >> 2];
+      node_term_[a] = m.point_volume_k[a] * s / 4;
+    });
+  }
+  // Each part scatters its springs' and tets' terms: a spring's y on its
+  // ends, a tet's c dV_t/dx_i on its corners (c = beta k_t dV_t . p, or
+  // with the nodal term beta times the mean of its nodes' k_a (dV_a . p)).
+  for_each(kParts, [&](int32_t part) {
+    Eigen::VectorXd& y = part == 0 ? out : part_out_[part - 1];
+    y.setZero();
+    const int32_t s0 = static_cast<int32_t>(int64_t{m.nspring()} * part / kParts);
+    const int32_t s1 = static_cast<int32_t>(int64_t{m.nspring()} * (part + 1) / kParts);
+    for (int32_t s = s0; s < s1; ++s) {
+      const SpringTangent& g = springs_[s];
+      const auto [a, b] = m.spring_ends[s];
+      const Vec3 delta = at(p, a) - at(p, b);
+      const Vec3 ys = (alpha * g.d + beta * g.axial) * g.u.dot(delta) * g.u + beta * g.transverse * delta;
+      at(y, a) += ys;
+      at(y, b) -= ys;
+    }
+    if (!volume) return;
+    const int32_t t0 = static_cast<int32_t>(int64_t{m.ntet()} * part / kParts);
+    const int32_t t1 = static_cast<int32_t>(int64_t{m.ntet()} * (part + 1) / kParts);
+    for (int32_t e = t0; e < t1; ++e) {
+      const Tet& tet = m.tet_points[e];
+      double c;
       if (nodal) {
-        tet_scratch_[e] = s;
-        continue;
-      }
-      for (int i = 0; i < 4; ++i) at(out, tet[i]) += beta * m.tet_k[e] * s * volume_gradient_[e][i];
-    }
-    if (nodal) {
-      // dV_a . p = sum over a's tets of dV_t . p / 4; then each tet's corners
-      // receive the mean of its nodes' k_a (dV_a . p) along dV_t/dx_i.
-      for (int32_t a = 0; a < n; ++a) {
+        c = beta * (node_term_[tet[0]] + node_term_[tet[1]] + node_term_[tet[2]] + node_term_[tet[3]]) / 4;
+      } else {
         double s = 0;
-        for (int32_t e : tets_of_point_[a]) s += tet_scratch_[e];
-        node_scratch_[a] = m.point_volume_k[a] * s / 4;
+        for (int i = 0; i < 4; ++i) s += volume_gradient_[e][i].dot(at(p, tet[i]));
+        c = beta * m.tet_k[e] * s;
       }
-      for (int32_t e = 0; e < m.ntet(); ++e) {
-        const Tet& tet = m.tet_points[e];
-        const double c = (node_scratch_[tet[0]] + node_scratch_[tet[1]] + node_scratch_[tet[2]] + node_scratch_[tet[3]]) / 4;
-        for (int i = 0; i < 4; ++i) at(out, tet[i]) += beta * c * volume_gradient_[e][i];
-      }
+      for (int i = 0; i < 4; ++i) at(y, tet[i]) += c * volume_gradient_[e][i];
     }
-  }
-  if (m.has_shear_element()) {
-    if (beta != 0) out.noalias() += beta * (shear_k_ * p);
-    if (alpha != 0 && m.shear_damping_time > 0) out.noalias() += alpha * (shear_d_ * p);
-  }
+  });
+  const bool shear_k = m.has_shear_element() && beta != 0;
+  const bool shear_d = m.has_shear_element() && alpha != 0 && m.shear_damping_time > 0;
+  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  const auto row_product = [&p](const Matrix& matrix, Eigen::Index r) {
+    double sum = 0;
+    for (Matrix::InnerIterator it(matrix, r); it; ++it) sum += it.value() * p[it.col()];
+    return sum;
+  };
+  // Each point: the mass and drag, the parts in order, the shear rows.
+  const double mass_coef = m_coef + alpha * m.viscous_damping;
+  for_each(n, [&](int32_t i) {
+    Vec3 y = mass_coef * m.mass[i] * at(p, i) + at(out, i);
+    for (const Eigen::VectorXd& part : part_out_) y += at(part, i);
+    for (int a = 0; a < 3; ++a) {
+      if (shear_k) y[a] += beta * row_product(shear_k_, 3 * i + a);
+      if (shear_d) y[a] += alpha * row_product(shear_d_, 3 * i + a);
+    }
+    at(out, i) = y;
+  });
   if (beta != 0)
     for (const ContactBlock& c : contact_) {
       Vec3 wp = Vec3::Zero();
@@ -120,55 +207,43 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
   const Model& m = model_;
   const int32_t n = m.npoint();
   out.resize(n);
-  for (int32_t i = 0; i < n; ++i)
-    out[i] = (m_coef + alpha * m.viscous_damping) * m.mass[i] * Eigen::Matrix3d::Identity();
-  for (int32_t s = 0; s < m.nspring(); ++s) {
-    const SpringTangent& g = springs_[s];
-    const Eigen::Matrix3d block = (alpha * g.d + beta * g.axial) * g.u * g.u.transpose() +
-                                  beta * g.transverse * Eigen::Matrix3d::Identity();
-    out[m.spring_ends[s][0]] += block;
-    out[m.spring_ends[s][1]] += block;
-  }
-  if (m.has_volume() && m.has_nodal_volume() && beta != 0) {
-    // Node a's row of G at each point q of its patch: the sum over the tets
-    // of a holding q of dV_t/dx_q / 4, accumulated per point id.
-    // Scratch kept between calls (zero again after each node): no allocation per step.
-    std::vector<Vec3>& row = row_scratch_;
-    std::vector<uint8_t>& in_patch = patch_mark_;
-    std::vector<int32_t>& patch = patch_scratch_;
-    row.resize(n, Vec3::Zero());
-    in_patch.resize(n, 0);
-    for (int32_t a = 0; a < n; ++a) {
-      patch.clear();
-      for (int32_t e : tets_of_point_[a])
-        for (int i = 0; i < 4; ++i) {
-          const int32_t q = m.tet_points[e][i];
-          if (!in_patch[q]) in_patch[q] = 1, patch.push_back(q);
-          row[q] += volume_gradient_[e][i] / 4;
-        }
-      for (int32_t q : patch) {
-        out[q] += beta * m.point_volume_k[a] * row[q] * row[q].transpose();
-        row[q].setZero();
-        in_patch[q] = 0;
+  const bool volume = m.has_volume() && beta != 0, nodal = volume && m.has_nodal_volume();
+  const double shear_damp = m.has_shear_element() && m.shear_damping_time > 0 ? alpha : 0;
+  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  for_each(n, [&](int32_t i, int slot) {
+    Eigen::Matrix3d block = (m_coef + alpha * m.viscous_damping) * m.mass[i] * Eigen::Matrix3d::Identity();
+    for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k) {
+      const SpringTangent& g = springs_[spring_of_point_[k]];
+      block += (alpha * g.d + beta * g.axial) * g.u * g.u.transpose() + beta * g.transverse * Eigen::Matrix3d::Identity();
+    }
+    if (nodal) {
+      // Node a's row of G at i: the sum over the tets of a holding i of
+      // dV_t/dx_i / 4, for every node a of i's patch.
+      std::vector<Vec3>& row = patch_row_[static_cast<size_t>(slot)];
+      const int32_t first = patch_start_[i], size = patch_start_[i + 1] - first;
+      row.assign(static_cast<size_t>(size), Vec3::Zero());
+      for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k) {
+        const Vec3 g = volume_gradient_[corner_of_point_[k] >> 2][corner_of_point_[k] & 3] / 4;
+        for (int j = 0; j < 4; ++j) row[patch_slot_[4 * static_cast<size_t>(k) + j]] += g;
+      }
+      for (int32_t j = 0; j < size; ++j)
+        block += beta * m.point_volume_k[patch_point_[first + j]] * row[j] * row[j].transpose();
+    } else if (volume) {
+      for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k) {
+        const int32_t e = corner_of_point_[k] >> 2;
+        const Vec3& g = volume_gradient_[e][corner_of_point_[k] & 3];
+        block += beta * m.tet_k[e] * g * g.transpose();
       }
     }
-  } else if (m.has_volume() && beta != 0) {
-    for (int32_t e = 0; e < m.ntet(); ++e)
-      for (int i = 0; i < 4; ++i) {
-        const Vec3& g = volume_gradient_[e][i];
-        out[m.tet_points[e][i]] += beta * m.tet_k[e] * g * g.transpose();
+    if (m.has_shear_element())
+      for (const auto& [matrix, coef] : {std::pair<const Matrix*, double>{&shear_k_, beta}, {&shear_d_, shear_damp}}) {
+        if (coef == 0) continue;
+        for (int a = 0; a < 3; ++a)
+          for (Matrix::InnerIterator it(*matrix, 3 * i + a); it; ++it)
+            if (it.col() / 3 == i) block(a, it.col() % 3) += coef * it.value();
       }
-  }
-  if (m.has_shear_element()) {
-    const double damp = m.shear_damping_time > 0 ? alpha : 0;
-    using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
-    for (const auto& [matrix, coef] : {std::pair<const Matrix*, double>{&shear_k_, beta}, {&shear_d_, damp}}) {
-      if (coef == 0) continue;
-      for (int32_t r = 0; r < 3 * n; ++r)
-        for (Matrix::InnerIterator it(*matrix, r); it; ++it)
-          if (it.col() / 3 == r / 3) out[r / 3](r % 3, it.col() % 3) += coef * it.value();
-    }
-  }
+    out[i] = block;
+  });
   for (const ContactBlock& c : contact_)
     for (int i = 0; i < 3; ++i)
       if (c.point[i] >= 0) out[c.point[i]] += beta * c.w[i] * c.w[i] * c.k;

@@ -13,6 +13,12 @@
 // and the tool's contact blocks (ContactBlock). Fixed points are projected
 // out by the caller (conjugate_gradient's `free`). docs/integrators.md
 // derives it.
+//
+// Threads: the products' element loops are cut into kParts fixed parts
+// (springs and tets in index ranges), each scattering into its own buffer,
+// summed in part order; the diagonal blocks gather per point in a fixed
+// order (incidence lists built at construction). So both run as OpenMP
+// loops on any number of threads with bit-identical results.
 #include <Eigen/SparseCore>
 #include <array>
 #include <vector>
@@ -34,8 +40,9 @@ struct ContactBlock {
 class ImplicitSystem {
  public:
   // The Model's constant parts (the shear element's rest matrices); the
-  // Model must outlive the system.
-  explicit ImplicitSystem(const Model& model);
+  // Model must outlive the system. `threads` (>= 1) share out its loops;
+  // results do not depend on it.
+  explicit ImplicitSystem(const Model& model, int32_t threads = 1);
 
   // The tangent at positions x and velocities v (npoint), the sutures' rest
   // lengths at time t, with the contact's blocks.
@@ -50,9 +57,17 @@ class ImplicitSystem {
   void diagonal_blocks(double m_coef, double alpha, double beta, std::vector<Eigen::Matrix3d>& out) const;
 
   const Model& model() const { return model_; }
+  int32_t threads() const { return threads_; }
 
  private:
+  // Runs body(i) for i in [0, n) as a static loop: in a parallel region of
+  // threads_ threads, or on its own on one (libgomp allocates a team for
+  // every region, even of one thread) or inside a caller's region.
+  template <class Body>
+  void for_each(int32_t n, const Body& body) const;
+
   const Model& model_;
+  int32_t threads_;
   // Per spring at the linearisation: its direction, axial and transverse
   // stiffness (K = axial u u^T + transverse I) and damper (D = d u u^T); a
   // slack suture has all three zero.
@@ -63,13 +78,25 @@ class ImplicitSystem {
   std::vector<SpringTangent> springs_;
   // Volume term: dV_t/dx_i of every tet's corners at the linearisation.
   std::vector<std::array<Vec3, 4>> volume_gradient_;
-  std::vector<std::vector<int32_t>> tets_of_point_;  // nodal term: each point's tets
+  // Each point's springs and tet corners, rows start[i] .. start[i + 1] in
+  // element order: spring_of_point_ holds spring indices, corner_of_point_
+  // 4 t + corner.
+  std::vector<int32_t> spring_start_, spring_of_point_, corner_start_, corner_of_point_;
   std::vector<ContactBlock> contact_;
   Eigen::SparseMatrix<double, Eigen::RowMajor> shear_k_, shear_d_;  // empty without the element
-  mutable std::vector<double> tet_scratch_, node_scratch_;          // nodal term's two passes
-  mutable std::vector<Vec3> row_scratch_;                           // nodal diagonal: a node's G row per point
-  mutable std::vector<uint8_t> patch_mark_;
-  mutable std::vector<int32_t> patch_scratch_;
+  // A product's parts: a fixed count, whatever the threads, so that the
+  // sums do not depend on them; part 0 scatters into the output itself.
+  static constexpr int kParts = 4;
+  mutable std::array<Eigen::VectorXd, kParts - 1> part_out_;
+  mutable std::vector<double> tet_term_, node_term_;  // the volume term's per-tet and nodal scalars
+  // The nodal diagonal: each point's patch (the nodes sharing a tet with
+  // it), rows patch_start_[i] .. patch_start_[i + 1] of patch_point_, and
+  // for each of its tet corners (corner_of_point_[k]) the slot in its patch
+  // of that tet's four nodes (patch_slot_[4 k + j]); per thread, the
+  // patch's G rows at the point.
+  std::vector<int32_t> patch_start_, patch_point_;
+  std::vector<uint16_t> patch_slot_;
+  mutable std::vector<std::vector<Vec3>> patch_row_;
 };
 
 }  // namespace organsim

@@ -2,6 +2,7 @@
 
 #include <Eigen/SparseCholesky>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <optional>
 
@@ -55,8 +56,9 @@ struct ReferencePrepared final : PreparedModel {
 
 class ReferenceBackend final : public Backend {
  public:
-  ReferenceBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options, Integrator integrator)
-      : tool_(tool), options_(options), integrator_(integrator) {
+  ReferenceBackend(const Model& model, const BackendTool& tool, const ImplicitOptions& options, Integrator integrator,
+                   int32_t threads)
+      : tool_(tool), options_(options), integrator_(integrator), threads_(implicit() ? threads : 1) {
     t_ = pack(model);
     x_ = model.rest_position;
     d_.assign(model.npoint(), Vec3::Zero());
@@ -69,7 +71,7 @@ class ReferenceBackend final : public Backend {
   std::string name() const override { return "cpu"; }
   std::string device() const override {
     if (!implicit()) return "CPU, 1 thread, Verlet (reference, double)";
-    return std::string("CPU, 1 thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") +
+    return "CPU, " + std::to_string(threads_) + (threads_ > 1 ? " threads, " : " thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") +
            " (reference, double; " + preconditioner_name(options_.preconditioner) + "-preconditioned CG)";
   }
   std::string precision() const override { return "double"; }
@@ -196,7 +198,7 @@ class ReferenceBackend final : public Backend {
     ReferenceTables t;
     t.model = &model;
     t.plan = make_step_plan(model, tool_, integrator_);
-    if (implicit()) t.system = std::make_unique<ImplicitSystem>(model);
+    if (implicit()) t.system = std::make_unique<ImplicitSystem>(model, threads_);
     const int32_t n = model.npoint();
     t.tool_scale.resize(n);
     for (int32_t i = 0; i < n; ++i) t.tool_scale[i] = model.tool_scale(i);
@@ -302,7 +304,7 @@ class ReferenceBackend final : public Backend {
 
   // One backward Euler step of h from the state (x_, d_ = h v). Its
   // vectors are members: once sized, a step with one Newton iteration
-  // allocates nothing (ImplicitEuler.AStepAllocatesNothingOnceSized).
+  // allocates nothing (ImplicitEuler.AStepAllocatesNothingOnceSizedOnOneThreadAndTwo).
   Reaction step(double h, double t, ToolTerm tool, const ToolPlacement& placed) {
     const Model& m = *t_.model;
     const int32_t n = m.npoint();
@@ -332,8 +334,10 @@ class ReferenceBackend final : public Backend {
       op.system->apply(1, op.h, op.beta, p, y);
     };
     const auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+      const auto start = std::chrono::steady_clock::now();
       const CgResult r =
           conjugate_gradient(product, precondition, b, free, options_.cg_tolerance, options_.cg_max_iterations, x, cg_);
+      stats_.cg_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       iterations += r.iterations;
       residual = std::max(residual, r.residual);
       converged = converged && r.converged;
@@ -451,6 +455,7 @@ class ReferenceBackend final : public Backend {
   BackendTool tool_;
   ImplicitOptions options_;
   Integrator integrator_;
+  int32_t threads_;  // the implicit solve's
   ReferenceTables t_;
   std::vector<Vec3> x_, d_;  // positions and the last step's increment h v
   Eigen::VectorXd dv_;       // the last solve's dv: the next one's warm start
@@ -475,7 +480,9 @@ class ReferenceBackend final : public Backend {
 }  // namespace
 
 std::unique_ptr<Backend> make_reference_backend(const Model& model, const BackendTool& tool, Integrator integrator,
-                                                const ImplicitOptions& options) {
+                                                const ImplicitOptions& options, int32_t threads) {
+  if (threads < 1)
+    throw Error(ErrorKind::Usage, "reference backend: threads must be >= 1 (got " + std::to_string(threads) + ")");
   if (options.newton_iterations > 1 && integrator == Integrator::ImplicitDamping)
     throw Error(ErrorKind::Usage, "implicit damping: newton_iterations must be 1 (its system is linear in v and "
                                   "solved exactly)");
@@ -491,7 +498,7 @@ std::unique_ptr<Backend> make_reference_backend(const Model& model, const Backen
     throw Error(ErrorKind::Usage,
                 "implicit Euler: newton_iterations > 1 with a tool that has friction is not supported (the "
                 "friction anchors advance at every evaluation of the contact); use newton_iterations 1");
-  return std::make_unique<ReferenceBackend>(model, tool, options, integrator);
+  return std::make_unique<ReferenceBackend>(model, tool, options, integrator, threads);
 }
 
 }  // namespace organsim

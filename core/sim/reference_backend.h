@@ -22,8 +22,9 @@
 // stable for the linear part, so time.dt is not bounded by dt_crit; it
 // damps numerically (docs/integrators.md). The tool's contact and a pulling
 // tool's attachments are springs in the system (their stiffness inside it,
-// so a stiff contact is stable too). One thread: results do not depend on
-// the thread count.
+// so a stiff contact is stable too). The implicit solve (linearisation,
+// products, preconditioner) shares out over `threads`; the force pass
+// runs on one. Results do not depend on the thread count.
 #include <memory>
 #include <string>
 
@@ -55,8 +56,8 @@ struct ImplicitOptions {
 // ImplicitDamping: (M + h D) dv = h f, the elastic and contact forces taken
 // at the step's start (symplectic Euler for them, stable below the
 // undamped 2/omega_max), the dampers and drag at its end. `options` are the
-// implicit solver's (Verlet uses none of them).
+// implicit solver's and `threads` (>= 1) its loops' (Verlet uses none of them).
 std::unique_ptr<Backend> make_reference_backend(const Model& model, const BackendTool& tool, Integrator integrator,
-                                                const ImplicitOptions& options = {});
+                                                const ImplicitOptions& options = {}, int32_t threads = 1);
 
 }  // namespace organsim

@@ -123,20 +123,22 @@ TEST(CpuBackend, ATickAllocatesNothingOnceSizedOnOneThreadAndTwo) {
 #endif
 }
 
-TEST(ImplicitEuler, AStepAllocatesNothingOnceSized) {
+TEST(ImplicitEuler, AStepAllocatesNothingOnceSizedOnOneThreadAndTwo) {
 #if !ORGANSIM_COUNT_ALLOCATIONS
   GTEST_SKIP() << "AddressSanitizer owns malloc: allocations are not counted under it";
 #else
   // Contact blocks in the system, both preconditioners.
   const Model model = pressed_box();
-  for (Preconditioner preconditioner : {Preconditioner::BlockJacobi, Preconditioner::RestCholesky}) {
-    SCOPED_TRACE(preconditioner_name(preconditioner));
-    ImplicitOptions options;
-    options.preconditioner = preconditioner;
-    auto backend = make_reference_backend(model, {true, ToolMode::Push, 0.02, 500}, Integrator::ImplicitEuler, options);
-    EXPECT_EQ(allocations_in_ticks(*backend, pressing(1e-3, 1)), 0);
-    EXPECT_GE(backend->integrator_stats()->cg_iterations.back(), 1);
-  }
+  for (const int32_t threads : {1, 2})
+    for (Preconditioner preconditioner : {Preconditioner::BlockJacobi, Preconditioner::RestCholesky}) {
+      SCOPED_TRACE(std::string(preconditioner_name(preconditioner)) + ", threads " + std::to_string(threads));
+      ImplicitOptions options;
+      options.preconditioner = preconditioner;
+      auto backend = make_reference_backend(model, {true, ToolMode::Push, 0.02, 500}, Integrator::ImplicitEuler,
+                                            options, threads);
+      EXPECT_EQ(allocations_in_ticks(*backend, pressing(1e-3, 1)), 0);
+      EXPECT_GE(backend->integrator_stats()->cg_iterations.back(), 1);
+    }
 #endif
 }
 
