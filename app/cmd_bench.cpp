@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "app/backend_factory.h"
+#include "app/bench_implicit.h"
 #include "app/bench_materials.h"
 #include "app/bench_timing.h"
 #include "app/command.h"
@@ -80,6 +81,7 @@ struct BenchArgs {
   std::string json;           // --json FILE: the results as JSON ("-": on stdout instead of the table)
   bool materials = false;     // --materials: the material comparison (bench_materials.h) instead of the size table
   std::string materials_scenario = "scenarios/liver_suture.json";  // its sutured and unsutured rows
+  bool implicit = false;      // --implicit: the integrators' comparison (bench_implicit.h) instead of the size table
   std::string tool = "none";  // none, or a pushing sphere touching the model: "surface" or "points" contact
 };
 
@@ -221,6 +223,7 @@ struct Results {
   std::string frames_unavailable;
   std::vector<std::pair<std::string, std::string>> unavailable;  // backend, reason
   std::vector<MaterialComparison> materials;  // --materials: one per size and precision
+  std::vector<ImplicitComparison> implicit;   // --implicit: one per size
 };
 
 Results measure(const BenchArgs& args) {
@@ -245,16 +248,25 @@ Results measure(const BenchArgs& args) {
     mo.exude = args.exude;
     MeshReport report;
     const TetMesh mesh = mesh_surface(surface, mo, surface_name, &report);
+    // Every row on the same thread count (the backend's own choice would
+    // time each row on whatever count a moment of load favoured, and its
+    // probes of the other count land in the timed steps).
+    const int32_t threads = args.threads > 0 ? args.threads : std::max(1, static_cast<int32_t>(std::thread::hardware_concurrency()));
+    if (args.implicit) {
+      ImplicitBenchOptions ib;
+      ib.threads = threads;
+      ib.steps = args.steps;
+      ib.quiet = quiet;
+      res.implicit.push_back(measure_implicit(ib, mesh, surface_name, target));
+      continue;
+    }
     if (args.materials) {
       const std::vector<std::string> precisions = args.precisions.empty() ? std::vector<std::string>{"float"} : args.precisions;
       for (const std::string& precision : precisions) {
         MaterialBenchOptions mb;
         mb.backend = args.backends.empty() ? "cpu" : args.backends[0];
         mb.precision = precision;
-        // Every row on the same thread count (the backend's own choice would
-        // time each row on whatever count a moment of load favoured, and its
-        // probes of the other count land in the timed steps).
-        mb.threads = args.threads > 0 ? args.threads : std::max(1, static_cast<int32_t>(std::thread::hardware_concurrency()));
+        mb.threads = threads;
         mb.steps = args.steps;
         mb.dt = args.dt;
         mb.exude = args.exude;
@@ -401,6 +413,10 @@ nlohmann::json to_json(const Results& res, const BenchArgs& args) {
       j["materials"].push_back(to_json(c));
     }
   }
+  if (args.implicit) {
+    j["implicit"] = nlohmann::json::array();
+    for (const ImplicitComparison& c : res.implicit) j["implicit"].push_back(to_json(c));
+  }
   return j;
 }
 
@@ -422,6 +438,20 @@ void print_material_comparisons(const Results& res, const BenchArgs& args) {
   for (const MaterialComparison& c : res.materials) {
     std::cout << "\n";
     print_materials(std::cout, c);
+  }
+}
+
+// --implicit: the integrators' comparison instead of the size table.
+void print_implicit_comparisons(const Results& res, const BenchArgs& args) {
+  print_machine(res);
+  std::cout << "step:    springs + dampers + nodal volume term + gravity + a 2 cm sphere 5 mm into the lowest point "
+            << "(surface contact), the top tenth fixed; Verlet at the guaranteed step, implicit Euler (block Jacobi) at 1 ms; "
+            << args.steps.warmup << " warm-up steps, then " << args.steps.repetitions << " repetitions of "
+            << args.steps.steps << " steps (implicit rows: a tenth of both)\n";
+  std::cout << "models:  " << res.surface_name << "\n";
+  for (const ImplicitComparison& c : res.implicit) {
+    std::cout << "\n";
+    print_implicit(std::cout, c);
   }
 }
 
@@ -538,7 +568,9 @@ void run_bench(const BenchArgs& args) {
     std::cout << to_json(res, args).dump(2) << "\n";
     return;
   }
-  if (args.materials) {
+  if (args.implicit) {
+    print_implicit_comparisons(res, args);
+  } else if (args.materials) {
     print_material_comparisons(res, args);
   } else {
     print_table(res, args);
@@ -596,6 +628,10 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
                 "Instead of the size table: the materials' cost side by side on one backend (cpu, or --backend gl; per-tet volume_modulus, "
                 "poisson_ratio 0.45 and 0.2, a scenario before and after its sutures), at --sizes (default 7750) in "
                 "--precision (default float), with the ratios of the medians");
+  cmd->add_flag("--implicit", args->implicit,
+                "Instead of the size table: the integrators side by side on the cpu backend in double (Verlet and "
+                "implicit Euler, a soft and a stiff liver hung by its top, a sphere pressing), at --sizes (default "
+                "7750), with CG iterations and ms per CG iteration");
   cmd->add_option("--materials-scenario", args->materials_scenario,
                   "The scenario with sutures for --materials, meshed to each size (default "
                   "scenarios/liver_suture.json)")
@@ -617,6 +653,9 @@ const bool registered = register_command("bench", 60, [](CLI::App& root) {
     args->simd = split_list(*simd);
     for (const std::string& k : args->simd)
       simd_target_named(k, "bench --simd");
+    if (args->implicit && args->materials)
+      throw Error(ErrorKind::Usage, "bench: --implicit and --materials are two comparisons: ask for one");
+    if (args->implicit && sizes_option->count() == 0) args->sizes = {7750};  // the paper's liver
     if (args->materials) {
       if (sizes_option->count() == 0) args->sizes = {7750};  // the paper's liver
       if (args->backends.size() > 1) {

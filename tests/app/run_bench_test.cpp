@@ -334,5 +334,88 @@ TEST(RunBench, MaterialComparisonRefusesTwoBackendsAndAScenarioWithoutSutures) {
   EXPECT_NE(none.err.find(push.string() + ": events"), std::string::npos) << none.err;
 }
 
+// The aims of `bench --implicit` (docs/integrators.md, "Measured"): written
+// here, not read from the output.
+struct ImplicitAim {
+  const char* name;
+  double target;
+};
+constexpr ImplicitAim kImplicitAims[] = {
+    {"cg_iteration / verlet_step", 1.5}, {"cg_iterations_8kPa", 30}, {"implicit_1MPa / verlet_1MPa", 1.0 / 3}};
+
+// `bench --implicit`: the four rows side by side, Verlet at the model's
+// guaranteed step on the simd kernel and implicit Euler at 1 ms on the
+// implicit solve's threads, the implicit rows with their CG iterations and
+// cost per iteration, and the three aims computed from the rows they name.
+// (Timings are what the command is for and are not asserted; that the
+// stiff liver needs more CG iterations than the soft one at the same step is
+// the physics: its system's condition number grows with h^2 K / M.)
+TEST(RunBench, ImplicitComparisonReportsBothIntegratorsWithTheirSolves) {
+  const fs::path dir = fs::path(ORGANSIM_TEST_TMP) / "run_bench_implicit";
+  fs::remove_all(dir);
+  const fs::path file = dir / "implicit.json";
+  const auto r = test::run_organsim("bench --implicit --sizes 300 --repetitions 2 --steps 10 --warmup 10 --threads 2 "
+                                    "--no-exude --json '" + file.string() + "'",
+                                    dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(test::slurp(file));
+  EXPECT_TRUE(j["rows"].empty());  // the comparison instead of the size table
+  ASSERT_EQ(j["implicit"].size(), 1u);
+  const auto& c = j["implicit"][0];
+  ASSERT_EQ(c["rows"].size(), 4u);
+  const char* names[] = {"verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa"};
+  for (size_t i = 0; i < 4; ++i) {
+    const auto& row = c["rows"][i];
+    SCOPED_TRACE(row.dump());
+    EXPECT_EQ(row["name"], names[i]);
+    EXPECT_NEAR(row["points"].get<double>(), 300, 60);
+    EXPECT_GT(row["fixed"].get<int>(), 0);
+    EXPECT_LT(row["fixed"].get<int>(), row["points"].get<int>() / 2);
+    const std::string device = row["device"];
+    const double dt = row["dt"], dt_crit = row["dt_crit"], median = row["median_ms"];
+    EXPECT_NE(device.find("2 threads"), std::string::npos);
+    EXPECT_NEAR(row["ms_per_simulated_ms"].get<double>(), median / (1e3 * dt), 1e-12 * median / dt);
+    if (i % 2 == 0) {
+      EXPECT_EQ(row["integrator"], "verlet");
+      EXPECT_NE(device.find("simd ("), std::string::npos);
+      EXPECT_GT(dt, 0.5 * dt_crit);  // the guaranteed step, not a fraction of it
+      EXPECT_LE(dt, dt_crit);
+      EXPECT_EQ(row["cg_iterations_median"].get<double>(), 0);
+    } else {
+      EXPECT_EQ(row["integrator"], "implicit_euler");
+      EXPECT_NE(device.find("implicit Euler"), std::string::npos);
+      EXPECT_EQ(dt, 1e-3);
+      if (i == 3) {
+        EXPECT_GT(dt, 10 * dt_crit);  // far beyond what Verlet could step
+      }
+      EXPECT_GE(row["cg_iterations_median"].get<double>(), 1);
+      EXPECT_GT(row["cg_ms_per_iteration"].get<double>(), 0);
+      EXPECT_LT(row["cg_ms_per_iteration"].get<double>(), median);
+    }
+  }
+  const auto& rows = c["rows"];
+  EXPECT_EQ(rows[0]["dt_crit"], rows[1]["dt_crit"]);
+  EXPECT_LT(rows[2]["dt_crit"].get<double>(), 0.2 * rows[0]["dt_crit"].get<double>());
+  EXPECT_GT(rows[3]["cg_iterations_median"].get<double>(), rows[1]["cg_iterations_median"].get<double>());
+  const double values[] = {rows[1]["cg_ms_per_iteration"].get<double>() / rows[0]["median_ms"].get<double>(),
+                           rows[1]["cg_iterations_median"].get<double>(),
+                           rows[3]["ms_per_simulated_ms"].get<double>() / rows[2]["ms_per_simulated_ms"].get<double>()};
+  ASSERT_EQ(c["ratios"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    const auto& ratio = c["ratios"][i];
+    EXPECT_EQ(ratio["name"], kImplicitAims[i].name);
+    EXPECT_DOUBLE_EQ(ratio["target"].get<double>(), kImplicitAims[i].target);
+    EXPECT_DOUBLE_EQ(ratio["value"].get<double>(), values[i]) << ratio.dump();
+    EXPECT_EQ(ratio["within_target"].get<bool>(), values[i] <= kImplicitAims[i].target);
+    EXPECT_NE(r.out.find(kImplicitAims[i].name), std::string::npos) << r.out;
+  }
+}
+
+TEST(RunBench, ImplicitAndMaterialComparisonsAreOneAtATime) {
+  const auto r = test::run_organsim("bench --implicit --materials --sizes 300", fs::path(ORGANSIM_TEST_TMP));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--implicit and --materials"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace organsim
