@@ -130,7 +130,8 @@ class ReferenceBackend final : public Backend {
       case Pass::ConjugateGradient:
         return std::string(damping_only() ? "(M + h D) dv = h f" : "(M + h D + h^2 K) dv = h (f - h K v)") + " by " +
                preconditioner_name(options_.preconditioner) + "-preconditioned CG on the free points, "
-               "matrix-free products, warm start from the last dv, relative tolerance " +
+               "matrix-free products on " + std::to_string(threads_) + (threads_ > 1 ? " threads" : " thread") +
+               ", warm start from the last dv, relative tolerance " +
                format_number(options_.cg_tolerance) + ", at most " + std::to_string(options_.cg_max_iterations) +
                " iterations";
       case Pass::VelocityUpdate:
