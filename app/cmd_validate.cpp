@@ -34,6 +34,7 @@ struct ValidateArgs {
   std::vector<std::string> poisson_ratios;
   double young_modulus = 10e3;
   std::string volume_formulation;
+  std::string shear_formulation;
   std::string contact = "surface";
   std::string hertz_layer;  // "on", "off"; empty: on with surface contact
   double line_load_reference = 0;  // m; 0: the line-load case is left out
@@ -106,6 +107,13 @@ void validate_command(const ValidateArgs& args) {
   else if (!args.volume_formulation.empty())
     throw Error(ErrorKind::Usage,
                 "--volume-formulation: expected 'nodal' or 'per_tet', got '" + args.volume_formulation + "'");
+  if (args.shear_formulation == "smoothed")
+    options.shear_formulation = ShearFormulation::Smoothed;
+  else if (args.shear_formulation == "per_tet")
+    options.shear_formulation = ShearFormulation::PerTet;
+  else if (!args.shear_formulation.empty())
+    throw Error(ErrorKind::Usage,
+                "--shear-formulation: expected 'smoothed' or 'per_tet', got '" + args.shear_formulation + "'");
 
   const bool tty = isatty(2);
   const auto rows = run_validation_suite(options, [tty](int done, int total, const std::string& what) {
@@ -190,6 +198,9 @@ const bool registered = register_command("validate", 45, [](CLI::App& root) {
   cmd->add_option("--volume-formulation", args->volume_formulation,
                   "Volume term of the Poisson-ratio materials: 'nodal' or 'per_tet' (default: the material's "
                   "default, docs/scenarios.md)");
+  cmd->add_option("--shear-formulation", args->shear_formulation,
+                  "Shear element of the materials below nu = 1/4, as a scenario's material.shear_formulation: "
+                  "'smoothed' (default) or 'per_tet'");
   cmd->add_option("--contact", args->contact,
                   "The indenters' contact, as a scenario's tool.contact: 'surface' (the boundary triangles, "
                   "default) or 'points'");

@@ -30,6 +30,7 @@ Material suite_material(const SuiteOptions& options, const std::optional<double>
   m.young_modulus = options.young_modulus;
   m.poisson_ratio = nu;
   if (nu) m.volume_formulation = options.volume_formulation;
+  if (options.shear_formulation) m.shear_formulation = *options.shear_formulation;
   return m;
 }
 

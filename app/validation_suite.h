@@ -25,6 +25,9 @@ struct SuiteOptions {
   // Form of the volume term for the Poisson-ratio materials; unset = the
   // material's default (volume_formulation() in core/model/stiffness.h).
   std::optional<VolumeFormulation> volume_formulation;
+  // Form of the shear element of the materials below nu = 1/4; unset = the
+  // material's default (smoothed).
+  std::optional<ShearFormulation> shear_formulation;
   double young_modulus = 10e3;   // Pa
   double indenter_radius = 0.02; // m
   double probe_radius = 0.005;   // m: the small probe, pressed to d/R = 0.2
