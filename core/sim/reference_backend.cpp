@@ -27,11 +27,6 @@ void flat(const std::vector<Vec3>& v, Eigen::VectorXd& out) {
   out.resize(3 * static_cast<Eigen::Index>(v.size()));
   for (size_t i = 0; i < v.size(); ++i) out.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
 }
-Eigen::VectorXd flat(const std::vector<Vec3>& v) {
-  Eigen::VectorXd out;
-  flat(v, out);
-  return out;
-}
 void unflat(const Eigen::VectorXd& v, std::vector<Vec3>& out) {
   out.resize(static_cast<size_t>(v.size() / 3));
   for (size_t i = 0; i < out.size(); ++i) out[i] = v.segment<3>(3 * static_cast<Eigen::Index>(i));
@@ -305,7 +300,7 @@ class ReferenceBackend final : public Backend {
 
   // One backward Euler step of h from the state (x_, d_ = h v). Its
   // vectors are members: once sized, a step with one Newton iteration
-  // allocates nothing (ImplicitEuler.AStepAllocatesNothingOnceSizedOnOneThreadAndTwo).
+  // allocates nothing (ImplicitEuler.AStepAllocatesNothingOnceSizedWithOrWithoutNewtonIterations).
   Reaction step(double h, double t, ToolTerm tool, const ToolPlacement& placed) {
     const Model& m = *t_.model;
     const int32_t n = m.npoint();
@@ -359,39 +354,44 @@ class ReferenceBackend final : public Backend {
 
   // Newton iterations 2.. on g(v) = M (v - v0) - h f(x0 + h v, v), each
   // solving (M + h D + h^2 K) dv = -g at the new state, its step halved
-  // (at most 4 times) while |g| does not fall.
+  // (at most 4 times) while |g| does not fall. Its vectors are members, so
+  // that once sized it allocates nothing either.
   template <class Solve>
   void newton(double h, double t, ToolTerm tool, const ToolPlacement& placed, const Eigen::VectorXd& v0,
               Eigen::VectorXd& v, const Solve& solve) {
     const Model& m = *t_.model;
-    std::vector<Vec3> x, vv, f;
-    std::vector<ContactBlock> contact;
-    Eigen::VectorXd mass(v.size());
-    for (int32_t i = 0; i < m.npoint(); ++i) mass.segment<3>(3 * i).setConstant(m.mass[i]);
-    const auto residual = [&](const Eigen::VectorXd& vel, bool linearise) {
-      unflat(vel, vv);
-      x = x_;
+    NewtonVectors& n = newton_;
+    n.mass.resize(v.size());
+    for (int32_t i = 0; i < m.npoint(); ++i) n.mass.segment<3>(3 * i).setConstant(m.mass[i]);
+    // g at velocities `vel` into `g`, the system linearised there when asked.
+    const auto residual = [&](const Eigen::VectorXd& vel, bool linearise, Eigen::VectorXd& g) {
+      unflat(vel, n.v);
+      n.x = x_;
       for (int32_t i = 0; i < m.npoint(); ++i)
-        if (!m.fixed[i]) x[i] += h * vv[i];
-      forces(x, vv, t, tool, placed, f, &contact);
-      if (linearise) t_.system->linearise(x, vv, t, contact);
-      return Eigen::VectorXd((mass.cwiseProduct(vel - v0) - h * flat(f)).cwiseProduct(t_.free));
+        if (!m.fixed[i]) n.x[i] += h * n.v[i];
+      forces(n.x, n.v, t, tool, placed, n.f, &n.contact);
+      if (linearise) t_.system->linearise(n.x, n.v, t, n.contact);
+      flat(n.f, n.flat_f);
+      g = (n.mass.cwiseProduct(vel - v0) - h * n.flat_f).cwiseProduct(t_.free);
     };
-    Eigen::VectorXd g = residual(v, true);
-    stats_.last_newton_residuals.assign(1, g.norm());
+    residual(v, true, n.g);
+    stats_.last_newton_residuals.clear();
+    stats_.last_newton_residuals.push_back(n.g.norm());
     for (int32_t k = 1; k < options_.newton_iterations; ++k) {
-      Eigen::VectorXd step = Eigen::VectorXd::Zero(v.size());
-      solve(Eigen::VectorXd(-g), step);
+      n.step.setZero(v.size());
+      n.minus_g = -n.g;
+      solve(n.minus_g, n.step);
       double alpha = 1;
-      Eigen::VectorXd trial = v + step, g_trial = residual(trial, false);
-      for (int halvings = 0; halvings < 4 && g_trial.norm() > g.norm(); ++halvings) {
+      n.trial = v + n.step;
+      residual(n.trial, false, n.g_trial);
+      for (int halvings = 0; halvings < 4 && n.g_trial.norm() > n.g.norm(); ++halvings) {
         alpha /= 2;
-        trial = v + alpha * step;
-        g_trial = residual(trial, false);
+        n.trial = v + alpha * n.step;
+        residual(n.trial, false, n.g_trial);
       }
-      v = trial;
-      stats_.last_newton_residuals.push_back(g_trial.norm());
-      if (k + 1 < options_.newton_iterations) g = residual(v, true);
+      v = n.trial;
+      stats_.last_newton_residuals.push_back(n.g_trial.norm());
+      if (k + 1 < options_.newton_iterations) residual(v, true, n.g);
     }
   }
 
@@ -476,6 +476,13 @@ class ReferenceBackend final : public Backend {
   std::vector<ContactBlock> contact_;
   Eigen::VectorXd v0_, v1_, kv_, rhs_, rf_, yf_, zf_;
   CgWorkspace cg_;
+  // Newton iterations': the state at the trial velocities, its forces and
+  // contact, the lumped masses per coordinate, the residuals and the step.
+  struct NewtonVectors {
+    std::vector<Vec3> x, v, f;
+    std::vector<ContactBlock> contact;
+    Eigen::VectorXd mass, flat_f, g, g_trial, minus_g, step, trial;
+  } newton_;
 };
 
 }  // namespace

@@ -123,22 +123,27 @@ TEST(CpuBackend, ATickAllocatesNothingOnceSizedOnOneThreadAndTwo) {
 #endif
 }
 
-TEST(ImplicitEuler, AStepAllocatesNothingOnceSizedOnOneThreadAndTwo) {
+TEST(ImplicitEuler, AStepAllocatesNothingOnceSizedWithOrWithoutNewtonIterations) {
 #if !ORGANSIM_COUNT_ALLOCATIONS
   GTEST_SKIP() << "AddressSanitizer owns malloc: allocations are not counted under it";
 #else
-  // Contact blocks in the system, both preconditioners.
+  // Contact blocks in the system, both preconditioners, one linearised
+  // solve per step and three Newton iterations (their line search included).
   const Model model = pressed_box();
   for (const int32_t threads : {1, 2})
-    for (Preconditioner preconditioner : {Preconditioner::BlockJacobi, Preconditioner::RestCholesky}) {
-      SCOPED_TRACE(std::string(preconditioner_name(preconditioner)) + ", threads " + std::to_string(threads));
-      ImplicitOptions options;
-      options.preconditioner = preconditioner;
-      auto backend = make_reference_backend(model, {true, ToolMode::Push, 0.02, 500}, Integrator::ImplicitEuler,
-                                            options, threads);
-      EXPECT_EQ(allocations_in_ticks(*backend, pressing(1e-3, 1)), 0);
-      EXPECT_GE(backend->integrator_stats()->cg_iterations.back(), 1);
-    }
+    for (const int32_t newton : {1, 3})
+      for (Preconditioner preconditioner : {Preconditioner::BlockJacobi, Preconditioner::RestCholesky}) {
+        SCOPED_TRACE(std::string(preconditioner_name(preconditioner)) + ", threads " + std::to_string(threads) +
+                     ", newton_iterations " + std::to_string(newton));
+        ImplicitOptions options;
+        options.preconditioner = preconditioner;
+        options.newton_iterations = newton;
+        auto backend = make_reference_backend(model, {true, ToolMode::Push, 0.02, 500}, Integrator::ImplicitEuler,
+                                              options, threads);
+        EXPECT_EQ(allocations_in_ticks(*backend, pressing(1e-3, 1)), 0);
+        EXPECT_GE(backend->integrator_stats()->cg_iterations.back(), newton);
+        EXPECT_EQ(backend->integrator_stats()->last_newton_residuals.size(), newton > 1 ? size_t(newton) : 0);
+      }
 #endif
 }
 
