@@ -61,6 +61,11 @@ struct IntegratorStats {
   int64_t unconverged_steps = 0;       // steps with a solve that stopped above its tolerance
   int32_t cg_max_iterations = 0;       // the limit a solve stops at
   double cg_seconds = 0;               // wall time inside the solves (organsim bench: per CG iteration)
+  // Steps whose velocity change turned back the last one's, about as large
+  // (cosine below -0.9, at least half its size) and not negligible: a state
+  // alternating between two, which a converged CG does not show (a stiff
+  // contact overshot by one linearisation per step).
+  int64_t alternating_steps = 0;
   // With Newton iterations: |M (v1 - v0) - h f(x0 + h v1, v1)| on the free
   // coordinates after the first solve and after each Newton step, of the
   // last step (N s); empty with one linearised solve per step.

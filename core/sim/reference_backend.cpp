@@ -17,6 +17,11 @@
 
 namespace organsim {
 
+namespace {
+// The alternation count's thresholds (count_alternation).
+constexpr double kAlternationCosine = -0.9, kAlternationShrink = 0.5, kAlternationFloor = 1e-6;
+}  // namespace
+
 const char* preconditioner_name(Preconditioner preconditioner) {
   return preconditioner == Preconditioner::RestCholesky ? "rest_cholesky" : "block_jacobi";
 }
@@ -42,6 +47,7 @@ struct ReferenceTables {
   std::vector<double> tool_scale;
   std::array<std::vector<double>, 3> rest;  // X per axis (the surface pass reads streams)
   Eigen::VectorXd free;                     // 1 per free coordinate, 0 per fixed one
+  double alternation_floor = 0;             // m: a step's swing h |dv| below it is noise (1e-6 of the bounding-box diagonal)
 };
 
 struct ReferencePrepared final : PreparedModel {
@@ -150,6 +156,7 @@ class ReferenceBackend final : public Backend {
     x_ = x;
     for (size_t i = 0; i < x.size(); ++i) d_[i] = x[i] - x_prev[i];
     dv_.setZero();
+    last_dv_.resize(0);  // a new state: nothing to compare the next step with
   }
 
   std::unique_ptr<PreparedModel> prepare(const Model& next) const override {
@@ -172,6 +179,7 @@ class ReferenceBackend final : public Backend {
     Eigen::VectorXd dv = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(n));
     dv.head(dv_.size()) = dv_;
     dv_ = dv;
+    last_dv_.resize(0);
     std::swap(t_, p->tables);
     t_.surface.take_anchors(p->tables.surface);
     factor_.reset();
@@ -202,6 +210,9 @@ class ReferenceBackend final : public Backend {
       t.rest[a].resize(n);
       for (int32_t i = 0; i < n; ++i) t.rest[a][i] = model.rest_position[i][a];
     }
+    Vec3 lo = model.rest_position.empty() ? Vec3::Zero() : model.rest_position[0], hi = lo;
+    for (const Vec3& p : model.rest_position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    t.alternation_floor = kAlternationFloor * (hi - lo).norm();
     t.free = Eigen::VectorXd::Ones(3 * n);
     for (int32_t i = 0; i < n; ++i)
       if (model.fixed[i]) t.free.segment<3>(3 * i).setZero();
@@ -349,7 +360,23 @@ class ReferenceBackend final : public Backend {
     stats_.cg_iterations.push_back(iterations);
     stats_.max_residual = std::max(stats_.max_residual, residual);
     if (!converged) ++stats_.unconverged_steps;
+    count_alternation(h);
     return reaction;
+  }
+
+  // This step's velocity change against the last one's: a swing back of
+  // about its size (cosine below kAlternationCosine, at least
+  // kAlternationShrink of it) that moves a point more than the floor is
+  // counted (IntegratorStats::alternating_steps).
+  void count_alternation(double h) {
+    step_dv_ = v1_ - v0_;
+    if (last_dv_.size() == step_dv_.size()) {
+      const double now = step_dv_.norm(), before = last_dv_.norm();
+      const bool swung_back = now > 0 && before > 0 && step_dv_.dot(last_dv_) < kAlternationCosine * now * before;
+      if (swung_back && now >= kAlternationShrink * before && h * step_dv_.lpNorm<Eigen::Infinity>() > t_.alternation_floor)
+        ++stats_.alternating_steps;
+    }
+    std::swap(last_dv_, step_dv_);
   }
 
   // Newton iterations 2.. on g(v) = M (v - v0) - h f(x0 + h v, v), each
@@ -475,6 +502,7 @@ class ReferenceBackend final : public Backend {
   // its permuted solve and the solution.
   std::vector<ContactBlock> contact_;
   Eigen::VectorXd v0_, v1_, kv_, rhs_, rf_, yf_, zf_;
+  Eigen::VectorXd step_dv_, last_dv_;  // this step's and the last one's v1 - v0 (empty: none to compare)
   CgWorkspace cg_;
   // Newton iterations': the state at the trial velocities, its forces and
   // contact, the lumped masses per coordinate, the residuals and the step.
