@@ -58,12 +58,6 @@ struct Entry {
   double cg_seconds_before = 0;
 };
 
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
 }  // namespace
 
 ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const TetMesh& mesh,

@@ -52,6 +52,9 @@ struct ImplicitComparison {
   std::vector<ImplicitBenchRatio> ratios;
 };
 
+// Builds the soft and the stiff liver on `mesh` (the bench's liver at
+// `target_points`), warms each row up, then times the four rows with their
+// repetitions interleaved (row 1, 2, 3, 4, row 1, ...).
 ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const TetMesh& mesh,
                                     const std::string& mesh_name, int32_t target_points);
 

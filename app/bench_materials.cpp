@@ -108,12 +108,6 @@ struct Entry {
   std::vector<double> ms;
 };
 
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
 }  // namespace
 
 MaterialComparison measure_materials(const MaterialBenchOptions& options, const TetMesh& mesh,

@@ -2,8 +2,16 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iomanip>
+#include <sstream>
 
 namespace organsim::app {
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
 
 BenchTiming summarise_ms(std::vector<double> ms) {
   std::sort(ms.begin(), ms.end());

@@ -5,6 +5,7 @@
 // slowest repetition per step. Shared by the size table (cmd_bench.cpp) and
 // the material comparison (bench_materials.cpp), so both measure alike.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/sim/backend.h"
@@ -20,6 +21,9 @@ struct BenchSteps {
   int32_t repetitions = 7;    // timed ticks
   int32_t steps = 200;        // substeps per timed tick
 };
+
+// `v` with `digits` digits after the point ("0.4490"): the bench tables' numbers.
+std::string fixed(double v, int digits);
 
 // Median (mean of the two middle ones for an even count), min and max of `ms`.
 BenchTiming summarise_ms(std::vector<double> ms);

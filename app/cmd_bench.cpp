@@ -206,12 +206,6 @@ std::vector<Configuration> configurations(const BenchArgs& args) {
   return out;
 }
 
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
 // Everything one bench run measured, printed as a table or written as JSON.
 struct Results {
   Machine machine;
