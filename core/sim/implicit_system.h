@@ -57,7 +57,6 @@ class ImplicitSystem {
   void diagonal_blocks(double m_coef, double alpha, double beta, std::vector<Eigen::Matrix3d>& out) const;
 
   const Model& model() const { return model_; }
-  int32_t threads() const { return threads_; }
 
  private:
   // Runs body(i) for i in [0, n) as a static loop: in a parallel region of
