@@ -1,6 +1,7 @@
 #include "app/bench_implicit.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -67,7 +68,7 @@ ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const T
   BenchSteps implicit_steps = options.steps;
   implicit_steps.warmup = (options.steps.warmup + 9) / 10;
   implicit_steps.steps = (options.steps.steps + 9) / 10;
-  std::vector<Entry> entries(4);
+  std::vector<Entry> entries(5);
   const auto set = [&](Entry& e, const char* name, const char* material, const Model& m, Integrator integrator) {
     e.row.name = name;
     e.row.material = material;
@@ -78,8 +79,15 @@ ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const T
     const StabilityReport stability = estimate_critical_step(m);
     e.row.dt_crit = stability.dt_crit;
     const bool implicit = integrator != Integrator::Verlet;
-    // Verlet at the guaranteed step, as `organsim run` would step it.
-    e.row.dt = implicit ? options.implicit_dt : stability.dt_crit_gershgorin;
+    // Verlet at the guaranteed step, as `organsim run` would step it;
+    // implicit Euler at the haptic tick; implicit damping at the largest
+    // step that divides the tick within the undamped limit it is held to.
+    if (integrator == Integrator::Verlet)
+      e.row.dt = stability.dt_crit_gershgorin;
+    else if (integrator == Integrator::ImplicitDamping)
+      e.row.dt = options.implicit_dt / std::ceil(options.implicit_dt / stability.dt_crit_undamped);
+    else
+      e.row.dt = options.implicit_dt;
     e.steps = implicit ? implicit_steps : options.steps;
     BackendSelection sel;
     sel.name = "cpu";
@@ -92,6 +100,7 @@ ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const T
   set(entries[1], "implicit_8kPa", "E 8 kPa, poisson_ratio 0.45", soft, Integrator::ImplicitEuler);
   set(entries[2], "verlet_1MPa", "E 1 MPa, poisson_ratio 0.45", stiff, Integrator::Verlet);
   set(entries[3], "implicit_1MPa", "E 1 MPa, poisson_ratio 0.45", stiff, Integrator::ImplicitEuler);
+  set(entries[4], "damping_1MPa", "E 1 MPa, poisson_ratio 0.45", stiff, Integrator::ImplicitDamping);
   const BenchToolPlacement tool{kToolRadius, kToolDepth};
   for (Entry& e : entries) {
     if (!options.quiet)

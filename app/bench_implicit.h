@@ -5,7 +5,9 @@
 // sphere pressed 5 mm into its lowest point. Rows, repetitions
 // interleaved: the soft liver (E 8 kPa, poisson_ratio 0.45) under Verlet
 // on the CPU backend (double) at its guaranteed step (as `organsim run`
-// steps it) and under implicit Euler at 1 ms, and the same for a stiff liver (E 1 MPa). Each row gives ms per
+// steps it) and under implicit Euler at 1 ms, the same for a stiff liver
+// (E 1 MPa), and the stiff liver under implicit damping at the largest
+// step that divides 1 ms within its undamped limit. Each row gives ms per
 // step and per simulated ms; the implicit rows also CG iterations per step
 // and ms per CG iteration (the backend's own timer around its solves, over
 // the timed steps), so that one CG iteration is compared with one explicit
@@ -29,9 +31,9 @@ struct ImplicitBenchOptions {
 };
 
 struct ImplicitBenchRow {
-  std::string name;        // "verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa"
+  std::string name;        // "verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa", "damping_1MPa"
   std::string material;    // in words
-  std::string integrator;  // "verlet" | "implicit_euler"
+  std::string integrator;  // "verlet" | "implicit_euler" | "implicit_damping"
   int32_t points = 0, fixed = 0;
   double dt = 0, dt_crit = 0;  // s
   std::string device;

@@ -439,7 +439,7 @@ void print_material_comparisons(const Results& res, const BenchArgs& args) {
 void print_implicit_comparisons(const Results& res, const BenchArgs& args) {
   print_machine(res);
   std::cout << "step:    springs + dampers + nodal volume term + gravity + a 2 cm sphere 5 mm into the lowest point "
-            << "(surface contact), the top tenth fixed; Verlet at the guaranteed step, implicit Euler (block Jacobi) at 1 ms; "
+            << "(surface contact), the top tenth fixed; Verlet at the guaranteed step, implicit Euler (block Jacobi) at 1 ms, implicit damping within the undamped limit; "
             << args.steps.warmup << " warm-up steps, then " << args.steps.repetitions << " repetitions of "
             << args.steps.steps << " steps (implicit rows: a tenth of both)\n";
   std::cout << "models:  " << res.surface_name << "\n";

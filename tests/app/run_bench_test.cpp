@@ -343,9 +343,9 @@ struct ImplicitAim {
 constexpr ImplicitAim kImplicitAims[] = {
     {"cg_iteration / verlet_step", 1.5}, {"cg_iterations_8kPa", 30}, {"implicit_1MPa / verlet_1MPa", 1.0 / 3}};
 
-// `bench --implicit`: the four rows side by side, Verlet at the model's
-// guaranteed step on the simd kernel and implicit Euler at 1 ms on the
-// implicit solve's threads, the implicit rows with their CG iterations and
+// `bench --implicit`: the five rows side by side, Verlet at the model's
+// guaranteed step on the simd kernel, implicit Euler at 1 ms on the
+// implicit solve's threads and implicit damping within its undamped limit, the implicit rows with their CG iterations and
 // cost per iteration, and the three aims computed from the rows they name.
 // (Timings are what the command is for and are not asserted; that the
 // stiff liver needs more CG iterations than the soft one at the same step is
@@ -362,9 +362,9 @@ TEST(RunBench, ImplicitComparisonReportsBothIntegratorsWithTheirSolves) {
   EXPECT_TRUE(j["rows"].empty());  // the comparison instead of the size table
   ASSERT_EQ(j["implicit"].size(), 1u);
   const auto& c = j["implicit"][0];
-  ASSERT_EQ(c["rows"].size(), 4u);
-  const char* names[] = {"verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa"};
-  for (size_t i = 0; i < 4; ++i) {
+  ASSERT_EQ(c["rows"].size(), 5u);
+  const char* names[] = {"verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa", "damping_1MPa"};
+  for (size_t i = 0; i < 5; ++i) {
     const auto& row = c["rows"][i];
     SCOPED_TRACE(row.dump());
     EXPECT_EQ(row["name"], names[i]);
@@ -375,7 +375,17 @@ TEST(RunBench, ImplicitComparisonReportsBothIntegratorsWithTheirSolves) {
     const double dt = row["dt"], dt_crit = row["dt_crit"], median = row["median_ms"];
     EXPECT_NE(device.find("2 threads"), std::string::npos);
     EXPECT_NEAR(row["ms_per_simulated_ms"].get<double>(), median / (1e3 * dt), 1e-12 * median / dt);
-    if (i % 2 == 0) {
+    if (i == 4) {
+      // Implicit damping: the largest step dividing 1 ms within the undamped
+      // limit 2/omega_max, which lies between dt_crit and 1 ms here.
+      EXPECT_EQ(row["integrator"], "implicit_damping");
+      EXPECT_NE(device.find("implicit damping"), std::string::npos);
+      const double substeps = 1e-3 / dt;
+      EXPECT_NEAR(substeps, std::round(substeps), 1e-9);
+      EXPECT_GT(dt, dt_crit);
+      EXPECT_LT(dt, 1e-3);
+      EXPECT_GE(row["cg_iterations_median"].get<double>(), 1);
+    } else if (i % 2 == 0) {
       EXPECT_EQ(row["integrator"], "verlet");
       EXPECT_NE(device.find("simd ("), std::string::npos);
       EXPECT_GT(dt, 0.5 * dt_crit);  // the guaranteed step, not a fraction of it
