@@ -17,16 +17,14 @@
 
 namespace organsim {
 
-namespace {
-// The alternation count's thresholds (count_alternation).
-constexpr double kAlternationCosine = -0.9, kAlternationShrink = 0.5, kAlternationFloor = 1e-6;
-}  // namespace
-
 const char* preconditioner_name(Preconditioner preconditioner) {
   return preconditioner == Preconditioner::RestCholesky ? "rest_cholesky" : "block_jacobi";
 }
 
 namespace {
+
+// The alternation count's thresholds (count_alternation).
+constexpr double kAlternationCosine = -0.9, kAlternationShrink = 0.5, kAlternationFloor = 1e-6;
 
 void flat(const std::vector<Vec3>& v, Eigen::VectorXd& out) {
   out.resize(3 * static_cast<Eigen::Index>(v.size()));
@@ -72,8 +70,9 @@ class ReferenceBackend final : public Backend {
   std::string name() const override { return "cpu"; }
   std::string device() const override {
     if (!implicit()) return "CPU, 1 thread, Verlet (reference, double)";
-    return "CPU, " + std::to_string(threads_) + (threads_ > 1 ? " threads, " : " thread, ") + (damping_only() ? "implicit damping" : "implicit Euler") +
-           " (reference, double; " + preconditioner_name(options_.preconditioner) + "-preconditioned CG)";
+    return "CPU, " + std::to_string(threads_) + (threads_ > 1 ? " threads, " : " thread, ") +
+           (damping_only() ? "implicit damping" : "implicit Euler") + " (reference, double; " +
+           preconditioner_name(options_.preconditioner) + "-preconditioned CG)";
   }
   std::string precision() const override { return "double"; }
   const StepPlan& step_plan() const override { return t_.plan; }
@@ -310,8 +309,8 @@ class ReferenceBackend final : public Backend {
   }
 
   // One backward Euler step of h from the state (x_, d_ = h v). Its
-  // vectors are members: once sized, a step with one Newton iteration
-  // allocates nothing (ImplicitEuler.AStepAllocatesNothingOnceSizedWithOrWithoutNewtonIterations).
+  // vectors are members: once sized, a step allocates nothing, Newton
+  // iterations included (ImplicitEuler.AStepAllocatesNothingOnceSizedWithOrWithoutNewtonIterations).
   Reaction step(double h, double t, ToolTerm tool, const ToolPlacement& placed) {
     const Model& m = *t_.model;
     const int32_t n = m.npoint();
