@@ -276,8 +276,10 @@ TimeDef parse_time(const nlohmann::json& j, const JsonPath& at) {
   if (auto v = r.string("preconditioner")) {
     implicit_only("preconditioner");
     if (*v == "rest_cholesky") t.implicit.preconditioner = Preconditioner::RestCholesky;
+    else if (*v == "two_level") t.implicit.preconditioner = Preconditioner::TwoLevel;
     else if (*v != "block_jacobi")
-      throw r.at("preconditioner").error("expected \"block_jacobi\" or \"rest_cholesky\" (got \"" + *v + "\")");
+      throw r.at("preconditioner")
+          .error("expected \"block_jacobi\", \"two_level\" or \"rest_cholesky\" (got \"" + *v + "\")");
   }
   r.finish();
   if (t.ticks() > 100'000'000) throw at.error("duration / (dt * substeps) gives more than 1e8 ticks");

@@ -51,7 +51,7 @@ struct TimeDef {
   // "integrator": "verlet" (explicit, dt below dt_crit) or "implicit_euler"
   // (any dt; core/sim/reference_backend.h), whose solver settings are
   // "newton_iterations", "cg_tolerance", "cg_max_iterations" and
-  // "preconditioner" ("block_jacobi" or "rest_cholesky").
+  // "preconditioner" ("block_jacobi", "two_level" or "rest_cholesky").
   Integrator integrator = Integrator::Verlet;
   ImplicitOptions implicit;
 

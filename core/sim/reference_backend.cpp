@@ -8,6 +8,7 @@
 
 #include "core/model/rest_stiffness.h"
 #include "core/physics/force_law.h"
+#include "core/sim/coarse_space.h"
 #include "core/sim/conjugate_gradient.h"
 #include "core/sim/implicit_system.h"
 #include "core/sim/reference_forces.h"
@@ -18,7 +19,12 @@
 namespace organsim {
 
 const char* preconditioner_name(Preconditioner preconditioner) {
-  return preconditioner == Preconditioner::RestCholesky ? "rest_cholesky" : "block_jacobi";
+  switch (preconditioner) {
+    case Preconditioner::BlockJacobi: return "block_jacobi";
+    case Preconditioner::TwoLevel: return "two_level";
+    case Preconditioner::RestCholesky: return "rest_cholesky";
+  }
+  return "";
 }
 
 namespace {
@@ -41,6 +47,7 @@ struct ReferenceTables {
   const Model* model = nullptr;
   StepPlan plan;
   std::unique_ptr<ImplicitSystem> system;  // implicit integrators only
+  std::unique_ptr<CoarseSpace> coarse;     // the two-level preconditioner's
   SurfaceContact<double> surface;
   std::vector<double> tool_scale;
   std::array<std::vector<double>, 3> rest;  // X per axis (the surface pass reads streams)
@@ -202,6 +209,7 @@ class ReferenceBackend final : public Backend {
     t.model = &model;
     t.plan = make_step_plan(model, tool_, integrator_);
     if (implicit()) t.system = std::make_unique<ImplicitSystem>(model, threads_);
+    if (implicit() && options_.preconditioner == Preconditioner::TwoLevel) t.coarse = std::make_unique<CoarseSpace>(model);
     const int32_t n = model.npoint();
     t.tool_scale.resize(n);
     for (int32_t i = 0; i < n; ++i) t.tool_scale[i] = model.tool_scale(i);
@@ -421,7 +429,8 @@ class ReferenceBackend final : public Backend {
     }
   }
 
-  // z = P r: block Jacobi at the current linearisation, or the rest system's factor.
+  // z = P r: block Jacobi at the current linearisation (with the coarse
+  // space's correction for two_level), or the rest system's factor.
   LinearOperator preconditioner(double h, double beta) {
     if (options_.preconditioner == Preconditioner::RestCholesky) {
       if (!factor_ || factor_h_ != h) factor_rest_system(h, beta);
@@ -442,10 +451,13 @@ class ReferenceBackend final : public Backend {
     }
     t_.system->diagonal_blocks(1, h, beta, blocks_);
     for (auto& b : blocks_) b = b.inverse().eval();
-    return [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+    CoarseSpace* coarse = t_.coarse.get();
+    if (coarse) coarse->factor(h, beta);
+    return [this, coarse](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
       z.resize(r.size());
       for (size_t i = 0; i < blocks_.size(); ++i)
         z.segment<3>(3 * static_cast<Eigen::Index>(i)) = blocks_[i] * r.segment<3>(3 * static_cast<Eigen::Index>(i));
+      if (coarse) coarse->add_correction(r, z);
     };
   }
 

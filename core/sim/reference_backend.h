@@ -34,9 +34,10 @@ namespace organsim {
 
 enum class Preconditioner : uint8_t {
   BlockJacobi,   // the inverse of each point's 3x3 diagonal block, at every linearisation
+  TwoLevel,      // block Jacobi plus a coarse correction on aggregates' rigid modes (core/sim/coarse_space.h)
   RestCholesky,  // a sparse Cholesky factor of the rest system M + h D_rest + h^2 K_rest, refreshed when h or the Model changes
 };
-// "block_jacobi", "rest_cholesky".
+// "block_jacobi", "two_level", "rest_cholesky".
 const char* preconditioner_name(Preconditioner preconditioner);
 
 // The solver's settings (scenario `time`); which implicit integrator is

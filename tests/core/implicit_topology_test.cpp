@@ -1,7 +1,9 @@
 // Implicit Euler across topology changes: a hanging block cut right through
 // under implicit Euler drops its lower part at g with its mass kept, and a
-// sutured beam's gap closes with every position finite. The backend is
-// rebuilt through the same prepare/adopt path as the CPU backend's.
+// sutured beam's gap closes with every position finite, with block Jacobi
+// and with the two-level preconditioner (whose coarse space each new Model
+// version rebuilds). The backend is rebuilt through the same prepare/adopt
+// path as the CPU backend's.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -17,7 +19,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // One implicit Euler step per 1 ms tick.
-void implicit_at_the_tick(Scenario& s) {
+void implicit_at_the_tick(Scenario& s, Preconditioner preconditioner) {
+  s.time.implicit.preconditioner = preconditioner;
   s.time.dt = s.time.tick();
   s.time.substeps = 1;
   s.time.integrator = Integrator::ImplicitEuler;
@@ -34,13 +37,15 @@ RunResult run_implicit(const Scenario& s, const Model& model, testing::TopologyR
 
 // The hanging block of topology_test_util.h (4 cm, no drag, cut through the
 // plane z = 2 cm at t = 20 ms).
-TEST(ImplicitTopology, ABlockCutThroughDropsItsLowerPartAtGWithItsMassKept) {
+class ImplicitTopology : public ::testing::TestWithParam<Preconditioner> {};
+
+TEST_P(ImplicitTopology, ABlockCutThroughDropsItsLowerPartAtGWithItsMassKept) {
   Scenario s = testing::hanging_block();
-  implicit_at_the_tick(s);
+  implicit_at_the_tick(s, GetParam());
   const Model model = testing::block_model(s);
   testing::TopologyRecorder rec;
   rec.keep_positions = true;
-  run_implicit(s, model, rec, "implicit_block_cut");
+  run_implicit(s, model, rec, std::string("implicit_block_cut_") + preconditioner_name(GetParam()));
   ASSERT_EQ(rec.changes, 1);
   const Model& cut_model = *rec.last;
   EXPECT_EQ(testing::topology_problems(cut_model), "");
@@ -74,13 +79,13 @@ TEST(ImplicitTopology, ABlockCutThroughDropsItsLowerPartAtGWithItsMassKept) {
 // The sutured beam of suture_test.cpp (cut in its first 10 ms, sutured at 0.3 s):
 // under implicit Euler the gap closes to a tenth of its opening and every
 // position stays finite; the sutures add no mass.
-TEST(ImplicitTopology, ASuturedGapClosesWithEveryPositionFinite) {
+TEST_P(ImplicitTopology, ASuturedGapClosesWithEveryPositionFinite) {
   Scenario s = testing::sutured_beam(0.3, 1.3);
-  implicit_at_the_tick(s);
+  implicit_at_the_tick(s, GetParam());
   const Model model = testing::beam_model(s);
   testing::TopologyRecorder rec;
   rec.keep_positions = true;
-  run_implicit(s, model, rec, "implicit_suture_beam");
+  run_implicit(s, model, rec, std::string("implicit_suture_beam_") + preconditioner_name(GetParam()));
   ASSERT_TRUE(rec.last.has_value());
   const Model& last = *rec.last;
   ASSERT_GT(last.nsuture(), 2);
@@ -97,6 +102,12 @@ TEST(ImplicitTopology, ASuturedGapClosesWithEveryPositionFinite) {
     }
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Preconditioners, ImplicitTopology,
+                         ::testing::Values(Preconditioner::BlockJacobi, Preconditioner::TwoLevel),
+                         [](const ::testing::TestParamInfo<Preconditioner>& info) {
+                           return std::string(preconditioner_name(info.param));
+                         });
 
 }  // namespace
 }  // namespace organsim

@@ -636,6 +636,8 @@ TEST(ScenarioParse, IntegratorAndItsSolverSettingsAreReadAndChecked) {
   EXPECT_EQ(s.time.implicit.cg_tolerance, 1e-7);
   EXPECT_EQ(s.time.implicit.cg_max_iterations, 50);
   EXPECT_EQ(s.time.implicit.preconditioner, Preconditioner::RestCholesky);
+  j["time"]["preconditioner"] = "two_level";
+  EXPECT_EQ(parse(j).time.implicit.preconditioner, Preconditioner::TwoLevel);
 
   j = minimal();
   j["time"] = {{"integrator", "implicit_damping"}, {"cg_tolerance", 1e-6}};
@@ -659,6 +661,7 @@ TEST(ScenarioParse, IntegratorAndItsSolverSettingsAreReadAndChecked) {
   EXPECT_NE(error_of(j).find("time.cg_tolerance"), std::string::npos);
   j["time"] = {{"integrator", "implicit_euler"}, {"preconditioner", "ilu"}};
   EXPECT_NE(error_of(j).find("time.preconditioner"), std::string::npos);
+  EXPECT_NE(error_of(j).find("\"block_jacobi\", \"two_level\" or \"rest_cholesky\""), std::string::npos);
 }
 
 }  // namespace

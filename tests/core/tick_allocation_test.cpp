@@ -127,12 +127,13 @@ TEST(ImplicitEuler, AStepAllocatesNothingOnceSizedWithOrWithoutNewtonIterations)
 #if !ORGANSIM_COUNT_ALLOCATIONS
   GTEST_SKIP() << "AddressSanitizer owns malloc: allocations are not counted under it";
 #else
-  // Contact blocks in the system, both preconditioners, one linearised
+  // Contact blocks in the system, every preconditioner, one linearised
   // solve per step and three Newton iterations (their line search included).
   const Model model = pressed_box();
   for (const int32_t threads : {1, 2})
     for (const int32_t newton : {1, 3})
-      for (Preconditioner preconditioner : {Preconditioner::BlockJacobi, Preconditioner::RestCholesky}) {
+      for (Preconditioner preconditioner :
+           {Preconditioner::BlockJacobi, Preconditioner::TwoLevel, Preconditioner::RestCholesky}) {
         SCOPED_TRACE(std::string(preconditioner_name(preconditioner)) + ", threads " + std::to_string(threads) +
                      ", newton_iterations " + std::to_string(newton));
         ImplicitOptions options;
