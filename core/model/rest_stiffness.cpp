@@ -111,6 +111,23 @@ Triplets rest_damping(const Model& model, RestTerms terms) {
   return t;
 }
 
+Triplets lumped_mass(const Model& model) {
+  Triplets t;
+  t.reserve(3 * static_cast<size_t>(model.npoint()));
+  for (int32_t p = 0; p < model.npoint(); ++p)
+    for (int a = 0; a < 3; ++a) t.emplace_back(3 * p + a, 3 * p + a, model.mass[p]);
+  return t;
+}
+
+Triplets rest_system(const Model& model, double h, double beta) {
+  Triplets t = beta != 0 ? rest_stiffness(model) : Triplets{};
+  for (auto& e : t) e = {e.row(), e.col(), beta * e.value()};
+  for (const auto& e : rest_damping(model)) t.emplace_back(e.row(), e.col(), h * e.value());
+  const Triplets mass = lumped_mass(model);
+  t.insert(t.end(), mass.begin(), mass.end());
+  return t;
+}
+
 Eigen::SparseMatrix<double> assemble(const Model& model, const Triplets& triplets) {
   const int32_t ndof = 3 * model.npoint();
   Eigen::SparseMatrix<double> m(ndof, ndof);

@@ -27,6 +27,14 @@ Triplets rest_stiffness(const Model& model, RestTerms terms = RestTerms::All);
 // drag alpha m I on every point (ShearElement: the element's damper only).
 Triplets rest_damping(const Model& model, RestTerms terms = RestTerms::All);
 
+// M: each point's lumped mass on its three coordinates.
+Triplets lumped_mass(const Model& model);
+
+// M + h D_rest + beta K_rest (beta = h^2 with the stiffness in the system,
+// 0 without): the rest system the implicit integrator's preconditioners
+// factor or project (core/sim/reference_backend.cpp, core/sim/coarse_space.h).
+Triplets rest_system(const Model& model, double h, double beta);
+
 // The sparse matrix of `triplets` (duplicates summed), 3 npoint square.
 Eigen::SparseMatrix<double> assemble(const Model& model, const Triplets& triplets);
 

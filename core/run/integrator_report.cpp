@@ -46,7 +46,7 @@ std::string integrator_warning(const Backend& backend) {
               std::to_string(s->cg_max_iterations) + " above cg_tolerance in " + std::to_string(s->unconverged_steps) +
               " of " + std::to_string(s->steps()) + " steps (" + format_number(100 * unconverged, "%.3g") +
               " %; largest final residual " + format_number(s->max_residual) +
-              "): raise time.cg_max_iterations, loosen time.cg_tolerance or try time.preconditioner \"rest_cholesky\"";
+              "): raise time.cg_max_iterations, loosen time.cg_tolerance or try time.preconditioner \"two_level\"";
   if (alternating > kUnconvergedShareWarning)
     warning += std::string(warning.empty() ? "" : "; ") + "implicit Euler: the state swung back and forth between two in " +
                std::to_string(s->alternating_steps) + " of " + std::to_string(s->steps()) + " steps (" +

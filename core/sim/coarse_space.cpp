@@ -110,10 +110,7 @@ CoarseSpace::CoarseSpace(const Model& model) {
   }
   Eigen::SparseMatrix<double> prolongation(3 * n, column);
   prolongation.setFromTriplets(entries.begin(), entries.end());
-  Triplets lumped;
-  for (int32_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) lumped.emplace_back(3 * i + c, 3 * i + c, model.mass[i]);
-  mass_ = project(prolongation, assemble(model, lumped));
+  mass_ = project(prolongation, assemble(model, lumped_mass(model)));
   damping_ = project(prolongation, assemble(model, rest_damping(model)));
   stiffness_ = project(prolongation, assemble(model, rest_stiffness(model)));
   rc_.resize(column), yc_.resize(column), zc_.resize(column);

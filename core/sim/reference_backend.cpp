@@ -465,11 +465,7 @@ class ReferenceBackend final : public Backend {
   // contact's blocks left out: they come and go with the tool).
   void factor_rest_system(double h, double beta) {
     const Model& m = *t_.model;
-    Triplets t = beta != 0 ? rest_stiffness(m) : Triplets{};
-    for (auto& e : t) e = {e.row(), e.col(), beta * e.value()};
-    for (const auto& e : rest_damping(m)) t.emplace_back(e.row(), e.col(), h * e.value());
-    for (int32_t i = 0; i < m.npoint(); ++i)
-      for (int a = 0; a < 3; ++a) t.emplace_back(3 * i + a, 3 * i + a, m.mass[i]);
+    const Triplets t = rest_system(m, h, beta);
     std::vector<int32_t> index(3 * m.npoint(), -1);
     free_index_.clear();
     for (int32_t i = 0; i < 3 * m.npoint(); ++i)

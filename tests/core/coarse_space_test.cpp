@@ -2,9 +2,8 @@
 // its aggregates cover every free point once and hold together over the
 // springs, its correction P A_c^-1 P^T is symmetric and reproduces any rigid
 // motion of the free points exactly (translations and rotations are in its
-// range, and A_c is P^T A P), a mode an aggregate cannot carry is dropped,
-// and implicit Euler with it solves the same steps as with block Jacobi in
-// fewer CG iterations on a stiff block.
+// range, and A_c is P^T A P), and a mode an aggregate cannot carry is
+// dropped. (Implicit Euler with it: implicit_test.cpp.)
 #include <gtest/gtest.h>
 
 #include <numeric>
@@ -12,7 +11,6 @@
 
 #include "core/model/rest_stiffness.h"
 #include "core/sim/coarse_space.h"
-#include "core/sim/reference_backend.h"
 #include "tests/core/force_law_checks.h"
 #include "tests/core/test_models.h"
 
@@ -29,14 +27,8 @@ Model stiff_box(int cells) {
                      testing::fixed_bottom_options(Vec3(0, 0, -9.81)));
 }
 
-// M + h D_rest + h^2 K_rest, assembled as the coarse space projects it.
 Eigen::SparseMatrix<double> rest_system(const Model& model) {
-  Triplets t = rest_stiffness(model);
-  for (auto& e : t) e = {e.row(), e.col(), kH * kH * e.value()};
-  for (const auto& e : rest_damping(model)) t.emplace_back(e.row(), e.col(), kH * e.value());
-  for (int32_t i = 0; i < model.npoint(); ++i)
-    for (int a = 0; a < 3; ++a) t.emplace_back(3 * i + a, 3 * i + a, model.mass[i]);
-  return assemble(model, t);
+  return assemble(model, organsim::rest_system(model, kH, kH * kH));
 }
 
 Eigen::VectorXd correction(CoarseSpace& coarse, const Eigen::VectorXd& r) {
@@ -121,33 +113,6 @@ TEST(CoarseSpace, AModeAnAggregateCannotCarryIsDropped) {
   Eigen::VectorXd shift = Eigen::VectorXd::Zero(12);
   for (int p = 0; p < 4; ++p) shift.segment<3>(3 * p) = Vec3(0, 1e-3, 2e-3);
   EXPECT_LT((correction(coarse, rest_system(model) * shift) - shift).norm(), 1e-9 * shift.norm());
-}
-
-// Both preconditioners solve the same steps (tolerance 1e-9: the runs agree
-// within 1e-6 of the largest displacement), and on a stiff block the coarse
-// correction saves most of block Jacobi's iterations.
-TEST(ImplicitEuler, TwoLevelAndBlockJacobiAgreeAndTheCoarseCorrectionNeedsFewerIterations) {
-  const Model model = stiff_box(10);
-  std::vector<std::vector<Vec3>> end(2);
-  std::vector<int64_t> iterations(2);
-  for (int k = 0; k < 2; ++k) {
-    ImplicitOptions options;
-    options.preconditioner = k == 0 ? Preconditioner::BlockJacobi : Preconditioner::TwoLevel;
-    options.cg_tolerance = 1e-9;
-    options.cg_max_iterations = 2000;
-    auto backend = make_reference_backend(model, {}, Integrator::ImplicitEuler, options);
-    testing::run_ticks(*backend, 20, kH, 1);
-    backend->positions(end[k]);
-    for (int32_t it : backend->integrator_stats()->cg_iterations) iterations[k] += it;
-  }
-  double largest = 0, worst = 0;
-  for (int32_t p = 0; p < model.npoint(); ++p) {
-    largest = std::max(largest, (end[0][p] - model.rest_position[p]).norm());
-    worst = std::max(worst, (end[0][p] - end[1][p]).norm());
-  }
-  EXPECT_GT(largest, 0);
-  EXPECT_LT(worst, 1e-6 * largest);
-  EXPECT_LT(iterations[1], iterations[0] * 3 / 5) << "block Jacobi " << iterations[0] << ", two-level " << iterations[1];
 }
 
 }  // namespace
