@@ -49,7 +49,7 @@ Model hung_liver(const TetMesh& mesh, double young_modulus, const std::string& m
   return build_model(mesh, material, options, mesh_name);
 }
 
-struct Entry {
+struct ImplicitEntry {
   ImplicitBenchRow row;
   const Model* model = nullptr;
   std::unique_ptr<Backend> backend;
@@ -69,8 +69,8 @@ ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const T
   BenchSteps implicit_steps = options.steps;
   implicit_steps.warmup = (options.steps.warmup + 9) / 10;
   implicit_steps.steps = (options.steps.steps + 9) / 10;
-  std::vector<Entry> entries(6);
-  const auto set = [&](Entry& e, const char* name, const char* material, const Model& m, Integrator integrator,
+  std::vector<ImplicitEntry> entries(6);
+  const auto set = [&](ImplicitEntry& e, const char* name, const char* material, const Model& m, Integrator integrator,
                        Preconditioner preconditioner = Preconditioner::BlockJacobi) {
     e.row.name = name;
     e.row.material = material;
@@ -107,7 +107,7 @@ ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const T
   set(entries[5], "two_level_1MPa", "E 1 MPa, poisson_ratio 0.45", stiff, Integrator::ImplicitEuler,
       Preconditioner::TwoLevel);
   const BenchToolPlacement tool{kToolRadius, kToolDepth};
-  for (Entry& e : entries) {
+  for (ImplicitEntry& e : entries) {
     if (!options.quiet)
       std::cerr << "bench: " << e.row.name << ": " << e.row.points << " points (" << e.row.fixed << " fixed), dt "
                 << e.row.dt << " s\n";
@@ -119,11 +119,11 @@ ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const T
   }
   // Interleaved: every row sees the same stretch of machine load.
   for (int32_t r = 0; r < options.steps.repetitions; ++r)
-    for (Entry& e : entries) e.ms.push_back(time_steps(*e.backend, e.steps.steps, e.row.dt, e.positions, tool));
+    for (ImplicitEntry& e : entries) e.ms.push_back(time_steps(*e.backend, e.steps.steps, e.row.dt, e.positions, tool));
 
   ImplicitComparison out;
   out.target_points = target_points;
-  for (Entry& e : entries) {
+  for (ImplicitEntry& e : entries) {
     e.row.timing = summarise_ms(e.ms);
     e.row.ms_per_simulated_ms = e.row.timing.median_ms / (1e3 * e.row.dt);
     e.row.device = e.backend->device();

@@ -101,7 +101,7 @@ std::pair<Model, Model> suture_models(const MaterialBenchOptions& options, int32
   return {std::move(*versions.unsutured), std::move(*versions.sutured)};
 }
 
-struct Entry {
+struct MaterialEntry {
   MaterialBenchRow row;
   const Model* model = nullptr;
   std::unique_ptr<Backend> backend;
@@ -121,7 +121,7 @@ MaterialComparison measure_materials(const MaterialBenchOptions& options, const 
   const auto [unsutured, sutured] = suture_models(options, target_points);
   const std::string scenario = options.suture_scenario.filename().string();
 
-  std::vector<Entry> entries(5);
+  std::vector<MaterialEntry> entries(5);
   entries[0].row.name = "volume_modulus";
   entries[0].row.material = "E 8 kPa, volume_modulus 20 kPa (per-tet volume term)";
   entries[0].model = &per_tet;
@@ -143,7 +143,7 @@ MaterialComparison measure_materials(const MaterialBenchOptions& options, const 
   sel.precision = options.precision;
   sel.threads = options.threads;
   std::vector<Vec3> positions;
-  for (Entry& e : entries) {
+  for (MaterialEntry& e : entries) {
     const Model& m = *e.model;
     e.row.points = m.npoint();
     e.row.springs = m.nspring();
@@ -158,14 +158,14 @@ MaterialComparison measure_materials(const MaterialBenchOptions& options, const 
   }
   // Interleaved: every row sees the same stretch of machine load.
   for (int32_t r = 0; r < options.steps.repetitions; ++r) {
-    for (Entry& e : entries) e.ms.push_back(time_steps(*e.backend, options.steps.steps, e.row.dt, positions));
+    for (MaterialEntry& e : entries) e.ms.push_back(time_steps(*e.backend, options.steps.steps, e.row.dt, positions));
   }
 
   MaterialComparison out;
   out.target_points = target_points;
   out.backend = options.backend;
   out.precision = options.precision;
-  for (Entry& e : entries) {
+  for (MaterialEntry& e : entries) {
     e.row.timing = summarise_ms(e.ms);
     e.row.device = e.backend->device();  // after the timing: the thread count and kernel it ran on
     e.row.kernel = options.backend == "cpu" ? kernel_of(e.row.device) : "glsl";

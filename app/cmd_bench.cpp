@@ -587,7 +587,7 @@ std::vector<std::string> split_list(const std::string& s) {
   return out;
 }
 
-const bool registered = register_command("bench", 60, [](CLI::App& root) {
+const bool bench_registered = register_command("bench", 60, [](CLI::App& root) {
   auto args = std::make_shared<BenchArgs>();
   auto backends = std::make_shared<std::string>();
   auto precisions = std::make_shared<std::string>();

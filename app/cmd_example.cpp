@@ -40,7 +40,7 @@ void run_example(const ExampleArgs& args) {
             << "\n";
 }
 
-const bool registered = register_command("example", 90, [](CLI::App& root) {
+const bool example_registered = register_command("example", 90, [](CLI::App& root) {
   auto args = std::make_shared<ExampleArgs>();
   CLI::App* cmd = root.add_subcommand("example", "Write an example closed surface (liver-like, sphere or box; metres)");
   cmd->add_option("shape", args->shape, "liver (about 0.21 x 0.15 x 0.10 m), sphere or box (0.10 x 0.08 x 0.06 m)")

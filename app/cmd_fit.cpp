@@ -26,6 +26,7 @@
 #include "core/sim/cpu_backend.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim::app {
 namespace {
@@ -97,12 +98,6 @@ RunResult simulate(Scenario s, const TetMesh& mesh, const Material& material, Ru
   return run_scenario(s, model, *backend, options);
 }
 
-std::string fmt(double v, const char* spec = "%.6g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
-
 void fit_command(const FitArgs& args) {
   Scenario s = load_scenario(args.scenario);
   if (s.time.integrator != Integrator::Verlet)
@@ -118,9 +113,9 @@ void fit_command(const FitArgs& args) {
     Material m = s.material;
     const double start = slot.ref(m);
     if (start < slot.lower || start > slot.upper)
-      throw Error(ErrorKind::Scenario, args.scenario + ": " + name + ": start value " + fmt(start) +
-                                           " outside the range fit searches [" + fmt(slot.lower) + ", " +
-                                           fmt(slot.upper) + "]");
+      throw Error(ErrorKind::Scenario, args.scenario + ": " + name + ": start value " + format_number(start, "%.6g") +
+                                           " outside the range fit searches [" + format_number(slot.lower, "%.6g") + ", " +
+                                           format_number(slot.upper, "%.6g") + "]");
     slots.push_back(&slot);
     parameters.push_back({name, start, slot.lower, slot.upper, slot.log});
   }
@@ -168,9 +163,9 @@ void fit_command(const FitArgs& args) {
       least_squares(parameters, residual, ls, [&](int32_t it, double cost, const std::vector<double>& v) {
         if (!tty) return;
         std::cerr << "iteration " << it << "/" << args.max_iterations << ": residual rms "
-                  << fmt(std::sqrt(2 * cost / static_cast<double>(curve.x.size() * curve.columns.size())), "%.4g")
+                  << format_number(std::sqrt(2 * cost / static_cast<double>(curve.x.size() * curve.columns.size())), "%.4g")
                   << " N";
-        for (size_t i = 0; i < v.size(); ++i) std::cerr << ", " << parameters[i].name << " " << fmt(v[i], "%.5g");
+        for (size_t i = 0; i < v.size(); ++i) std::cerr << ", " << parameters[i].name << " " << format_number(v[i], "%.5g");
         std::cerr << "\n";
       });
 
@@ -227,19 +222,19 @@ void fit_command(const FitArgs& args) {
     series.push_back({"fitted " + curve.columns[k], curve.x, best_columns[k], false, true});
   }
   XyPlotOptions plot;
-  plot.title = "fit: residual rms " + fmt(rms, "%.3g") + " N";
+  plot.title = "fit: residual rms " + format_number(rms, "%.3g") + " N";
   plot.x_label = curve.abscissa == MeasuredCurve::Abscissa::Time ? "t (s)" : "tool displacement (m)";
   plot.y_label = "force (N)";
   write_xy_plot(outdir / "fit.png", series, plot);
 
   for (size_t i = 0; i < parameters.size(); ++i)
-    std::cout << parameters[i].name << ": " << fmt(parameters[i].start) << " -> " << fmt(fit.values[i]) << "\n";
-  std::cout << "residual rms " << fmt(rms, "%.4g") << " N after " << fit.iterations << " iterations ("
+    std::cout << parameters[i].name << ": " << format_number(parameters[i].start, "%.6g") << " -> " << format_number(fit.values[i], "%.6g") << "\n";
+  std::cout << "residual rms " << format_number(rms, "%.4g") << " N after " << fit.iterations << " iterations ("
             << fit.evaluations << " runs, " << fit.stop_reason << ")\n";
   std::cout << "fit: " << (outdir / "fit.json").string() << ", fit.png, forces.json\n";
 }
 
-const bool registered = register_command("fit", 47, [](CLI::App& root) {
+const bool fit_registered = register_command("fit", 47, [](CLI::App& root) {
   auto args = std::make_shared<FitArgs>();
   CLI::App* cmd = root.add_subcommand(
       "fit", "Calibrate material parameters (Pa, kg/m^3, s) so the simulated tool force [N] matches a measured "

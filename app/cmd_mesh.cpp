@@ -138,7 +138,7 @@ void run_mesh(const MeshArgs& args) {
   }
 }
 
-const bool registered = register_command("mesh", 10, [](CLI::App& root) {
+const bool mesh_registered = register_command("mesh", 10, [](CLI::App& root) {
   auto args = std::make_shared<MeshArgs>();
   CLI::App* cmd = root.add_subcommand(
       "mesh",

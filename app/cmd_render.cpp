@@ -61,7 +61,7 @@ void run(const RenderArgs& a) {
             << result.triangles << " triangles, " << result.renderer << ")\n";
 }
 
-const bool registered = register_command("render", 60, [](CLI::App& root) {
+const bool render_registered = register_command("render", 60, [](CLI::App& root) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = root.add_subcommand(
       "render",

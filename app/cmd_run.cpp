@@ -281,7 +281,7 @@ void run_command(const RunArgs& args) {
     throw Error(ErrorKind::SolverWarning, warning);
 }
 
-const bool registered = register_command("run", 20, [](CLI::App& root) {
+const bool run_registered = register_command("run", 20, [](CLI::App& root) {
   auto args = std::make_shared<RunArgs>();
   CLI::App* cmd = root.add_subcommand(
       "run", "Run a scenario (JSON, SI units) and write OUTDIR/forces.json: tool force [N], torque [N m], "

@@ -231,7 +231,7 @@ void serve_command(const ServeArgs& args) {
     throw Error(ErrorKind::SolverWarning, warning);
 }
 
-const bool registered = register_command("serve", 25, [](CLI::App& root) {
+const bool serve_registered = register_command("serve", 25, [](CLI::App& root) {
   auto args = std::make_shared<ServeArgs>();
   CLI::App* cmd = root.add_subcommand(
       "serve", "Step a scenario's model in real time with its tool driven over OpenIGTLink (TRANSFORM in, SENSOR "

@@ -39,6 +39,7 @@
 #include "core/sweep/shard.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim::app {
 namespace {
@@ -72,12 +73,6 @@ fs::path plan_path(const fs::path& outdir) { return outdir / "study_plan.json"; 
 fs::path reference_path(const fs::path& outdir) { return outdir / "study_reference.json"; }
 fs::path runs_dir(const fs::path& outdir) { return outdir / "study_runs"; }
 fs::path run_path(const fs::path& outdir, size_t k) { return runs_dir(outdir) / (std::to_string(k) + ".json"); }
-
-std::string fmt(double v, const char* spec = "%.4g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
 
 // A configuration's outcome and, for comparison, its trajectory.
 struct Ran {
@@ -221,7 +216,7 @@ StudySetup set_up(const StudyArgs& args) {
   const auto substeps_of = [&](const std::vector<double>& dts, const char* option) {
     std::vector<int32_t> out;
     for (double dt : dts) {
-      if (!(dt > 0)) throw Error(ErrorKind::Usage, std::string(option) + ": expected positive steps in s, got " + fmt(dt));
+      if (!(dt > 0)) throw Error(ErrorKind::Usage, std::string(option) + ": expected positive steps in s, got " + format_number(dt));
       out.push_back(std::max<int32_t>(1, static_cast<int32_t>(std::lround(tick / dt))));
     }
     return out;
@@ -267,7 +262,7 @@ Ran run_one(const StudySetup& u, const StudyConfiguration& c) {
 // of study.json. Returns the dt_ref / 2 trajectory, the one compared with.
 Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::json& head) {
   const double tick = u.scenario.time.tick();
-  progress(0, 2, "reference dt " + fmt(tick / u.ref_substeps) + " and " + fmt(tick / (2 * u.ref_substeps)));
+  progress(0, 2, "reference dt " + format_number(tick / u.ref_substeps) + " and " + format_number(tick / (2 * u.ref_substeps)));
   Ran ref, half;
   std::mutex progress_mutex;
   int done = 0;
@@ -275,17 +270,17 @@ Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::j
     Ran& o = i == 0 ? ref : half;
     o = run_one(u, {"cpu", "double", static_cast<int32_t>(i + 1) * u.ref_substeps, "verlet"});
     const std::lock_guard<std::mutex> lock(progress_mutex);
-    progress(++done, 2, "reference dt " + fmt(o.outcome.dt));
+    progress(++done, 2, "reference dt " + format_number(o.outcome.dt));
   });
   if (!ref.outcome.stable || !half.outcome.stable)
-    throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + fmt(half.outcome.dt) +
+    throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + format_number(half.outcome.dt) +
                                           " s) did not complete: " +
                                           (half.outcome.stable ? ref.outcome.reason : half.outcome.reason));
   const StudyErrors convergence = compare_trajectories(ref.trajectory, half.trajectory, u.diag);
   const bool converged = convergence.position_max <= args.ref_tolerance;
   if (!converged)
     std::cerr << "organsim: warning: the reference is not converged: halving dt_ref changed positions by "
-              << fmt(convergence.position_max) << " of the bbox diagonal (tolerance " << fmt(args.ref_tolerance)
+              << format_number(convergence.position_max) << " of the bbox diagonal (tolerance " << format_number(args.ref_tolerance)
               << "); use a larger --ref-factor\n";
 
   const Model& model = u.model;
@@ -324,7 +319,7 @@ void run_configurations(const StudyArgs& args, const StudySetup& u, const std::v
     if (o.outcome.stable) o.outcome.errors = compare_trajectories(o.trajectory, reference, u.diag);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress(++finished, static_cast<int>(which.size()),
-             c.integrator + " " + c.backend + " " + c.precision + " dt " + fmt(u.scenario.time.tick() / c.substeps));
+             c.integrator + " " + c.backend + " " + c.precision + " dt " + format_number(u.scenario.time.tick() / c.substeps));
     done(which[i], std::move(o.outcome));
   });
 }
@@ -414,7 +409,7 @@ void run_shard(const StudyArgs& args, const Shard& shard, const StudyPlan& plan,
             << " to run\n" << std::flush;
   run_configurations(args, u, which, reference, [&](size_t k, StudyOutcome&& o) {
     write_file_atomically(run_path(outdir, k), [&](std::ostream& out) { out << outcome_record_json(o).dump(2) << "\n"; });
-    std::cout << "configuration " << k << " (" << o.integrator << " " << o.backend << " " << o.precision << " dt " << fmt(o.dt) << "): "
+    std::cout << "configuration " << k << " (" << o.integrator << " " << o.backend << " " << o.precision << " dt " << format_number(o.dt) << "): "
               << (o.ran ? (o.stable ? "stable" : "unstable") : "not run") << " -> " << run_path(outdir, k).string()
               << std::endl;
   });
@@ -477,7 +472,7 @@ void study_command(const StudyArgs& args) {
   write_study_outputs(outdir_of(args), head, u.prepared.stability.dt_crit, runs);
 }
 
-const bool registered = register_command("study", 40, [](CLI::App& root) {
+const bool study_registered = register_command("study", 40, [](CLI::App& root) {
   auto args = std::make_shared<StudyArgs>();
   CLI::App* cmd = root.add_subcommand(
       "study", "Error against run time: run a scenario at several dt [s], backends and precisions, compare each "

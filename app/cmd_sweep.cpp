@@ -198,7 +198,7 @@ void run_sweep(const SweepArgs& args) {
                                       (shard ? "" : ", listed in manifest.json") + "); --retry-failed reruns them");
 }
 
-const bool registered = register_command("sweep", 46, [](CLI::App& root) {
+const bool sweep_registered = register_command("sweep", 46, [](CLI::App& root) {
   auto args = std::make_shared<SweepArgs>();
   CLI::App* cmd = root.add_subcommand(
       "sweep",

@@ -22,6 +22,7 @@
 #include "core/render/xy_plot.h"
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 namespace organsim::app {
 namespace {
@@ -42,12 +43,6 @@ struct ValidateArgs {
   std::vector<std::string> cases;  // empty: every case
 };
 
-std::string fmt(double v, const char* spec = "%.4g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
-
 std::optional<double> parse_ratio(const std::string& text) {
   if (text == "springs") return std::nullopt;
   try {
@@ -63,7 +58,7 @@ void validate_command(const ValidateArgs& args) {
   SuiteOptions options;
   if (!args.cell_sizes.empty()) options.cell_sizes = args.cell_sizes;
   for (double h : options.cell_sizes)
-    if (!(h > 0)) throw Error(ErrorKind::Usage, "--cell-size: expected positive sizes in m, got " + fmt(h));
+    if (!(h > 0)) throw Error(ErrorKind::Usage, "--cell-size: expected positive sizes in m, got " + format_number(h));
   if (!args.poisson_ratios.empty()) {
     options.poisson_ratios.clear();
     for (const std::string& s : args.poisson_ratios) options.poisson_ratios.push_back(parse_ratio(s));
@@ -82,12 +77,12 @@ void validate_command(const ValidateArgs& args) {
   if (args.contact_stiffness) {
     if (!(*args.contact_stiffness > 0) || !std::isfinite(*args.contact_stiffness))
       throw Error(ErrorKind::Usage, "--contact-stiffness: expected a stiffness in N/m (> 0), got " +
-                                        fmt(*args.contact_stiffness));
+                                        format_number(*args.contact_stiffness));
     options.run_contact_stiffness = *args.contact_stiffness;
   }
   if (args.line_load_reference < 0 || !std::isfinite(args.line_load_reference))
     throw Error(ErrorKind::Usage, "--line-load-reference: expected a cell size in m (> 0), got " +
-                                      fmt(args.line_load_reference));
+                                      format_number(args.line_load_reference));
   if (args.line_load_reference > 0) options.line_load_reference = args.line_load_reference;
   for (const std::string& c : args.cases) {
     if (std::find(kSuiteCases.begin(), kSuiteCases.end(), c) == kSuiteCases.end()) {
@@ -146,9 +141,9 @@ void validate_command(const ValidateArgs& args) {
   std::ostringstream csv;
   csv << "test,material,cell_size_m,points,measured,theory,error,error_kind,tolerance,pass\n";
   for (const SuiteRow& r : rows)
-    csv << r.test << "," << r.material << "," << fmt(r.cell_size) << "," << r.points << "," << fmt(r.measured, "%.6g")
-        << "," << fmt(r.theory, "%.6g") << "," << fmt(r.error, "%.4f") << "," << r.error_kind << ","
-        << (r.tolerance ? fmt(*r.tolerance) : "") << "," << (r.tolerance ? (r.pass() ? "pass" : "fail") : "") << "\n";
+    csv << r.test << "," << r.material << "," << format_number(r.cell_size) << "," << r.points << "," << format_number(r.measured, "%.6g")
+        << "," << format_number(r.theory, "%.6g") << "," << format_number(r.error, "%.4f") << "," << r.error_kind << ","
+        << (r.tolerance ? format_number(*r.tolerance) : "") << "," << (r.tolerance ? (r.pass() ? "pass" : "fail") : "") << "\n";
   write_file_atomically(outdir / "validation.csv", [&](std::ostream& out) { out << csv.str(); });
   std::cout << csv.str();
 
@@ -182,7 +177,7 @@ void validate_command(const ValidateArgs& args) {
   std::cout << "validation: " << (outdir / "validation.json").string() << ", validation.csv, validation.png\n";
 }
 
-const bool registered = register_command("validate", 45, [](CLI::App& root) {
+const bool validate_registered = register_command("validate", 45, [](CLI::App& root) {
   auto args = std::make_shared<ValidateArgs>();
   CLI::App* cmd = root.add_subcommand(
       "validate", "The force law against elasticity theory (uniaxial E and nu, cantilever, Hertz) at several "

@@ -9,6 +9,7 @@
 
 #include "core/util/atomic_file.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 
 #ifdef ORGANSIM_STUDY_PLOT
 #include <opencv2/imgcodecs.hpp>
@@ -19,12 +20,6 @@ namespace organsim::app {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string fmt(double v, const char* spec = "%.4g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
 
 nlohmann::json outcome_json(const StudyOutcome& o, double dt_crit, bool pareto) {
   nlohmann::json j = {{"integrator", o.integrator}, {"backend", o.backend}, {"precision", o.precision}, {"dt", o.dt},
@@ -73,11 +68,11 @@ void write_plot(const fs::path& path, const std::vector<StudyOutcome>& runs, con
   const cv::Scalar black(0, 0, 0), grey(210, 210, 210);
   for (double d = x0; d <= x1 + 1e-9; d += 1) {
     cv::line(img, {px(d), T}, {px(d), H - B}, grey);
-    cv::putText(img, "1e" + fmt(d, "%.0f"), {px(d) - 15, H - B + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
+    cv::putText(img, "1e" + format_number(d, "%.0f"), {px(d) - 15, H - B + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
   }
   for (double d = y0; d <= y1 + 1e-9; d += 1) {
     cv::line(img, {L, py(d)}, {W - R, py(d)}, grey);
-    cv::putText(img, "1e" + fmt(d, "%.0f"), {L - 45, py(d) + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
+    cv::putText(img, "1e" + format_number(d, "%.0f"), {L - 45, py(d) + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
   }
   cv::rectangle(img, {L, T}, {W - R, H - B}, black);
   cv::putText(img, "wall time per simulated second [s]", {L + 120, H - 25}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black);
@@ -98,7 +93,7 @@ void write_plot(const fs::path& path, const std::vector<StudyOutcome>& runs, con
     const cv::Point p(px(std::log10(cost(i))), py(std::log10(runs[i].errors.position_rms)));
     const cv::Scalar c = colours[series_of(runs[i]) % 4];
     cv::circle(img, p, 5, c, cv::FILLED);
-    cv::putText(img, fmt(runs[i].dt, "%.2g"), p + cv::Point(7, -6), cv::FONT_HERSHEY_SIMPLEX, 0.35, c);
+    cv::putText(img, format_number(runs[i].dt, "%.2g"), p + cv::Point(7, -6), cv::FONT_HERSHEY_SIMPLEX, 0.35, c);
     if (front[i]) {
       cv::circle(img, p, 10, black, 2);
       on_front.push_back({cost(i), i});
@@ -149,11 +144,11 @@ void write_study_outputs(const fs::path& outdir, const nlohmann::json& head, dou
     const StudyOutcome& o = runs[i];
     std::string reason = o.reason;
     std::replace(reason.begin(), reason.end(), '"', '\'');
-    csv << o.integrator << "," << o.backend << "," << o.precision << "," << fmt(o.dt, "%.6g") << "," << o.substeps << ","
-        << fmt(o.dt / dt_crit, "%.3f") << "," << (o.ran ? (o.stable ? "yes" : "no") : "not run") << ",";
+    csv << o.integrator << "," << o.backend << "," << o.precision << "," << format_number(o.dt, "%.6g") << "," << o.substeps << ","
+        << format_number(o.dt / dt_crit, "%.3f") << "," << (o.ran ? (o.stable ? "yes" : "no") : "not run") << ",";
     if (o.stable)
-      csv << fmt(o.wall / o.simulated) << "," << fmt(o.steps_per_second) << "," << fmt(o.errors.position_max) << ","
-          << fmt(o.errors.position_rms) << "," << fmt(o.errors.force_rms) << "," << (front[i] ? "yes" : "no");
+      csv << format_number(o.wall / o.simulated) << "," << format_number(o.steps_per_second) << "," << format_number(o.errors.position_max) << ","
+          << format_number(o.errors.position_rms) << "," << format_number(o.errors.force_rms) << "," << (front[i] ? "yes" : "no");
     else
       csv << ",,,,,";
     csv << ",\"" << reason << "\"\n";
@@ -161,12 +156,12 @@ void write_study_outputs(const fs::path& outdir, const nlohmann::json& head, dou
   write_file_atomically(outdir / "study.csv", [&](std::ostream& out) { out << csv.str(); });
 
   const nlohmann::json& reference = head.at("reference");
-  std::cout << "reference: verlet cpu double dt " << fmt(reference.at("dt_half").get<double>())
+  std::cout << "reference: verlet cpu double dt " << format_number(reference.at("dt_half").get<double>())
             << " s; halving dt_ref changed positions by "
-            << fmt(reference.at("halving_position_change_max").get<double>()) << " (max) of the bbox diagonal: "
+            << format_number(reference.at("halving_position_change_max").get<double>()) << " (max) of the bbox diagonal: "
             << (reference.at("converged").get<bool>() ? "converged" : "NOT converged")
             << "\n";
-  std::cout << "dt_crit " << fmt(dt_crit) << " s\n";
+  std::cout << "dt_crit " << format_number(dt_crit) << " s\n";
   std::cout << csv.str();
 #ifdef ORGANSIM_STUDY_PLOT
   write_plot(outdir / "study.png", runs, front);

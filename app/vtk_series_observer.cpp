@@ -6,7 +6,7 @@
 namespace organsim::app {
 namespace {
 
-const bool registered = register_run_observer(
+const bool vtk_series_registered = register_run_observer(
     {"states.pvd", "vtk", [](const RunObserverContext& c) -> std::unique_ptr<RunObserver> {
        if (!c.scenario.outputs.vtk) return nullptr;
        std::optional<ToolSpec> tool;

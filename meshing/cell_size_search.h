@@ -10,6 +10,11 @@
 
 namespace organsim {
 
+// Absurd cell sizes are refused before Mesh_3 runs for hours: a domain of
+// V m^3 meshed at cell size h gets roughly V / h^3 points, and surfaces and
+// images alike refuse an estimate above this.
+inline constexpr double kMaxEstimatedPoints = 5e7;
+
 // `points_at(h)` meshes at cell size h (quickly: no exudation) and returns
 // the point count. Returns the h whose count is closest to `target`; adds a
 // note; throws Error(Input) naming `source` when no try is within 10 %.

@@ -15,9 +15,6 @@ namespace organsim {
 
 namespace {
 
-// As for surfaces (mesh_surface.cpp): refuse sizes that would mesh for hours.
-constexpr double kMaxEstimatedPoints = 5e7;
-
 void stage(const ImageMeshOptions& options, const std::string& what) {
   if (options.on_stage) options.on_stage(what);
 }

@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <sstream>
 
 #include "core/mesh/mesh_io.h"
 #include "core/util/error.h"
+#include "core/util/format.h"
 #include "meshing/cell_size_search.h"
 #include "meshing/mesh_3.h"
 #include "meshing/meshed_check.h"
@@ -28,16 +28,6 @@ double bounding_box_diagonal(const TriangleMesh& surface) {
   return (hi - lo).norm();
 }
 
-std::string format_number(double value) {
-  std::ostringstream out;
-  out.precision(4);
-  out << value;
-  return out.str();
-}
-
-// Absurd cell sizes are refused before Mesh_3 runs for hours: a surface
-// enclosing V m^3 meshed at cell size h gets roughly V / h^3 points.
-constexpr double kMaxEstimatedPoints = 5e7;
 // Below this fraction of the bounding-box diagonal, the facet distance asks
 // for a surface refinement that does not end in reasonable time.
 constexpr double kMinRelativeFacetDistance = 1e-6;

@@ -1,18 +1,12 @@
 #include "core/scenario/json_reader.h"
 
 #include <cmath>
-#include <sstream>
+
+#include "core/util/format.h"
 
 namespace organsim {
 
 namespace {
-std::string format_number(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
-
 // A short name for the JSON type found, for "expected a number, got a string".
 std::string type_name(const nlohmann::json& j) {
   switch (j.type()) {
@@ -56,7 +50,7 @@ int64_t read_integer(const nlohmann::json& j, const JsonPath& at) {
     const double v = j.get<double>();
     if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15) return static_cast<int64_t>(v);
   }
-  throw at.error("expected an integer, got " + (j.is_number() ? format_number(j.get<double>()) : type_name(j)));
+  throw at.error("expected an integer, got " + (j.is_number() ? format_number(j.get<double>(), "%.6g") : type_name(j)));
 }
 
 bool read_bool(const nlohmann::json& j, const JsonPath& at) {
@@ -85,12 +79,12 @@ Vec3 read_vec3(const nlohmann::json& j, const JsonPath& at) {
 }
 
 double require_positive(double value, const JsonPath& at) {
-  if (!(value > 0)) throw at.error("expected a value > 0 (got " + format_number(value) + ")");
+  if (!(value > 0)) throw at.error("expected a value > 0 (got " + format_number(value, "%.6g") + ")");
   return value;
 }
 
 double require_non_negative(double value, const JsonPath& at) {
-  if (!(value >= 0)) throw at.error("expected a value >= 0 (got " + format_number(value) + ")");
+  if (!(value >= 0)) throw at.error("expected a value >= 0 (got " + format_number(value, "%.6g") + ")");
   return value;
 }
 

@@ -16,8 +16,6 @@ namespace organsim {
 
 namespace {
 
-std::string fmt(double v, const char* spec = "%.4g") { return format_number(v, spec); }
-
 std::string kind_name(BlowupFinding::Kind k) {
   switch (k) {
     case BlowupFinding::Kind::NonFinite: return "non-finite position";
@@ -131,8 +129,8 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
     f.point = model.input_of_internal[a_moved_more ? a : b];
     f.value = worst_strain;
     f.detail = "spring " + std::to_string(model.input_of_internal[a]) + "-" + std::to_string(model.input_of_internal[b]) +
-               " stretched by " + fmt(100 * worst_strain, "%.0f") + " % (bound " +
-               fmt(100 * options.max_strain, "%.0f") + " %)";
+               " stretched by " + format_number(100 * worst_strain, "%.0f") + " % (bound " +
+               format_number(100 * options.max_strain, "%.0f") + " %)";
     return f;
   }
   if (options.check_inversion && any_tet_beyond(model, x, options.max_inversion, 0, model.ntet())) {
@@ -158,7 +156,7 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
       f.detail = "tet (" + std::to_string(model.input_of_internal[p[0]]) + ", " +
                  std::to_string(model.input_of_internal[p[1]]) + ", " + std::to_string(model.input_of_internal[p[2]]) +
                  ", " + std::to_string(model.input_of_internal[p[3]]) + ") inverted: volume " +
-                 fmt(worst_ratio, "%.3g") + " x its rest volume";
+                 format_number(worst_ratio, "%.3g") + " x its rest volume";
       return f;
     }
   }
@@ -220,8 +218,8 @@ std::optional<BlowupFinding> BlowupMonitor::check_energy(const Model& model, dou
   f.kind = BlowupFinding::Kind::Energy;
   f.point = top_point >= 0 ? model.input_of_internal[top_point] : -1;
   f.value = ke;
-  f.detail = "kinetic energy " + fmt(ke) + " J exceeds what gravity and the tool put in (" + fmt(budget) +
-             " J, plus the initial elastic energy); the fastest point carries " + fmt(100 * top / ke, "%.0f") + " %";
+  f.detail = "kinetic energy " + format_number(ke) + " J exceeds what gravity and the tool put in (" + format_number(budget) +
+             " J, plus the initial elastic energy); the fastest point carries " + format_number(100 * top / ke, "%.0f") + " %";
   return f;
 }
 
@@ -259,7 +257,7 @@ void BlowupMonitor::on_tick(const Model& model, Backend& backend, const TickInfo
 }
 
 std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, double t, const TickInfo& info) const {
-  std::string msg = "run stopped at t = " + fmt(t, "%.6g") + " s: " + kind_name(f.kind) + " at point " +
+  std::string msg = "run stopped at t = " + format_number(t, "%.6g") + " s: " + kind_name(f.kind) + " at point " +
                     std::to_string(f.point) + " (input numbering): " + f.detail + ". Likely cause: ";
   const auto& st = context_.stability;
   const int32_t internal = f.point >= 0 ? model.internal_of_input[f.point] : -1;
@@ -273,17 +271,17 @@ std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, 
   const bool verlet = context_.integrator == Integrator::Verlet;
   const bool damping_only = context_.integrator == Integrator::ImplicitDamping;
   if (st && verlet && context_.dt > st->dt_crit) {
-    msg += "time.dt = " + fmt(context_.dt) + " s exceeds dt_crit = " + fmt(st->dt_crit) +
+    msg += "time.dt = " + format_number(context_.dt) + " s exceeds dt_crit = " + format_number(st->dt_crit) +
            " s, so the stiffest mode grows every step; use a smaller dt or more substeps.";
   } else if (st && damping_only && context_.dt > st->dt_crit_undamped) {
-    msg += "time.dt = " + fmt(context_.dt) + " s exceeds the undamped limit 2/omega_max = " +
-           fmt(st->dt_crit_undamped) + " s that implicit_damping needs, so the stiffest mode grows every step; use "
+    msg += "time.dt = " + format_number(context_.dt) + " s exceeds the undamped limit 2/omega_max = " +
+           format_number(st->dt_crit_undamped) + " s that implicit_damping needs, so the stiffest mode grows every step; use "
            "a smaller dt or \"integrator\": \"implicit_euler\".";
   } else if (near_tool && f.kind == BlowupFinding::Kind::Inversion) {
     msg += "the tool pushed the material through itself (penetration deeper than the tets can resist); move the "
            "tool less deep or slower, or raise material.volume_modulus.";
   } else if (near_tool) {
-    msg += "stiff or fast tool contact (tool.contact_stiffness = " + fmt(context_.tool_contact_stiffness) +
+    msg += "stiff or fast tool contact (tool.contact_stiffness = " + format_number(context_.tool_contact_stiffness) +
            " N/m) near this point; lower it, slow the tool, or use a smaller dt.";
   } else if (limiting) {
     msg += "this point limits the critical step (stiff springs or slivers around it, see --plan); use a smaller "
@@ -293,7 +291,7 @@ std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, 
            "reduce the load, or raise material.volume_modulus.";
   } else {
     msg += "a numerically unstable step";
-    if (st) msg += " (dt_crit = " + fmt(st->dt_crit) + " s at rest; deformation can lower it)";
+    if (st) msg += " (dt_crit = " + format_number(st->dt_crit) + " s at rest; deformation can lower it)";
     msg += "; use a smaller dt.";
   }
   return msg;

@@ -12,8 +12,6 @@ namespace organsim {
 
 namespace {
 
-std::string fmt(double v, const char* spec = "%.4g") { return format_number(v, spec); }
-
 std::string point_list(const std::vector<LimitingPoint>& points, size_t count) {
   std::string s;
   for (size_t i = 0; i < std::min(count, points.size()); ++i) s += (i ? ", " : "") + std::to_string(points[i].point);
@@ -46,19 +44,19 @@ std::string check_time_step(const StabilityReport& report, double dt, int32_t su
     // Only the dampers are implicit: the elastic forces' symplectic Euler
     // needs dt below the undamped limit.
     if (!(dt > report.dt_crit_undamped)) return {};
-    const std::string msg = "time.dt = " + fmt(dt) + " s exceeds the undamped limit 2/omega_max = " +
-                            fmt(report.dt_crit_undamped) + " s that implicit_damping needs (its elastic forces are "
+    const std::string msg = "time.dt = " + format_number(dt) + " s exceeds the undamped limit 2/omega_max = " +
+                            format_number(report.dt_crit_undamped) + " s that implicit_damping needs (its elastic forces are "
                             "explicit); use a smaller dt or \"integrator\": \"implicit_euler\"";
     if (!allow_unstable) throw Error(ErrorKind::Numerical, msg + ", or pass --allow-unstable to run anyway");
     return "warning: " + msg + ". Running anyway (--allow-unstable).";
   }
   if (!(dt > report.dt_crit)) return {};
   const StepSuggestion s = suggest_step(report, dt * substeps);
-  std::string msg = "time.dt = " + fmt(dt) + " s exceeds the critical step dt_crit = " + fmt(report.dt_crit) +
+  std::string msg = "time.dt = " + format_number(dt) + " s exceeds the critical step dt_crit = " + format_number(report.dt_crit) +
                     " s of this model (limited by the " + dominant_term(report) + " at points " +
-                    point_list(report.mode_points, 3) + ", input numbering); use time.dt = " + fmt(s.dt) +
+                    point_list(report.mode_points, 3) + ", input numbering); use time.dt = " + format_number(s.dt) +
                     " s with time.substeps = " + std::to_string(s.substeps) + " to keep the haptic tick of " +
-                    fmt(s.tick) + " s";
+                    format_number(s.tick) + " s";
   if (!allow_unstable) throw Error(ErrorKind::Numerical, msg + ", or pass --allow-unstable to run anyway");
   return "warning: " + msg +
          ". Running anyway (--allow-unstable): expect the top mode to grow every step until the blow-up "
@@ -108,46 +106,46 @@ nlohmann::json to_json(const StabilityReport& r) {
 std::string format_stability_report(const StabilityReport& r, double dt, int32_t substeps, Integrator integrator) {
   std::ostringstream o;
   o << "stability (at rest):\n";
-  o << "  dt_crit " << fmt(r.dt_crit) << " s (undamped 2/omega_max " << fmt(r.dt_crit_undamped)
-    << " s, damping ratio of the top mode " << fmt(r.damping_ratio, "%.3g") << ")\n"
-    << "  bounds: all modes at once " << fmt(r.dt_crit_bound) << " s, guaranteed "
-    << fmt(r.dt_crit_gershgorin) << " s\n";
-  o << "  omega_max " << fmt(r.omega_max) << " rad/s from " << r.iterations << " power iterations"
-    << (r.converged ? "" : " (NOT converged)") << "; top mode: springs " << fmt(100 * r.share_springs, "%.0f")
-    << " %, volume " << fmt(100 * r.share_volume, "%.0f")
-    << (r.share_shear > 0 ? " %, shear element " + fmt(100 * r.share_shear, "%.0f") : std::string())
-    << " %, tool " << fmt(100 * r.share_tool, "%.0f") << " %\n";
+  o << "  dt_crit " << format_number(r.dt_crit) << " s (undamped 2/omega_max " << format_number(r.dt_crit_undamped)
+    << " s, damping ratio of the top mode " << format_number(r.damping_ratio, "%.3g") << ")\n"
+    << "  bounds: all modes at once " << format_number(r.dt_crit_bound) << " s, guaranteed "
+    << format_number(r.dt_crit_gershgorin) << " s\n";
+  o << "  omega_max " << format_number(r.omega_max) << " rad/s from " << r.iterations << " power iterations"
+    << (r.converged ? "" : " (NOT converged)") << "; top mode: springs " << format_number(100 * r.share_springs, "%.0f")
+    << " %, volume " << format_number(100 * r.share_volume, "%.0f")
+    << (r.share_shear > 0 ? " %, shear element " + format_number(100 * r.share_shear, "%.0f") : std::string())
+    << " %, tool " << format_number(100 * r.share_tool, "%.0f") << " %\n";
   if (r.tool_points > 0)
-    o << "  tool contact " << fmt(r.tool_contact_stiffness) << " N/m counted on " << r.tool_points
+    o << "  tool contact " << format_number(r.tool_contact_stiffness) << " N/m counted on " << r.tool_points
       << " points near the tool path\n";
   o << "  limiting points (input numbering): " << point_list(r.mode_points, r.mode_points.size())
     << "; largest bound rows: " << point_list(r.gershgorin_points, r.gershgorin_points.size()) << "\n";
   if (!r.label_shares.empty()) {
     o << "  limited by label " << r.label_shares[0].label << "'s cells: top mode by label";
-    for (const auto& l : r.label_shares) o << " " << l.label << " " << fmt(100 * l.share, "%.0f") << " %";
+    for (const auto& l : r.label_shares) o << " " << l.label << " " << format_number(100 * l.share, "%.0f") << " %";
     o << "\n";
   }
   for (const auto& s : r.slivers)
     o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3]
-      << "): quality " << fmt(s.quality, "%.3f") << ", min dihedral " << fmt(s.min_dihedral_deg, "%.1f")
-      << " deg, volume " << fmt(s.volume) << " m^3\n";
+      << "): quality " << format_number(s.quality, "%.3f") << ", min dihedral " << format_number(s.min_dihedral_deg, "%.1f")
+      << " deg, volume " << format_number(s.volume) << " m^3\n";
   if (integrator == Integrator::ImplicitDamping) {
-    o << "  dt " << fmt(dt) << " s is " << fmt(dt / r.dt_crit_undamped, "%.2f")
-      << " x the undamped 2/omega_max that implicit damping needs (" << fmt(dt / r.dt_crit, "%.3g")
+    o << "  dt " << format_number(dt) << " s is " << format_number(dt / r.dt_crit_undamped, "%.2f")
+      << " x the undamped 2/omega_max that implicit damping needs (" << format_number(dt / r.dt_crit, "%.3g")
       << " x dt_crit): " << (dt > r.dt_crit_undamped ? "UNSTABLE, refused without --allow-unstable" : "stable")
       << "\n";
     return o.str();
   }
   if (integrator == Integrator::ImplicitEuler) {
-    o << "  dt " << fmt(dt) << " s spans " << fmt(dt / r.dt_crit, "%.3g")
+    o << "  dt " << format_number(dt) << " s spans " << format_number(dt / r.dt_crit, "%.3g")
       << " x dt_crit: implicit Euler, not bounded by dt_crit (it damps the modes above 1/dt instead: "
          "docs/integrators.md)\n";
     return o.str();
   }
   const StepSuggestion s = suggest_step(r, dt * substeps);
-  o << "  dt " << fmt(dt) << " s is " << fmt(dt / r.dt_crit, "%.2f") << " x dt_crit: "
-    << (dt > r.dt_crit ? "UNSTABLE, refused without --allow-unstable" : "stable") << "; suggested dt " << fmt(s.dt)
-    << " s x " << s.substeps << " substeps for the tick of " << fmt(s.tick) << " s\n";
+  o << "  dt " << format_number(dt) << " s is " << format_number(dt / r.dt_crit, "%.2f") << " x dt_crit: "
+    << (dt > r.dt_crit ? "UNSTABLE, refused without --allow-unstable" : "stable") << "; suggested dt " << format_number(s.dt)
+    << " s x " << s.substeps << " substeps for the tick of " << format_number(s.tick) << " s\n";
   return o.str();
 }
 
