@@ -114,8 +114,8 @@ void fit_command(const FitArgs& args) {
     const double start = slot.ref(m);
     if (start < slot.lower || start > slot.upper)
       throw Error(ErrorKind::Scenario, args.scenario + ": " + name + ": start value " + format_number(start, "%.6g") +
-                                           " outside the range fit searches [" + format_number(slot.lower, "%.6g") + ", " +
-                                           format_number(slot.upper, "%.6g") + "]");
+                                           " outside the range fit searches [" + format_number(slot.lower, "%.6g") +
+                                           ", " + format_number(slot.upper, "%.6g") + "]");
     slots.push_back(&slot);
     parameters.push_back({name, start, slot.lower, slot.upper, slot.log});
   }
@@ -163,9 +163,11 @@ void fit_command(const FitArgs& args) {
       least_squares(parameters, residual, ls, [&](int32_t it, double cost, const std::vector<double>& v) {
         if (!tty) return;
         std::cerr << "iteration " << it << "/" << args.max_iterations << ": residual rms "
-                  << format_number(std::sqrt(2 * cost / static_cast<double>(curve.x.size() * curve.columns.size())), "%.4g")
+                  << format_number(std::sqrt(2 * cost / static_cast<double>(curve.x.size() * curve.columns.size())),
+                                   "%.4g")
                   << " N";
-        for (size_t i = 0; i < v.size(); ++i) std::cerr << ", " << parameters[i].name << " " << format_number(v[i], "%.5g");
+        for (size_t i = 0; i < v.size(); ++i)
+          std::cerr << ", " << parameters[i].name << " " << format_number(v[i], "%.5g");
         std::cerr << "\n";
       });
 
@@ -228,7 +230,8 @@ void fit_command(const FitArgs& args) {
   write_xy_plot(outdir / "fit.png", series, plot);
 
   for (size_t i = 0; i < parameters.size(); ++i)
-    std::cout << parameters[i].name << ": " << format_number(parameters[i].start, "%.6g") << " -> " << format_number(fit.values[i], "%.6g") << "\n";
+    std::cout << parameters[i].name << ": " << format_number(parameters[i].start, "%.6g") << " -> "
+              << format_number(fit.values[i], "%.6g") << "\n";
   std::cout << "residual rms " << format_number(rms, "%.4g") << " N after " << fit.iterations << " iterations ("
             << fit.evaluations << " runs, " << fit.stop_reason << ")\n";
   std::cout << "fit: " << (outdir / "fit.json").string() << ", fit.png, forces.json\n";

@@ -216,7 +216,8 @@ StudySetup set_up(const StudyArgs& args) {
   const auto substeps_of = [&](const std::vector<double>& dts, const char* option) {
     std::vector<int32_t> out;
     for (double dt : dts) {
-      if (!(dt > 0)) throw Error(ErrorKind::Usage, std::string(option) + ": expected positive steps in s, got " + format_number(dt));
+      if (!(dt > 0))
+        throw Error(ErrorKind::Usage, std::string(option) + ": expected positive steps in s, got " + format_number(dt));
       out.push_back(std::max<int32_t>(1, static_cast<int32_t>(std::lround(tick / dt))));
     }
     return out;
@@ -262,7 +263,9 @@ Ran run_one(const StudySetup& u, const StudyConfiguration& c) {
 // of study.json. Returns the dt_ref / 2 trajectory, the one compared with.
 Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::json& head) {
   const double tick = u.scenario.time.tick();
-  progress(0, 2, "reference dt " + format_number(tick / u.ref_substeps) + " and " + format_number(tick / (2 * u.ref_substeps)));
+  progress(
+      0, 2,
+      "reference dt " + format_number(tick / u.ref_substeps) + " and " + format_number(tick / (2 * u.ref_substeps)));
   Ran ref, half;
   std::mutex progress_mutex;
   int done = 0;
@@ -273,15 +276,15 @@ Trajectory run_reference(const StudyArgs& args, const StudySetup& u, nlohmann::j
     progress(++done, 2, "reference dt " + format_number(o.outcome.dt));
   });
   if (!ref.outcome.stable || !half.outcome.stable)
-    throw Error(ErrorKind::Numerical, "study reference (cpu double, dt " + format_number(half.outcome.dt) +
-                                          " s) did not complete: " +
-                                          (half.outcome.stable ? ref.outcome.reason : half.outcome.reason));
+    throw Error(ErrorKind::Numerical,
+                "study reference (cpu double, dt " + format_number(half.outcome.dt) +
+                    " s) did not complete: " + (half.outcome.stable ? ref.outcome.reason : half.outcome.reason));
   const StudyErrors convergence = compare_trajectories(ref.trajectory, half.trajectory, u.diag);
   const bool converged = convergence.position_max <= args.ref_tolerance;
   if (!converged)
     std::cerr << "organsim: warning: the reference is not converged: halving dt_ref changed positions by "
-              << format_number(convergence.position_max) << " of the bbox diagonal (tolerance " << format_number(args.ref_tolerance)
-              << "); use a larger --ref-factor\n";
+              << format_number(convergence.position_max) << " of the bbox diagonal (tolerance "
+              << format_number(args.ref_tolerance) << "); use a larger --ref-factor\n";
 
   const Model& model = u.model;
   head = nlohmann::json::object();
@@ -319,7 +322,8 @@ void run_configurations(const StudyArgs& args, const StudySetup& u, const std::v
     if (o.outcome.stable) o.outcome.errors = compare_trajectories(o.trajectory, reference, u.diag);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress(++finished, static_cast<int>(which.size()),
-             c.integrator + " " + c.backend + " " + c.precision + " dt " + format_number(u.scenario.time.tick() / c.substeps));
+             c.integrator + " " + c.backend + " " + c.precision + " dt " +
+                 format_number(u.scenario.time.tick() / c.substeps));
     done(which[i], std::move(o.outcome));
   });
 }
@@ -409,9 +413,9 @@ void run_shard(const StudyArgs& args, const Shard& shard, const StudyPlan& plan,
             << " to run\n" << std::flush;
   run_configurations(args, u, which, reference, [&](size_t k, StudyOutcome&& o) {
     write_file_atomically(run_path(outdir, k), [&](std::ostream& out) { out << outcome_record_json(o).dump(2) << "\n"; });
-    std::cout << "configuration " << k << " (" << o.integrator << " " << o.backend << " " << o.precision << " dt " << format_number(o.dt) << "): "
-              << (o.ran ? (o.stable ? "stable" : "unstable") : "not run") << " -> " << run_path(outdir, k).string()
-              << std::endl;
+    std::cout << "configuration " << k << " (" << o.integrator << " " << o.backend << " " << o.precision << " dt "
+              << format_number(o.dt) << "): " << (o.ran ? (o.stable ? "stable" : "unstable") : "not run") << " -> "
+              << run_path(outdir, k).string() << std::endl;
   });
 }
 

@@ -141,9 +141,11 @@ void validate_command(const ValidateArgs& args) {
   std::ostringstream csv;
   csv << "test,material,cell_size_m,points,measured,theory,error,error_kind,tolerance,pass\n";
   for (const SuiteRow& r : rows)
-    csv << r.test << "," << r.material << "," << format_number(r.cell_size) << "," << r.points << "," << format_number(r.measured, "%.6g")
-        << "," << format_number(r.theory, "%.6g") << "," << format_number(r.error, "%.4f") << "," << r.error_kind << ","
-        << (r.tolerance ? format_number(*r.tolerance) : "") << "," << (r.tolerance ? (r.pass() ? "pass" : "fail") : "") << "\n";
+    csv << r.test << "," << r.material << "," << format_number(r.cell_size) << "," << r.points << ","
+        << format_number(r.measured, "%.6g") << "," << format_number(r.theory, "%.6g") << ","
+        << format_number(r.error, "%.4f") << "," << r.error_kind << ","
+        << (r.tolerance ? format_number(*r.tolerance) : "") << "," << (r.tolerance ? (r.pass() ? "pass" : "fail") : "")
+        << "\n";
   write_file_atomically(outdir / "validation.csv", [&](std::ostream& out) { out << csv.str(); });
   std::cout << csv.str();
 

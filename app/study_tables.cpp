@@ -144,11 +144,13 @@ void write_study_outputs(const fs::path& outdir, const nlohmann::json& head, dou
     const StudyOutcome& o = runs[i];
     std::string reason = o.reason;
     std::replace(reason.begin(), reason.end(), '"', '\'');
-    csv << o.integrator << "," << o.backend << "," << o.precision << "," << format_number(o.dt, "%.6g") << "," << o.substeps << ","
-        << format_number(o.dt / dt_crit, "%.3f") << "," << (o.ran ? (o.stable ? "yes" : "no") : "not run") << ",";
+    csv << o.integrator << "," << o.backend << "," << o.precision << "," << format_number(o.dt, "%.6g") << ","
+        << o.substeps << "," << format_number(o.dt / dt_crit, "%.3f") << ","
+        << (o.ran ? (o.stable ? "yes" : "no") : "not run") << ",";
     if (o.stable)
-      csv << format_number(o.wall / o.simulated) << "," << format_number(o.steps_per_second) << "," << format_number(o.errors.position_max) << ","
-          << format_number(o.errors.position_rms) << "," << format_number(o.errors.force_rms) << "," << (front[i] ? "yes" : "no");
+      csv << format_number(o.wall / o.simulated) << "," << format_number(o.steps_per_second) << ","
+          << format_number(o.errors.position_max) << "," << format_number(o.errors.position_rms) << ","
+          << format_number(o.errors.force_rms) << "," << (front[i] ? "yes" : "no");
     else
       csv << ",,,,,";
     csv << ",\"" << reason << "\"\n";
@@ -158,9 +160,9 @@ void write_study_outputs(const fs::path& outdir, const nlohmann::json& head, dou
   const nlohmann::json& reference = head.at("reference");
   std::cout << "reference: verlet cpu double dt " << format_number(reference.at("dt_half").get<double>())
             << " s; halving dt_ref changed positions by "
-            << format_number(reference.at("halving_position_change_max").get<double>()) << " (max) of the bbox diagonal: "
-            << (reference.at("converged").get<bool>() ? "converged" : "NOT converged")
-            << "\n";
+            << format_number(reference.at("halving_position_change_max").get<double>())
+            << " (max) of the bbox diagonal: "
+            << (reference.at("converged").get<bool>() ? "converged" : "NOT converged") << "\n";
   std::cout << "dt_crit " << format_number(dt_crit) << " s\n";
   std::cout << csv.str();
 #ifdef ORGANSIM_STUDY_PLOT

@@ -128,8 +128,9 @@ std::optional<BlowupFinding> check_geometry(const Model& model, const std::vecto
         (x[a] - model.rest_position[a]).squaredNorm() >= (x[b] - model.rest_position[b]).squaredNorm();
     f.point = model.input_of_internal[a_moved_more ? a : b];
     f.value = worst_strain;
-    f.detail = "spring " + std::to_string(model.input_of_internal[a]) + "-" + std::to_string(model.input_of_internal[b]) +
-               " stretched by " + format_number(100 * worst_strain, "%.0f") + " % (bound " +
+    f.detail = "spring " + std::to_string(model.input_of_internal[a]) + "-" +
+               std::to_string(model.input_of_internal[b]) + " stretched by " +
+               format_number(100 * worst_strain, "%.0f") + " % (bound " +
                format_number(100 * options.max_strain, "%.0f") + " %)";
     return f;
   }
@@ -218,8 +219,9 @@ std::optional<BlowupFinding> BlowupMonitor::check_energy(const Model& model, dou
   f.kind = BlowupFinding::Kind::Energy;
   f.point = top_point >= 0 ? model.input_of_internal[top_point] : -1;
   f.value = ke;
-  f.detail = "kinetic energy " + format_number(ke) + " J exceeds what gravity and the tool put in (" + format_number(budget) +
-             " J, plus the initial elastic energy); the fastest point carries " + format_number(100 * top / ke, "%.0f") + " %";
+  f.detail = "kinetic energy " + format_number(ke) + " J exceeds what gravity and the tool put in (" +
+             format_number(budget) + " J, plus the initial elastic energy); the fastest point carries " +
+             format_number(100 * top / ke, "%.0f") + " %";
   return f;
 }
 
@@ -274,8 +276,9 @@ std::string BlowupMonitor::describe(const Model& model, const BlowupFinding& f, 
     msg += "time.dt = " + format_number(context_.dt) + " s exceeds dt_crit = " + format_number(st->dt_crit) +
            " s, so the stiffest mode grows every step; use a smaller dt or more substeps.";
   } else if (st && damping_only && context_.dt > st->dt_crit_undamped) {
-    msg += "time.dt = " + format_number(context_.dt) + " s exceeds the undamped limit 2/omega_max = " +
-           format_number(st->dt_crit_undamped) + " s that implicit_damping needs, so the stiffest mode grows every step; use "
+    msg += "time.dt = " + format_number(context_.dt) +
+           " s exceeds the undamped limit 2/omega_max = " + format_number(st->dt_crit_undamped) +
+           " s that implicit_damping needs, so the stiffest mode grows every step; use "
            "a smaller dt or \"integrator\": \"implicit_euler\".";
   } else if (near_tool && f.kind == BlowupFinding::Kind::Inversion) {
     msg += "the tool pushed the material through itself (penetration deeper than the tets can resist); move the "

@@ -44,15 +44,17 @@ std::string check_time_step(const StabilityReport& report, double dt, int32_t su
     // Only the dampers are implicit: the elastic forces' symplectic Euler
     // needs dt below the undamped limit.
     if (!(dt > report.dt_crit_undamped)) return {};
-    const std::string msg = "time.dt = " + format_number(dt) + " s exceeds the undamped limit 2/omega_max = " +
-                            format_number(report.dt_crit_undamped) + " s that implicit_damping needs (its elastic forces are "
+    const std::string msg = "time.dt = " + format_number(dt) +
+                            " s exceeds the undamped limit 2/omega_max = " + format_number(report.dt_crit_undamped) +
+                            " s that implicit_damping needs (its elastic forces are "
                             "explicit); use a smaller dt or \"integrator\": \"implicit_euler\"";
     if (!allow_unstable) throw Error(ErrorKind::Numerical, msg + ", or pass --allow-unstable to run anyway");
     return "warning: " + msg + ". Running anyway (--allow-unstable).";
   }
   if (!(dt > report.dt_crit)) return {};
   const StepSuggestion s = suggest_step(report, dt * substeps);
-  std::string msg = "time.dt = " + format_number(dt) + " s exceeds the critical step dt_crit = " + format_number(report.dt_crit) +
+  std::string msg = "time.dt = " + format_number(dt) +
+                    " s exceeds the critical step dt_crit = " + format_number(report.dt_crit) +
                     " s of this model (limited by the " + dominant_term(report) + " at points " +
                     point_list(report.mode_points, 3) + ", input numbering); use time.dt = " + format_number(s.dt) +
                     " s with time.substeps = " + std::to_string(s.substeps) + " to keep the haptic tick of " +
@@ -126,14 +128,13 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     o << "\n";
   }
   for (const auto& s : r.slivers)
-    o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3]
-      << "): quality " << format_number(s.quality, "%.3f") << ", min dihedral " << format_number(s.min_dihedral_deg, "%.1f")
+    o << "  tet (" << s.points[0] << ", " << s.points[1] << ", " << s.points[2] << ", " << s.points[3] << "): quality "
+      << format_number(s.quality, "%.3f") << ", min dihedral " << format_number(s.min_dihedral_deg, "%.1f")
       << " deg, volume " << format_number(s.volume) << " m^3\n";
   if (integrator == Integrator::ImplicitDamping) {
     o << "  dt " << format_number(dt) << " s is " << format_number(dt / r.dt_crit_undamped, "%.2f")
       << " x the undamped 2/omega_max that implicit damping needs (" << format_number(dt / r.dt_crit, "%.3g")
-      << " x dt_crit): " << (dt > r.dt_crit_undamped ? "UNSTABLE, refused without --allow-unstable" : "stable")
-      << "\n";
+      << " x dt_crit): " << (dt > r.dt_crit_undamped ? "UNSTABLE, refused without --allow-unstable" : "stable") << "\n";
     return o.str();
   }
   if (integrator == Integrator::ImplicitEuler) {
@@ -143,9 +144,9 @@ std::string format_stability_report(const StabilityReport& r, double dt, int32_t
     return o.str();
   }
   const StepSuggestion s = suggest_step(r, dt * substeps);
-  o << "  dt " << format_number(dt) << " s is " << format_number(dt / r.dt_crit, "%.2f") << " x dt_crit: "
-    << (dt > r.dt_crit ? "UNSTABLE, refused without --allow-unstable" : "stable") << "; suggested dt " << format_number(s.dt)
-    << " s x " << s.substeps << " substeps for the tick of " << format_number(s.tick) << " s\n";
+  o << "  dt " << format_number(dt) << " s is " << format_number(dt / r.dt_crit, "%.2f")
+    << " x dt_crit: " << (dt > r.dt_crit ? "UNSTABLE, refused without --allow-unstable" : "stable") << "; suggested dt "
+    << format_number(s.dt) << " s x " << s.substeps << " substeps for the tick of " << format_number(s.tick) << " s\n";
   return o.str();
 }
 
