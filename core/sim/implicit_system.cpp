@@ -14,8 +14,8 @@ namespace organsim {
 
 namespace {
 
-Eigen::SparseMatrix<double, Eigen::RowMajor> row_major(const Model& model, const Triplets& t) {
-  return Eigen::SparseMatrix<double, Eigen::RowMajor>(assemble(model, t));
+ImplicitSystem::ShearMatrix row_major(const Model& model, const Triplets& t) {
+  return ImplicitSystem::ShearMatrix(assemble(model, t));
 }
 
 Eigen::Map<const Eigen::Vector3d> at(const Eigen::VectorXd& v, int32_t p) { return Eigen::Map<const Eigen::Vector3d>(v.data() + 3 * p); }
@@ -120,6 +120,18 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
   contact_ = contact;
 }
 
+const ImplicitSystem::ShearMatrix* ImplicitSystem::shear_matrix(double alpha, double beta) const {
+  if (!model_.has_shear_element()) return nullptr;
+  if (!(model_.shear_damping_time > 0)) alpha = 0;
+  if (alpha == 0 && beta == 0) return nullptr;
+  if (alpha != shear_alpha_ || beta != shear_beta_) {
+    shear_ = beta * shear_k_ + alpha * shear_d_;
+    shear_alpha_ = alpha;
+    shear_beta_ = beta;
+  }
+  return &shear_;
+}
+
 void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen::VectorXd& p,
                            Eigen::VectorXd& out) const {
   const Model& m = model_;
@@ -173,12 +185,10 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
       for (int i = 0; i < 4; ++i) at(y, tet[i]) += c * volume_gradient_[e][i];
     }
   });
-  const bool shear_k = m.has_shear_element() && beta != 0;
-  const bool shear_d = m.has_shear_element() && alpha != 0 && m.shear_damping_time > 0;
-  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
-  const auto row_product = [&p](const Matrix& matrix, Eigen::Index r) {
+  const ShearMatrix* shear = shear_matrix(alpha, beta);
+  const auto row_product = [&p](const ShearMatrix& matrix, Eigen::Index r) {
     double sum = 0;
-    for (Matrix::InnerIterator it(matrix, r); it; ++it) sum += it.value() * p[it.col()];
+    for (ShearMatrix::InnerIterator it(matrix, r); it; ++it) sum += it.value() * p[it.col()];
     return sum;
   };
   // Each point: the mass and drag, the parts in order, the shear rows.
@@ -186,10 +196,8 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
   for_each(n, [&](int32_t i) {
     Vec3 y = mass_coef * m.mass[i] * at(p, i) + at(out, i);
     for (const Eigen::VectorXd& part : part_out_) y += at(part, i);
-    for (int a = 0; a < 3; ++a) {
-      if (shear_k) y[a] += beta * row_product(shear_k_, 3 * i + a);
-      if (shear_d) y[a] += alpha * row_product(shear_d_, 3 * i + a);
-    }
+    if (shear)
+      for (int a = 0; a < 3; ++a) y[a] += row_product(*shear, 3 * i + a);
     at(out, i) = y;
   });
   if (beta != 0)
@@ -208,8 +216,7 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
   const int32_t n = m.npoint();
   out.resize(n);
   const bool volume = m.has_volume() && beta != 0, nodal = volume && m.has_nodal_volume();
-  const double shear_damp = m.has_shear_element() && m.shear_damping_time > 0 ? alpha : 0;
-  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  const ShearMatrix* shear = shear_matrix(alpha, beta);
   for_each(n, [&](int32_t i, int slot) {
     Eigen::Matrix3d block = (m_coef + alpha * m.viscous_damping) * m.mass[i] * Eigen::Matrix3d::Identity();
     for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k) {
@@ -235,13 +242,10 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
         block += beta * m.tet_k[e] * g * g.transpose();
       }
     }
-    if (m.has_shear_element())
-      for (const auto& [matrix, coef] : {std::pair<const Matrix*, double>{&shear_k_, beta}, {&shear_d_, shear_damp}}) {
-        if (coef == 0) continue;
-        for (int a = 0; a < 3; ++a)
-          for (Matrix::InnerIterator it(*matrix, 3 * i + a); it; ++it)
-            if (it.col() / 3 == i) block(a, it.col() % 3) += coef * it.value();
-      }
+    if (shear)
+      for (int a = 0; a < 3; ++a)
+        for (ShearMatrix::InnerIterator it(*shear, 3 * i + a); it; ++it)
+          if (it.col() / 3 == i) block(a, it.col() % 3) += it.value();
     out[i] = block;
   });
   for (const ContactBlock& c : contact_)

@@ -58,6 +58,8 @@ class ImplicitSystem {
 
   const Model& model() const { return model_; }
 
+  using ShearMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
  private:
   // Runs body(i) for i in [0, n) as a static loop: in a parallel region of
   // threads_ threads, or on its own on one (libgomp allocates a team for
@@ -82,7 +84,17 @@ class ImplicitSystem {
   // 4 t + corner.
   std::vector<int32_t> spring_start_, spring_of_point_, corner_start_, corner_of_point_;
   std::vector<ContactBlock> contact_;
-  Eigen::SparseMatrix<double, Eigen::RowMajor> shear_k_, shear_d_;  // empty without the element
+  // The shear element's rest stiffness and its damper's (empty without the
+  // element; different matrices: the stiffness blends in the smoothed part,
+  // the damper is the per-tet element's alone).
+  ShearMatrix shear_k_, shear_d_;
+  // beta shear_k_ + alpha shear_d_ for the last (alpha, beta) asked for:
+  // CG applies one matrix many times, so the sum is formed once per solve
+  // setting and each row is one product (apply and diagonal_blocks keep
+  // scratch: one caller at a time). nullptr when it is zero.
+  const ShearMatrix* shear_matrix(double alpha, double beta) const;
+  mutable ShearMatrix shear_;
+  mutable double shear_alpha_ = 0, shear_beta_ = 0;
   // A product's parts: a fixed count, whatever the threads, so that the
   // sums do not depend on them; part 0 scatters into the output itself.
   static constexpr int kParts = 4;

@@ -88,6 +88,31 @@ Eigen::VectorXd force_difference(const Model& m, const std::vector<Vec3>& x, con
   return -(flat(fp) - flat(fm)) / (2 * eps);
 }
 
+// Where the tangent is exact (b.v zero): K p and D p against differences
+// of the reference forces for a random p, and a product with both
+// coefficients against the sum of the two (the shear element's rows are
+// one matrix beta K + alpha D formed per coefficient pair).
+void expect_exact_tangent(const DeformedBox& b, unsigned seed) {
+  ImplicitSystem system(b.model);
+  system.linearise(b.x, b.v, 0, {});
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd p(3 * b.model.npoint());
+  for (auto& c : p) c = u(rng);
+  Eigen::VectorXd kp, dp, both;
+  system.apply(0, 0, 1, p, kp);
+  system.apply(0, 1, 0, p, dp);
+  system.apply(0, 2, 3, p, both);
+  // 1e-6 relative: central differences with eps 1e-7 m against 4e-3 m
+  // springs leave ~1e-9 truncation and ~1e-8 rounding; the combined
+  // product is the same sums in another order (1e-12).
+  const Eigen::VectorXd kfd = force_difference(b.model, b.x, b.v, p, false, 1e-7);
+  const Eigen::VectorXd dfd = force_difference(b.model, b.x, b.v, p, true, 1e-5);
+  EXPECT_LT((kp - kfd).norm(), 1e-6 * kfd.norm());
+  EXPECT_LT((dp - dfd).norm(), 1e-6 * dfd.norm());
+  EXPECT_LT((both - (2 * dp + 3 * kp)).norm(), 1e-12 * both.norm());
+}
+
 // With every spring stretched, at rest in velocity, and no volume term, K is
 // the exact tangent of the spring forces, and D of the dampers (their force
 // is linear in v). (With the ends moving, the damper's tension also turns
@@ -97,21 +122,19 @@ TEST(ImplicitSystem, SpringTangentAndDamperMatchFiniteDifferencesWhereTheyAreExa
   ASSERT_FALSE(b.model.has_volume());
   ASSERT_FALSE(b.model.has_shear_element());
   b.v.assign(b.model.npoint(), Vec3::Zero());
-  ImplicitSystem system(b.model);
-  system.linearise(b.x, b.v, 0, {});
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Eigen::VectorXd p(3 * b.model.npoint());
-  for (auto& c : p) c = u(rng);
-  Eigen::VectorXd kp, dp;
-  system.apply(0, 0, 1, p, kp);
-  system.apply(0, 1, 0, p, dp);
-  // 1e-6 relative: central differences with eps 1e-7 m against 4e-3 m
-  // springs leave ~1e-9 truncation and ~1e-8 rounding.
-  const Eigen::VectorXd kfd = force_difference(b.model, b.x, b.v, p, false, 1e-7);
-  const Eigen::VectorXd dfd = force_difference(b.model, b.x, b.v, p, true, 1e-5);
-  EXPECT_LT((kp - kfd).norm(), 1e-6 * kfd.norm());
-  EXPECT_LT((dp - dfd).norm(), 1e-6 * dfd.norm());
+  expect_exact_tangent(b, 7);
+}
+
+// At rest every term's tangent is exact, the shear element's and its
+// damper's included (nu < 1/4 brings the element; its damper is
+// shear_damping_time times its stiffness, one matrix in the system): K and
+// D match differences of the reference forces in position and velocity.
+TEST(ImplicitSystem, AtRestStiffnessAndDamperMatchFiniteDifferencesWithTheShearElement) {
+  DeformedBox b = deformed_box(soft_material(0.2, 0.01), 0, 3);
+  ASSERT_TRUE(b.model.has_shear_element());
+  ASSERT_GT(b.model.shear_damping_time, 0);
+  b.v.assign(b.model.npoint(), Vec3::Zero());
+  expect_exact_tangent(b, 9);
 }
 
 // The volume term's Gauss-Newton part is the whole tangent at rest and its
