@@ -126,9 +126,10 @@ TEST(ImplicitSystem, SpringTangentAndDamperMatchFiniteDifferencesWhereTheyAreExa
 }
 
 // At rest every term's tangent is exact, the shear element's and its
-// damper's included (nu < 1/4 brings the element; its damper is
-// shear_damping_time times its stiffness, one matrix in the system): K and
-// D match differences of the reference forces in position and velocity.
+// damper's included (nu < 1/4 brings the element; its stiffness blends in
+// the smoothed part, its damper is shear_damping_time times the per-tet
+// element's alone): K and D match differences of the reference forces in
+// position and velocity.
 TEST(ImplicitSystem, AtRestStiffnessAndDamperMatchFiniteDifferencesWithTheShearElement) {
   DeformedBox b = deformed_box(soft_material(0.2, 0.01), 0, 3);
   ASSERT_TRUE(b.model.has_shear_element());
