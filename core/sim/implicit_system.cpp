@@ -120,16 +120,17 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
   contact_ = contact;
 }
 
-const ImplicitSystem::ShearMatrix* ImplicitSystem::shear_matrix(double alpha, double beta) const {
-  if (!model_.has_shear_element()) return nullptr;
+ImplicitSystem::ShearRows ImplicitSystem::shear_rows(double alpha, double beta) const {
+  if (!model_.has_shear_element()) return {};
   if (!(model_.shear_damping_time > 0)) alpha = 0;
-  if (alpha == 0 && beta == 0) return nullptr;
+  if (alpha == 0) return {beta != 0 ? &shear_k_ : nullptr, beta};
+  if (beta == 0) return {&shear_d_, alpha};
   if (alpha != shear_alpha_ || beta != shear_beta_) {
     shear_ = beta * shear_k_ + alpha * shear_d_;
     shear_alpha_ = alpha;
     shear_beta_ = beta;
   }
-  return &shear_;
+  return {&shear_, 1};
 }
 
 void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen::VectorXd& p,
@@ -185,7 +186,7 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
       for (int i = 0; i < 4; ++i) at(y, tet[i]) += c * volume_gradient_[e][i];
     }
   });
-  const ShearMatrix* shear = shear_matrix(alpha, beta);
+  const ShearRows shear = shear_rows(alpha, beta);
   const auto row_product = [&p](const ShearMatrix& matrix, Eigen::Index r) {
     double sum = 0;
     for (ShearMatrix::InnerIterator it(matrix, r); it; ++it) sum += it.value() * p[it.col()];
@@ -196,8 +197,8 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
   for_each(n, [&](int32_t i) {
     Vec3 y = mass_coef * m.mass[i] * at(p, i) + at(out, i);
     for (const Eigen::VectorXd& part : part_out_) y += at(part, i);
-    if (shear)
-      for (int a = 0; a < 3; ++a) y[a] += row_product(*shear, 3 * i + a);
+    if (shear.matrix)
+      for (int a = 0; a < 3; ++a) y[a] += shear.scale * row_product(*shear.matrix, 3 * i + a);
     at(out, i) = y;
   });
   if (beta != 0)
@@ -216,7 +217,7 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
   const int32_t n = m.npoint();
   out.resize(n);
   const bool volume = m.has_volume() && beta != 0, nodal = volume && m.has_nodal_volume();
-  const ShearMatrix* shear = shear_matrix(alpha, beta);
+  const ShearRows shear = shear_rows(alpha, beta);
   for_each(n, [&](int32_t i, int slot) {
     Eigen::Matrix3d block = (m_coef + alpha * m.viscous_damping) * m.mass[i] * Eigen::Matrix3d::Identity();
     for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k) {
@@ -242,10 +243,10 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
         block += beta * m.tet_k[e] * g * g.transpose();
       }
     }
-    if (shear)
+    if (shear.matrix)
       for (int a = 0; a < 3; ++a)
-        for (ShearMatrix::InnerIterator it(*shear, 3 * i + a); it; ++it)
-          if (it.col() / 3 == i) block(a, it.col() % 3) += it.value();
+        for (ShearMatrix::InnerIterator it(*shear.matrix, 3 * i + a); it; ++it)
+          if (it.col() / 3 == i) block(a, it.col() % 3) += shear.scale * it.value();
     out[i] = block;
   });
   for (const ContactBlock& c : contact_)

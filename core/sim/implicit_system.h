@@ -88,11 +88,17 @@ class ImplicitSystem {
   // element; different matrices: the stiffness blends in the smoothed part,
   // the damper is the per-tet element's alone).
   ShearMatrix shear_k_, shear_d_;
-  // beta shear_k_ + alpha shear_d_ for the last (alpha, beta) asked for:
-  // CG applies one matrix many times, so the sum is formed once per solve
-  // setting and each row is one product (apply and diagonal_blocks keep
-  // scratch: one caller at a time). nullptr when it is zero.
-  const ShearMatrix* shear_matrix(double alpha, double beta) const;
+  // beta shear_k_ + alpha shear_d_ as scale times one matrix: a single
+  // one when the other coefficient is zero (a step's K v), else their sum,
+  // kept for the last (alpha, beta) with both: CG applies it many times
+  // with the same pair, so the sum is formed once per step size and each
+  // row is one product (apply and diagonal_blocks keep scratch: one caller
+  // at a time). matrix nullptr when the whole is zero.
+  struct ShearRows {
+    const ShearMatrix* matrix = nullptr;
+    double scale = 0;
+  };
+  ShearRows shear_rows(double alpha, double beta) const;
   mutable ShearMatrix shear_;
   mutable double shear_alpha_ = 0, shear_beta_ = 0;
   // A product's parts: a fixed count, whatever the threads, so that the
