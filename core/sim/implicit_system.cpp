@@ -42,8 +42,12 @@ ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads)
     for (int32_t e = 0; e < nelement; ++e)
       for (int c = 0; c < arity; ++c) entry[fill[point_of(e, c)]++] = with_corner ? arity * e + c : e;
   };
-  incidence(model.nspring(), 2, [&](int32_t s, int c) { return model.spring_ends[s][c]; }, false, spring_start_,
-            spring_of_point_);
+  incidence(
+      model.nspring(), 2, [&](int32_t s, int c) { return model.spring_ends[s][c]; }, true, spring_start_,
+      spring_of_point_);
+  spring_other_.resize(spring_of_point_.size());
+  for (size_t k = 0; k < spring_of_point_.size(); ++k)
+    spring_other_[k] = model.spring_ends[spring_of_point_[k] >> 1][1 - (spring_of_point_[k] & 1)];
   if (model.has_volume())
     incidence(model.ntet(), 4, [&](int32_t t, int c) { return model.tet_points[t][c]; }, true, corner_start_,
               corner_of_point_);
@@ -67,7 +71,6 @@ ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads)
       patch_start_[i + 1] = static_cast<int32_t>(patch_point_.size());
     }
   }
-  for (Eigen::VectorXd& part : part_out_) part.resize(3 * n);
   tet_term_.resize(model.has_volume() ? model.ntet() : 0);
   node_term_.resize(model.has_nodal_volume() ? n : 0);
 }
@@ -117,6 +120,16 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
       force_law::tet_volume_gradients6(e1, e2, e3, g1, g2, g3);
       volume_gradient_[e] = {-(g1 + g2 + g3) / 6, g1 / 6, g2 / 6, g3 / 6};
     });
+  // Copied into each point's incidence order, which the per-point gathers read.
+  spring_at_.resize(spring_of_point_.size());
+  corner_gradient_.resize(m.has_volume() ? corner_of_point_.size() : 0);
+  for_each(m.npoint(), [&](int32_t i) {
+    for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k)
+      spring_at_[k] = springs_[spring_of_point_[k] >> 1];
+    if (m.has_volume())
+      for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
+        corner_gradient_[k] = volume_gradient_[corner_of_point_[k] >> 2][corner_of_point_[k] & 3];
+  });
   contact_ = contact;
 }
 
@@ -154,49 +167,43 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
       node_term_[a] = m.point_volume_k[a] * s / 4;
     });
   }
-  // Each part scatters its springs' and tets' terms: a spring's y on its
-  // ends, a tet's c dV_t/dx_i on its corners (c = beta k_t dV_t . p, or
-  // with the nodal term beta times the mean of its nodes' k_a (dV_a . p)).
-  for_each(kParts, [&](int32_t part) {
-    Eigen::VectorXd& y = part == 0 ? out : part_out_[part - 1];
-    y.setZero();
-    const int32_t s0 = static_cast<int32_t>(int64_t{m.nspring()} * part / kParts);
-    const int32_t s1 = static_cast<int32_t>(int64_t{m.nspring()} * (part + 1) / kParts);
-    for (int32_t s = s0; s < s1; ++s) {
-      const SpringTangent& g = springs_[s];
-      const auto [a, b] = m.spring_ends[s];
-      const Vec3 delta = at(p, a) - at(p, b);
-      const Vec3 ys = (alpha * g.d + beta * g.axial) * g.u.dot(delta) * g.u + beta * g.transverse * delta;
-      at(y, a) += ys;
-      at(y, b) -= ys;
-    }
-    if (!volume) return;
-    const int32_t t0 = static_cast<int32_t>(int64_t{m.ntet()} * part / kParts);
-    const int32_t t1 = static_cast<int32_t>(int64_t{m.ntet()} * (part + 1) / kParts);
-    for (int32_t e = t0; e < t1; ++e) {
+  // Each tet's coefficient c of its corners' terms c dV_t/dx_i: beta k_t
+  // dV_t . p, or with the nodal term beta times the mean of its nodes' k_a
+  // (dV_a . p).
+  if (volume)
+    for_each(m.ntet(), [&](int32_t e) {
       const Tet& tet = m.tet_points[e];
-      double c;
       if (nodal) {
-        c = beta * (node_term_[tet[0]] + node_term_[tet[1]] + node_term_[tet[2]] + node_term_[tet[3]]) / 4;
+        tet_term_[e] = beta * (node_term_[tet[0]] + node_term_[tet[1]] + node_term_[tet[2]] + node_term_[tet[3]]) / 4;
       } else {
         double s = 0;
         for (int i = 0; i < 4; ++i) s += volume_gradient_[e][i].dot(at(p, tet[i]));
-        c = beta * m.tet_k[e] * s;
+        tet_term_[e] = beta * m.tet_k[e] * s;
       }
-      for (int i = 0; i < 4; ++i) at(y, tet[i]) += c * volume_gradient_[e][i];
-    }
-  });
+    });
   const ShearRows shear = shear_rows(alpha, beta);
   const auto row_product = [&p](const ShearMatrix& matrix, Eigen::Index r) {
     double sum = 0;
     for (ShearMatrix::InnerIterator it(matrix, r); it; ++it) sum += it.value() * p[it.col()];
     return sum;
   };
-  // Each point: the mass and drag, the parts in order, the shear rows.
+  // Each point gathers, in its incidence lists' order: the mass and drag,
+  // its springs' terms (a spring's y on end a, -y on end b: evaluated at
+  // both ends, as the force pass does, rather than scattered), its tet
+  // corners' c dV_t/dx_i, the shear rows.
   const double mass_coef = m_coef + alpha * m.viscous_damping;
   for_each(n, [&](int32_t i) {
-    Vec3 y = mass_coef * m.mass[i] * at(p, i) + at(out, i);
-    for (const Eigen::VectorXd& part : part_out_) y += at(part, i);
+    Vec3 y = mass_coef * m.mass[i] * at(p, i);
+    const Eigen::Map<const Eigen::Vector3d> pi = at(p, i);
+    for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k) {
+      const SpringTangent& g = spring_at_[k];
+      // p_i - p_other: the end's own y, whichever end i is.
+      const Vec3 delta = pi - at(p, spring_other_[k]);
+      y += (alpha * g.d + beta * g.axial) * g.u.dot(delta) * g.u + beta * g.transverse * delta;
+    }
+    if (volume)
+      for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
+        y += tet_term_[corner_of_point_[k] >> 2] * corner_gradient_[k];
     if (shear.matrix)
       for (int a = 0; a < 3; ++a) y[a] += shear.scale * row_product(*shear.matrix, 3 * i + a);
     at(out, i) = y;
@@ -221,7 +228,7 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
   for_each(n, [&](int32_t i, int slot) {
     Eigen::Matrix3d block = (m_coef + alpha * m.viscous_damping) * m.mass[i] * Eigen::Matrix3d::Identity();
     for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k) {
-      const SpringTangent& g = springs_[spring_of_point_[k]];
+      const SpringTangent& g = spring_at_[k];
       block += (alpha * g.d + beta * g.axial) * g.u * g.u.transpose() + beta * g.transverse * Eigen::Matrix3d::Identity();
     }
     if (nodal) {
@@ -231,16 +238,15 @@ void ImplicitSystem::diagonal_blocks(double m_coef, double alpha, double beta, s
       const int32_t first = patch_start_[i], size = patch_start_[i + 1] - first;
       row.assign(static_cast<size_t>(size), Vec3::Zero());
       for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k) {
-        const Vec3 g = volume_gradient_[corner_of_point_[k] >> 2][corner_of_point_[k] & 3] / 4;
+        const Vec3 g = corner_gradient_[k] / 4;
         for (int j = 0; j < 4; ++j) row[patch_slot_[4 * static_cast<size_t>(k) + j]] += g;
       }
       for (int32_t j = 0; j < size; ++j)
         block += beta * m.point_volume_k[patch_point_[first + j]] * row[j] * row[j].transpose();
     } else if (volume) {
       for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k) {
-        const int32_t e = corner_of_point_[k] >> 2;
-        const Vec3& g = volume_gradient_[e][corner_of_point_[k] & 3];
-        block += beta * m.tet_k[e] * g * g.transpose();
+        const Vec3& g = corner_gradient_[k];
+        block += beta * m.tet_k[corner_of_point_[k] >> 2] * g * g.transpose();
       }
     }
     if (shear.matrix)

@@ -14,11 +14,12 @@
 // out by the caller (conjugate_gradient's `free`). docs/integrators.md
 // derives it.
 //
-// Threads: the products' element loops are cut into kParts fixed parts
-// (springs and tets in index ranges), each scattering into its own buffer,
-// summed in part order; the diagonal blocks gather per point in a fixed
-// order (incidence lists built at construction). So both run as OpenMP
-// loops on any number of threads with bit-identical results.
+// Threads: products and diagonal blocks gather per point, each point's
+// springs and tet corners in a fixed order (incidence lists built at
+// construction), as the explicit force pass does: a spring's term is
+// evaluated at both its ends, a tet's coefficient once per tet before the
+// gather. So both run as OpenMP loops on any number of threads with
+// bit-identical results and no per-thread buffers to sum.
 #include <Eigen/SparseCore>
 #include <array>
 #include <vector>
@@ -80,9 +81,14 @@ class ImplicitSystem {
   // Volume term: dV_t/dx_i of every tet's corners at the linearisation.
   std::vector<std::array<Vec3, 4>> volume_gradient_;
   // Each point's springs and tet corners, rows start[i] .. start[i + 1] in
-  // element order: spring_of_point_ holds spring indices, corner_of_point_
-  // 4 t + corner.
-  std::vector<int32_t> spring_start_, spring_of_point_, corner_start_, corner_of_point_;
+  // element order: spring_of_point_ holds 2 s + end (0: a, 1: b) and
+  // spring_other_ the spring's other end, corner_of_point_ 4 t + corner.
+  std::vector<int32_t> spring_start_, spring_of_point_, spring_other_, corner_start_, corner_of_point_;
+  // The same tangents in those rows' order (a spring's at both its ends),
+  // so that the per-point gathers read them in sequence, not scattered
+  // over all springs and tets.
+  std::vector<SpringTangent> spring_at_;
+  std::vector<Vec3> corner_gradient_;
   std::vector<ContactBlock> contact_;
   // The shear element's rest stiffness and its damper's (empty without the
   // element; different matrices: the stiffness blends in the smoothed part,
@@ -101,10 +107,6 @@ class ImplicitSystem {
   ShearRows shear_rows(double alpha, double beta) const;
   mutable ShearMatrix shear_;
   mutable double shear_alpha_ = 0, shear_beta_ = 0;
-  // A product's parts: a fixed count, whatever the threads, so that the
-  // sums do not depend on them; part 0 scatters into the output itself.
-  static constexpr int kParts = 4;
-  mutable std::array<Eigen::VectorXd, kParts - 1> part_out_;
   mutable std::vector<double> tet_term_, node_term_;  // the volume term's per-tet and nodal scalars
   // The nodal diagonal: each point's patch (the nodes sharing a tet with
   // it), rows patch_start_[i] .. patch_start_[i + 1] of patch_point_, and
