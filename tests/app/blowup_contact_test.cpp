@@ -11,6 +11,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace blowup_contact_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -101,4 +102,5 @@ TEST(BlowupInContact, GraspPullingFromTheFirstTickIsNotABlowUp) {
 }
 
 }  // namespace
+}  // namespace blowup_contact_test
 }  // namespace organsim

@@ -10,6 +10,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace fit_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -96,4 +97,5 @@ TEST(FitCli, BadMeasuredCurveNamesFileAndLine) {
 }
 
 }  // namespace
+}  // namespace fit_cli_test
 }  // namespace organsim

@@ -15,6 +15,7 @@
 #include "core/util/atomic_file.h"
 
 namespace organsim {
+namespace mesh_cli_test {
 namespace {
 
 using testing::five_tet_cube;
@@ -243,9 +244,11 @@ TEST(MeshImageCli, AGzippedImageCutShortIsRefusedAndTheOldOutputKept) {
 }
 
 }  // namespace
+}  // namespace mesh_cli_test
 }  // namespace organsim
 
 namespace organsim {
+namespace mesh_cli_test {
 namespace {
 
 TEST(ExampleCli, RegeneratesTheCommittedExamplesByteForByte) {
@@ -260,9 +263,11 @@ TEST(ExampleCli, RegeneratesTheCommittedExamplesByteForByte) {
 }
 
 }  // namespace
+}  // namespace mesh_cli_test
 }  // namespace organsim
 
 namespace organsim {
+namespace mesh_cli_test {
 namespace {
 
 TEST(MeshImageCli, LabelledImageGivesALabelledMeshAndVolumesPerLabel) {
@@ -301,4 +306,5 @@ TEST(MeshImageCli, BadImagesExitWithTheInputCodeAndWriteNothing) {
 }
 
 }  // namespace
+}  // namespace mesh_cli_test
 }  // namespace organsim

@@ -9,6 +9,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace mesh_scale_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -85,4 +86,5 @@ TEST(MeshScale, ASurfaceIsScaledBeforeItIsMeshed) {
 }
 
 }  // namespace
+}  // namespace mesh_scale_test
 }  // namespace organsim

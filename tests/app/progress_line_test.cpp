@@ -11,6 +11,7 @@
 #include "tests/core/mesh_io_test_util.h"
 
 namespace organsim {
+namespace progress_line_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -77,4 +78,5 @@ TEST(ProgressLine, MeshShowsItsStageOnATerminalOnly) {
 }
 
 }  // namespace
+}  // namespace progress_line_test
 }  // namespace organsim

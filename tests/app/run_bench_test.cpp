@@ -19,6 +19,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_bench_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -435,4 +436,5 @@ TEST(RunBench, ImplicitAndMaterialComparisonsAreOneAtATime) {
 }
 
 }  // namespace
+}  // namespace run_bench_test
 }  // namespace organsim

@@ -11,6 +11,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -188,4 +189,5 @@ TEST(RunCli, BackendSwitchOnTheCommandLineTakesThatBackendsPrecision) {
 }
 
 }  // namespace
+}  // namespace run_cli_test
 }  // namespace organsim

@@ -14,6 +14,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_implicit_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -103,4 +104,5 @@ TEST(RunImplicitCli, FitRefusesAnImplicitScenario) {
 }
 
 }  // namespace
+}  // namespace run_implicit_cli_test
 }  // namespace organsim

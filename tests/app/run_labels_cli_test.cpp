@@ -12,6 +12,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_labels_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -89,4 +90,5 @@ TEST(RunLabelsCli, ForceLogGivesTheElasticityAndTheTopModePerLabel) {
 }
 
 }  // namespace
+}  // namespace run_labels_cli_test
 }  // namespace organsim

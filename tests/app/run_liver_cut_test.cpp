@@ -13,6 +13,7 @@
 #include "tests/core/vtk_client.h"
 
 namespace organsim {
+namespace run_liver_cut_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -121,4 +122,5 @@ TEST(RunLiverCut, PlanSaysWhetherThereIsATopologyPass) {
 }
 
 }  // namespace
+}  // namespace run_liver_cut_test
 }  // namespace organsim

@@ -9,6 +9,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_liver_push_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -81,4 +82,5 @@ TEST(RunLiverPush, NoForceBeforeContactThenOpposingAndGrowingWithDepth) {
 }
 
 }  // namespace
+}  // namespace run_liver_push_test
 }  // namespace organsim

@@ -19,6 +19,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_liver_realtime_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -84,4 +85,5 @@ TEST(RunLiverRealtime, GuaranteedStepAndTheTenSubstepRunsForce) {
 }
 
 }  // namespace
+}  // namespace run_liver_realtime_test
 }  // namespace organsim

@@ -10,6 +10,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace run_liver_suture_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -62,4 +63,5 @@ TEST(RunLiverSuture, SuturesAlongTheCutCloseIt) {
 }
 
 }  // namespace
+}  // namespace run_liver_suture_test
 }  // namespace organsim

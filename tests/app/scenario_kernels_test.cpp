@@ -20,6 +20,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace scenario_kernels_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -176,4 +177,5 @@ TEST(ScenarioKernelsTable, ListsEveryShippedScenario) {
 }
 
 }  // namespace
+}  // namespace scenario_kernels_test
 }  // namespace organsim

@@ -21,6 +21,7 @@
 #include "tests/app/plot_pixels.h"
 #endif
 
+namespace study_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -396,3 +397,4 @@ TEST(StudyCli, BadShardsAreRefusedBeforeAnyRun) {
 }
 
 }  // namespace
+}  // namespace study_cli_test

@@ -28,6 +28,7 @@
 extern char** environ;
 
 namespace organsim::test {
+namespace sweep_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -415,4 +416,5 @@ TEST(SweepCli, SlurmScriptForTheSweep) {
 }
 
 }  // namespace
+}  // namespace sweep_cli_test
 }  // namespace organsim::test

@@ -14,6 +14,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace validate_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -224,4 +225,5 @@ TEST(ValidateCli, ShearFormulationPerTetStiffensTheCantileverOverTheSmoothedElem
 }
 
 }  // namespace
+}  // namespace validate_cli_test
 }  // namespace organsim

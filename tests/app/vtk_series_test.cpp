@@ -12,6 +12,7 @@
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
+namespace vtk_series_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -276,4 +277,5 @@ print(int(surface), label.GetDataTypeAsString(), g.GetNumberOfCells(), count[1],
 }
 
 }  // namespace
+}  // namespace vtk_series_test
 }  // namespace organsim

@@ -12,6 +12,7 @@
 #include "file_size_limit.h"
 
 namespace organsim {
+namespace atomic_file_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -64,4 +65,5 @@ TEST(AtomicFile, ARenameThatFailsLeavesNoTemporary) {
 }
 
 }  // namespace
+}  // namespace atomic_file_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "tests/core/contact_test_util.h"
 
 namespace organsim {
+namespace capsule_contact_test {
 namespace {
 
 using testing::Contact;
@@ -274,4 +275,5 @@ TEST(CapsuleContact, TheSphereIgnoresTheToolsOrientationBitForBit) {
 }
 
 }  // namespace
+}  // namespace capsule_contact_test
 }  // namespace organsim

@@ -8,6 +8,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace change_cost_test {
 namespace {
 
 TEST(ChangeCost, EverySizeCutsAComparableLocalPatch) {
@@ -34,4 +35,5 @@ TEST(ChangeCost, EverySizeCutsAComparableLocalPatch) {
 }
 
 }  // namespace
+}  // namespace change_cost_test
 }  // namespace organsim

@@ -15,6 +15,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace coarse_space_test {
 namespace {
 
 constexpr double kH = 1e-3;
@@ -116,4 +117,5 @@ TEST(CoarseSpace, AModeAnAggregateCannotCarryIsDropped) {
 }
 
 }  // namespace
+}  // namespace coarse_space_test
 }  // namespace organsim

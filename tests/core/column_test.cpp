@@ -9,6 +9,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace column_test {
 namespace {
 
 TEST(HangingColumn, ChainSettlesToAnalyticElongation) {
@@ -110,4 +111,5 @@ TEST(HangingColumn, TetColumnMatchesLinearStatics) {
 }
 
 }  // namespace
+}  // namespace column_test
 }  // namespace organsim

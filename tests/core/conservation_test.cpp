@@ -7,6 +7,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace conservation_test {
 namespace {
 
 Model free_box_model(double volume_modulus, double viscous) {
@@ -77,4 +78,5 @@ TEST(Conservation, ModelAtRestStaysAtRest) {
 }
 
 }  // namespace
+}  // namespace conservation_test
 }  // namespace organsim

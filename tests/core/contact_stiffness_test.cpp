@@ -18,6 +18,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace contact_stiffness_test {
 namespace {
 
 namespace fl = force_law;
@@ -198,4 +199,5 @@ TEST(ContactStiffness, HeldPointsStiffnessIsTheCentralDifferenceOfThePullReactio
 }
 
 }  // namespace
+}  // namespace contact_stiffness_test
 }  // namespace organsim

@@ -20,6 +20,7 @@
 #include "tests/core/cpu_kernel_test_util.h"
 
 namespace organsim {
+namespace cpu_kernel_double_test {
 namespace {
 
 using testing::kSize;
@@ -149,4 +150,5 @@ TEST(CpuKernelDoubleChoice, TheKernelSaysItsTargetAndLanes) {
 }
 
 }  // namespace
+}  // namespace cpu_kernel_double_test
 }  // namespace organsim

@@ -20,6 +20,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace cpu_kernel_test {
 namespace {
 
 using testing::kSize;
@@ -135,4 +136,5 @@ TEST(CpuKernelChoice, ThreadCountIsChosenByTimingAndReported) {
 }
 
 }  // namespace
+}  // namespace cpu_kernel_test
 }  // namespace organsim

@@ -11,6 +11,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace declared_counts_test {
 namespace {
 
 struct Claim {
@@ -55,4 +56,5 @@ TEST(DeclaredCounts, ABillionClaimedElementsAreRefusedBeforeAllocating) {
 }
 
 }  // namespace
+}  // namespace declared_counts_test
 }  // namespace organsim

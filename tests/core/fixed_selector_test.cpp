@@ -13,6 +13,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace fixed_selector_test {
 namespace {
 
 // A 4 x 4 x 4 grid of 2.5 cm cubes: 125 points at multiples of 0.025 m.
@@ -158,4 +159,5 @@ TEST(FixedSelectors, SelectorsThatHoldEveryPointAreRefused) {
 }
 
 }  // namespace
+}  // namespace fixed_selector_test
 }  // namespace organsim

@@ -13,6 +13,7 @@
 #include "core/util/vec.h"
 
 namespace organsim {
+namespace force_law_test {
 namespace {
 
 namespace fl = force_law;
@@ -361,5 +362,6 @@ TEST(ForceLaw, RestStiffnessIsMinusTheForcesDerivativeAtRest) {
 }
 
 }  // namespace
+}  // namespace force_law_test
 }  // namespace organsim
 

@@ -15,6 +15,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace fuzz_regressions_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -91,4 +92,5 @@ TEST(FuzzRegressions, AStepSuggestionForAnExtremeStiffnessStaysInRange) {
 }
 
 }  // namespace
+}  // namespace fuzz_regressions_test
 }  // namespace organsim

@@ -10,6 +10,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace gather_test {
 namespace {
 
 Model random_model(int32_t chunk, int32_t window) {
@@ -161,4 +162,5 @@ TEST(Gather, FloatTracksDoubleReference) {
 }
 
 }  // namespace
+}  // namespace gather_test
 }  // namespace organsim

@@ -18,6 +18,7 @@
 #include "tests/core/contact_test_util.h"
 
 namespace organsim {
+namespace grasper_test {
 namespace {
 
 constexpr double kSize = testing::kContactBox;
@@ -318,4 +319,5 @@ TEST(Grasper, AGripHoldsThroughARebuild) {
 }
 
 }  // namespace
+}  // namespace grasper_test
 }  // namespace organsim

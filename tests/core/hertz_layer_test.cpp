@@ -17,6 +17,7 @@
 #include "core/model/model_rebuild.h"
 
 namespace organsim {
+namespace hertz_layer_test {
 namespace {
 
 constexpr double kSize = testing::kContactBox;
@@ -364,4 +365,5 @@ TEST(HertzLayer, CpuBackendsApplyTheReferencesLayeredForcesBeforeAndAfterACut) {
 }
 
 }  // namespace
+}  // namespace hertz_layer_test
 }  // namespace organsim

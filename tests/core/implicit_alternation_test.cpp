@@ -13,6 +13,7 @@
 #include "core/sim/reference_backend.h"
 
 namespace organsim {
+namespace implicit_alternation_test {
 namespace {
 
 struct HeldSphere {
@@ -86,4 +87,5 @@ TEST(ImplicitEuler, ASettlingStateCountsNoAlternation) {
 }
 
 }  // namespace
+}  // namespace implicit_alternation_test
 }  // namespace organsim

@@ -25,6 +25,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace implicit_test {
 namespace {
 
 Eigen::VectorXd flat(const std::vector<Vec3>& v) {
@@ -584,4 +585,5 @@ TEST(ImplicitEuler, OptionsOutOfRangeAreRefused) {
 }
 
 }  // namespace
+}  // namespace implicit_test
 }  // namespace organsim

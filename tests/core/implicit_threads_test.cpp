@@ -12,6 +12,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace implicit_threads_test {
 namespace {
 
 // The three element terms: the per-tet volume term (volume_modulus), the
@@ -122,4 +123,5 @@ TEST(ImplicitEuler, ThreadsBelowOneAreRefused) {
 }
 
 }  // namespace
+}  // namespace implicit_threads_test
 }  // namespace organsim

@@ -14,6 +14,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace implicit_topology_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -110,4 +111,5 @@ INSTANTIATE_TEST_SUITE_P(Preconditioners, ImplicitTopology,
                          });
 
 }  // namespace
+}  // namespace implicit_topology_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace label_materials_test {
 namespace {
 
 using json = nlohmann::json;
@@ -198,4 +199,5 @@ TEST(LabelMaterials, RefusedCombinationsAreScenarioErrors) {
 }
 
 }  // namespace
+}  // namespace label_materials_test
 }  // namespace organsim

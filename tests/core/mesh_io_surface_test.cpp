@@ -8,6 +8,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace mesh_io_surface_test {
 namespace {
 
 using testing::error_message;
@@ -180,4 +181,5 @@ TEST(SurfaceIo, ErrorsNameTheFileAndTheProblem) {
 }
 
 }  // namespace
+}  // namespace mesh_io_surface_test
 }  // namespace organsim

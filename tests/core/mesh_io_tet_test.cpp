@@ -10,6 +10,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace mesh_io_tet_test {
 namespace {
 
 using testing::error_message;
@@ -217,4 +218,5 @@ TEST(TetMeshIo, AMeshWithANonPositiveTetIsNeverWritten) {
 }
 
 }  // namespace
+}  // namespace mesh_io_tet_test
 }  // namespace organsim

@@ -12,6 +12,7 @@
 #include "vtk_client.h"
 
 namespace organsim {
+namespace mesh_io_vtk_test {
 namespace {
 
 using testing::error_message;
@@ -248,4 +249,5 @@ TEST(GmshIo, Version1ReadsTheSameCube) {
 }
 
 }  // namespace
+}  // namespace mesh_io_vtk_test
 }  // namespace organsim

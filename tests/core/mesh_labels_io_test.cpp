@@ -12,6 +12,7 @@
 #include "vtk_client.h"
 
 namespace organsim {
+namespace mesh_labels_io_test {
 namespace {
 
 using testing::error_message;
@@ -116,4 +117,5 @@ TEST(MeshLabelsIo, NonIntegerLabelsAreErrorsNamingTheCell) {
 }
 
 }  // namespace
+}  // namespace mesh_labels_io_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace model_assembly_test {
 namespace {
 
 struct ReferenceSprings {
@@ -139,4 +140,5 @@ TEST(ModelAssembly, LinearTimeAssemblyEqualsTheStraightforwardOneAcrossRandomCut
 }
 
 }  // namespace
+}  // namespace model_assembly_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace nodal_volume_test {
 namespace {
 
 Material nodal_material(double nu = 0.45) { return testing::soft_material(nu); }
@@ -172,4 +173,5 @@ TEST(NodalVolume, CriticalStepIncludesTheNodalTerm) {
 }
 
 }  // namespace
+}  // namespace nodal_volume_test
 }  // namespace organsim

@@ -15,6 +15,7 @@
 #include "tests/core/cpu_kernel_test_util.h"
 
 namespace organsim {
+namespace prepare_adopt_test {
 namespace {
 
 using testing::kSize;
@@ -94,4 +95,5 @@ TEST(PrepareAdopt, AVersionPreparedElsewhereIsRefused) {
 }
 
 }  // namespace
+}  // namespace prepare_adopt_test
 }  // namespace organsim

@@ -12,6 +12,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace rebuild_test {
 namespace {
 
 // A 4 x 4 x 4 cube box of 4 cm; jitter moves interior points off the grid.
@@ -173,4 +174,5 @@ TEST(Rebuild, MalformedChangesAreRefused) {
 }
 
 }  // namespace
+}  // namespace rebuild_test
 }  // namespace organsim

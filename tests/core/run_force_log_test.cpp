@@ -11,6 +11,7 @@
 #include "file_size_limit.h"
 
 namespace organsim {
+namespace run_force_log_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -111,4 +112,5 @@ TEST(ForceLog, IncompleteRunSaysSoAndStaysValidJson) {
 }
 
 }  // namespace
+}  // namespace run_force_log_test
 }  // namespace organsim

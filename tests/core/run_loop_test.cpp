@@ -12,6 +12,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace run_loop_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -348,4 +349,5 @@ TEST(RunLoop, NoForceLogWhenOutputsForcesIsFalse) {
 }
 
 }  // namespace
+}  // namespace run_loop_test
 }  // namespace organsim

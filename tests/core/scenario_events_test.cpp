@@ -7,6 +7,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace scenario_events_test {
 namespace {
 
 using nlohmann::json;
@@ -163,4 +164,5 @@ TEST(ScenarioEvents, SutureErrorsNameTheField) {
 }
 
 }  // namespace
+}  // namespace scenario_events_test
 }  // namespace organsim

@@ -13,6 +13,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace scenario_parse_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -612,9 +613,11 @@ TEST(ToolSpec, OrientationIsSlerpedBetweenKeyframesAndExactAtThem) {
 }
 
 }  // namespace
+}  // namespace scenario_parse_test
 }  // namespace organsim
 
 namespace organsim {
+namespace scenario_parse_test {
 namespace {
 
 // time.integrator and the implicit solver's settings: defaults, values,
@@ -665,4 +668,5 @@ TEST(ScenarioParse, IntegratorAndItsSolverSettingsAreReadAndChecked) {
 }
 
 }  // namespace
+}  // namespace scenario_parse_test
 }  // namespace organsim

@@ -10,6 +10,7 @@
 #include "test_models.h"
 
 namespace organsim {
+namespace settle_test {
 namespace {
 
 // `seconds` of settling at dt 1e-4 s, 10 substeps, one thread.
@@ -109,4 +110,5 @@ TEST(Settle, AnUnstableScenarioStepSettlesAtAStableOne) {
 }
 
 }  // namespace
+}  // namespace settle_test
 }  // namespace organsim

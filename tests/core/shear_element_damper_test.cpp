@@ -21,6 +21,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace shear_element_damper_test {
 namespace {
 
 constexpr double kTau = 0.01;  // s, the damping time of these tests
@@ -293,4 +294,5 @@ TEST(ShearElementDamper, CriticalStepIncludesTheDamper) {
 }
 
 }  // namespace
+}  // namespace shear_element_damper_test
 }  // namespace organsim

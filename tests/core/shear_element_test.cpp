@@ -28,6 +28,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace shear_element_test {
 namespace {
 
 Material shear_material(double nu = 0.1, ShearFormulation formulation = ShearFormulation::Smoothed) {
@@ -470,4 +471,5 @@ TEST(ShearElement, ModelsWithItRunOnTheSimdKernel) {
 }
 
 }  // namespace
+}  // namespace shear_element_test
 }  // namespace organsim

@@ -15,6 +15,7 @@
 #include "tests/core/cpu_kernel_test_util.h"
 
 namespace organsim {
+namespace simd_dispatch_test {
 namespace {
 
 // ORGANSIM_SIMD and Highway's mock set for one test, undone after it.
@@ -104,4 +105,5 @@ TEST_F(SimdDispatch, AnUnknownOrUnsupportedTargetIsAClearError) {
 }
 
 }  // namespace
+}  // namespace simd_dispatch_test
 }  // namespace organsim

@@ -9,6 +9,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace spring_mass_test {
 namespace {
 
 struct Oscillation {
@@ -116,4 +117,5 @@ TEST(SpringMass, CoincidentPointsGiveNoNaN) {
 }
 
 }  // namespace
+}  // namespace spring_mass_test
 }  // namespace organsim

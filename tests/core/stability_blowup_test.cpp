@@ -16,6 +16,7 @@
 #include "tests/core/stability_test_util.h"
 
 namespace organsim {
+namespace stability_blowup_test {
 namespace {
 
 // Ticks the backend with the monitor attached; returns the error message, or
@@ -305,4 +306,5 @@ TEST(StabilityBlowup, RunLoopWritesTruncatedLog) {
 }
 
 }  // namespace
+}  // namespace stability_blowup_test
 }  // namespace organsim

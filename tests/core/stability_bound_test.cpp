@@ -25,6 +25,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace stability_bound_test {
 namespace {
 
 struct Case {
@@ -186,4 +187,5 @@ TEST(StabilityBound, ScaleWithoutAPositiveValueAtAFreePointIsRefused) {
 }
 
 }  // namespace
+}  // namespace stability_bound_test
 }  // namespace organsim

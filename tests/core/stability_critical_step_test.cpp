@@ -10,6 +10,7 @@
 #include "tests/core/stability_test_util.h"
 
 namespace organsim {
+namespace stability_critical_step_test {
 namespace {
 
 // Two free equal masses on one spring: lambda = 2k/m, so dt_crit = sqrt(2m/k)
@@ -190,4 +191,5 @@ TEST(StabilityCriticalStep, PredictionMatchesObservedThresholdJitteredWithVolume
 }
 
 }  // namespace
+}  // namespace stability_critical_step_test
 }  // namespace organsim

@@ -7,6 +7,7 @@
 #include "core/stability/study.h"
 
 namespace organsim {
+namespace stability_study_test {
 namespace {
 
 TEST(StabilityStudy, CompareAlignsTicksAndLatency) {
@@ -37,4 +38,5 @@ TEST(StabilityStudy, ParetoFront) {
 }
 
 }  // namespace
+}  // namespace stability_study_test
 }  // namespace organsim

@@ -14,6 +14,7 @@
 #include "tests/core/stability_test_util.h"
 
 namespace organsim {
+namespace stability_tool_contact_test {
 namespace {
 
 constexpr double kSize = 0.04;
@@ -248,4 +249,5 @@ TEST(StabilityToolContact, SmallToolPressingALightCornerCrossesOverWithin5Percen
 }
 
 }  // namespace
+}  // namespace stability_tool_contact_test
 }  // namespace organsim

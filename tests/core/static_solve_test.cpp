@@ -10,6 +10,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace static_solve_test {
 namespace {
 
 TEST(StaticSolve, SpringPulledAtOneEndGivesHookesReaction) {
@@ -128,4 +129,5 @@ INSTANTIATE_TEST_SUITE_P(VolumeTerms, StaticSolveRelaxed,
                          [](const auto& info) { return std::string(volume_formulation_name(info.param)); });
 
 }  // namespace
+}  // namespace static_solve_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace step_after_change_test {
 namespace {
 
 // Both volume terms: the nodal one's rows reach one ring further (a row sums
@@ -81,4 +82,5 @@ INSTANTIATE_TEST_SUITE_P(VolumeTerms, StepAfterChange,
                          [](const auto& info) { return std::string(volume_formulation_name(info.param)); });
 
 }  // namespace
+}  // namespace step_after_change_test
 }  // namespace organsim

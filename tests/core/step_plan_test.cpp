@@ -11,6 +11,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace step_plan_test {
 namespace {
 
 struct Scene {
@@ -114,4 +115,5 @@ TEST(StepPlan, RebuildWithSuturesRecomputesThePlan) {
 }
 
 }  // namespace
+}  // namespace step_plan_test
 }  // namespace organsim

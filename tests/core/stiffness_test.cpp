@@ -7,6 +7,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace stiffness_test {
 namespace {
 
 // The tet (0, e_x, e_y, e_z) * 1 cm.
@@ -97,4 +98,5 @@ TEST(Stiffness, PoissonRatioOutOfRangeOrWithVolumeModulusIsRefused) {
 }
 
 }  // namespace
+}  // namespace stiffness_test
 }  // namespace organsim

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+namespace stress_scenarios_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -190,3 +191,4 @@ TEST(StressScenarios, HighDampingStable) {
 }
 
 }  // namespace
+}  // namespace stress_scenarios_test

@@ -14,6 +14,7 @@
 #include "tests/core/contact_test_util.h"
 
 namespace organsim {
+namespace surface_contact_test {
 namespace {
 
 using testing::Contact;
@@ -258,4 +259,5 @@ TEST(SurfaceContact, RebuildReExtractsTheSurface) {
 }
 
 }  // namespace
+}  // namespace surface_contact_test
 }  // namespace organsim

@@ -12,6 +12,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace surface_limits_test {
 namespace {
 
 using testing::error_message;
@@ -130,4 +131,5 @@ TEST(SurfaceLimits, BadIndicesAndNoFacesAreRefused) {
 }
 
 }  // namespace
+}  // namespace surface_limits_test
 }  // namespace organsim

@@ -22,6 +22,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace suture_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -381,4 +382,5 @@ TEST(Suture, ExplicitPairsAreTiedInInputNumbering) {
 }
 
 }  // namespace
+}  // namespace suture_test
 }  // namespace organsim

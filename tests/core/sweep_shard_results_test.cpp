@@ -19,6 +19,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace sweep_shard_results_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -344,4 +345,5 @@ TEST(SweepCaseStatus, JudgeRunNeedsACompleteForceLog) {
 }
 
 }  // namespace
+}  // namespace sweep_shard_results_test
 }  // namespace organsim

@@ -14,6 +14,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace sweep_spec_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -213,4 +214,5 @@ TEST(FieldPath, SetsExistingAndNewFields) {
 }
 
 }  // namespace
+}  // namespace sweep_spec_test
 }  // namespace organsim

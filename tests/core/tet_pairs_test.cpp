@@ -12,6 +12,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace tet_pairs_test {
 namespace {
 
 // 6 V of the tet (a, b, c, d) at the rest positions.
@@ -99,4 +100,5 @@ TEST(TetPairs, BatchesHoldEveryPairOnceAndNoTwoPairsOfABatchShareAPoint) {
 }
 
 }  // namespace
+}  // namespace tet_pairs_test
 }  // namespace organsim

@@ -11,6 +11,7 @@
 #include "mesh_io_test_util.h"
 
 namespace organsim {
+namespace tet_reader_errors_test {
 namespace {
 
 // Two positively oriented tets on five points, in each format.
@@ -130,4 +131,5 @@ TEST(TetReaderErrors, EachBrokenPlaceIsNamed) {
 }
 
 }  // namespace
+}  // namespace tet_reader_errors_test
 }  // namespace organsim

@@ -10,6 +10,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace thread_choice_test {
 namespace {
 
 constexpr int32_t kSubsteps = 10;
@@ -278,4 +279,5 @@ TEST(ThreadChoice, BackendInALiveLoopTakesTheLastThreadWhenTheOthersMissTheBudge
 }
 
 }  // namespace
+}  // namespace thread_choice_test
 }  // namespace organsim

@@ -69,6 +69,7 @@ int posix_memalign(void** out, size_t alignment, size_t n) {
 #endif
 
 namespace organsim {
+namespace tick_allocation_test {
 namespace {
 
 #if ORGANSIM_COUNT_ALLOCATIONS
@@ -149,4 +150,5 @@ TEST(ImplicitEuler, AStepAllocatesNothingOnceSizedWithOrWithoutNewtonIterations)
 }
 
 }  // namespace
+}  // namespace tick_allocation_test
 }  // namespace organsim

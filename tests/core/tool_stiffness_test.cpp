@@ -7,6 +7,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace tool_stiffness_test {
 namespace {
 
 // A 4x4x4-cell box whose outer cell layers are 0.5 mm thick against 10 mm
@@ -104,4 +105,5 @@ TEST(ToolStiffness, CpuPushContactOnALightPointUsesItsScale) {
 }
 
 }  // namespace
+}  // namespace tool_stiffness_test
 }  // namespace organsim

@@ -12,6 +12,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace topology_cut_test {
 namespace {
 
 Material soft() {
@@ -185,9 +186,11 @@ TEST(Cut, MomentumAndForcesUnchangedAtTheCutInstant) {
 }
 
 }  // namespace
+}  // namespace topology_cut_test
 }  // namespace organsim
 
 namespace organsim {
+namespace topology_cut_test {
 namespace {
 
 // Seeded random blades chosen to hit degenerate cases on the unjittered
@@ -249,4 +252,5 @@ TEST(Cut, SeededDegenerateBladesKeepTheInvariants) {
 }
 
 }  // namespace
+}  // namespace topology_cut_test
 }  // namespace organsim

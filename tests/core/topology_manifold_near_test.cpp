@@ -12,6 +12,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace topology_manifold_near_test {
 namespace {
 
 TEST(ManifoldNear, FindsTheSameEdgesAsTheCheckOverEveryTet) {
@@ -57,4 +58,5 @@ TEST(ManifoldNear, FindsTheSameEdgesAsTheCheckOverEveryTet) {
 }
 
 }  // namespace
+}  // namespace topology_manifold_near_test
 }  // namespace organsim

@@ -20,6 +20,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace topology_run_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -309,4 +310,5 @@ TEST(TopologyRun, OffTheTicksPathTheWorkerMakesTheFullDtEstimate) {
 }
 
 }  // namespace
+}  // namespace topology_run_test
 }  // namespace organsim

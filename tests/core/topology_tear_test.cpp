@@ -13,6 +13,7 @@
 #include "tests/core/topology_test_util.h"
 
 namespace organsim {
+namespace topology_tear_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -94,4 +95,5 @@ TEST(Tear, BarTearScenarioComesApartInTwo) {
 }
 
 }  // namespace
+}  // namespace topology_tear_test
 }  // namespace organsim

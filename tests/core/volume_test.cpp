@@ -6,6 +6,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace volume_test {
 namespace {
 
 double deformed_volume(const Model& model, const std::vector<Vec3>& x) {
@@ -100,4 +101,5 @@ TEST(Volume, SqueezingKeepsVolumeWithinBound) {
 }
 
 }  // namespace
+}  // namespace volume_test
 }  // namespace organsim

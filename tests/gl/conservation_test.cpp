@@ -7,6 +7,7 @@
 #include "gl_test_scenes.h"
 
 namespace organsim {
+namespace conservation_test {
 namespace {
 
 constexpr double kDt = 1e-4;  // s
@@ -105,4 +106,5 @@ TEST(GlConservation, BlowUpIsReportedFromTheGpuWithoutAPositionReadback) {
 }
 
 }  // namespace
+}  // namespace conservation_test
 }  // namespace organsim

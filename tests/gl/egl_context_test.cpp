@@ -13,6 +13,7 @@
 #include "shaders/bindings.glsl.h"
 
 namespace organsim::gl {
+namespace egl_context_test {
 namespace {
 
 TEST(EglContext, CreatesOpenGL45CoreWithoutAWindow) {
@@ -114,4 +115,5 @@ TEST(Shaders, CompileFailureNamesTheShaderAndGivesTheDriverLog) {
 }
 
 }  // namespace
+}  // namespace egl_context_test
 }  // namespace organsim::gl

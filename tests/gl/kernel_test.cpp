@@ -23,6 +23,7 @@
 #include "tests/core/contact_test_util.h"
 
 namespace organsim {
+namespace kernel_test {
 namespace {
 
 constexpr double kDt = 1e-4;  // s
@@ -238,4 +239,5 @@ TEST(GlBackendOptions, ThreadsPerPointOutsideOneToSixteenIsAUsageError) {
 }
 
 }  // namespace
+}  // namespace kernel_test
 }  // namespace organsim

@@ -10,6 +10,7 @@
 #include "gl_test_scenes.h"
 
 namespace organsim {
+namespace label_materials_test {
 namespace {
 
 constexpr double kDt = 1e-4;  // s
@@ -75,4 +76,5 @@ TEST(GlLabelMaterials, TrajectoryMatchesTheCpuReference) {
 }
 
 }  // namespace
+}  // namespace label_materials_test
 }  // namespace organsim

@@ -11,6 +11,7 @@
 #include "shaders/bindings.glsl.h"
 
 namespace organsim::gl {
+namespace model_pack_test {
 namespace {
 
 TEST(GlModelPack, EveryEntryOnceAtEachEndAndPaddingInert) {
@@ -99,4 +100,5 @@ TEST(GlModelPack, LeanModelHasNoTetEntriesAndWrongChunkSizeIsAnError) {
 }
 
 }  // namespace
+}  // namespace model_pack_test
 }  // namespace organsim::gl

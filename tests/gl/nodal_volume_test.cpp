@@ -9,6 +9,7 @@
 #include "gl_test_scenes.h"
 
 namespace organsim {
+namespace nodal_volume_test {
 namespace {
 
 constexpr double kDt = 1e-4;  // s
@@ -55,4 +56,5 @@ TEST(GlNodalVolume, TrajectoryMatchesTheCpuReference) {
 }
 
 }  // namespace
+}  // namespace nodal_volume_test
 }  // namespace organsim

@@ -28,6 +28,7 @@
 #include "gl_test_scenes.h"
 
 namespace organsim {
+namespace parity_test {
 namespace {
 
 constexpr double kDt = 1e-4;    // s
@@ -402,4 +403,5 @@ TEST(GlParity, TheHertzLayerSolvesAContactAcrossSeveralBlocks) {
 }
 
 }  // namespace
+}  // namespace parity_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace rebuild_test {
 namespace {
 
 constexpr double kDt = 1e-4;
@@ -319,4 +320,5 @@ TEST(GlRebuild, ReactionPositionsAreThoseOfTheReactionsTickAcrossAnAdopt) {
 }
 
 }  // namespace
+}  // namespace rebuild_test
 }  // namespace organsim

@@ -7,6 +7,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace shader_sources_test {
 namespace {
 
 TEST(GlShaderSources, IncludeIsExpandedBetweenLineDirectives) {
@@ -27,4 +28,5 @@ TEST(GlShaderSources, MalformedOrMissingIncludeIsAnError) {
 }
 
 }  // namespace
+}  // namespace shader_sources_test
 }  // namespace organsim

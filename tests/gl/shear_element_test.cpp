@@ -18,6 +18,7 @@
 #include "tests/core/test_models.h"
 
 namespace organsim {
+namespace shear_element_test {
 namespace {
 
 constexpr double kDt = 1e-4;  // s
@@ -193,4 +194,5 @@ TEST(GlShearElement, TrajectoryMatchesTheCpuReference) {
 }
 
 }  // namespace
+}  // namespace shear_element_test
 }  // namespace organsim

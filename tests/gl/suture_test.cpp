@@ -12,6 +12,7 @@
 #include "tests/core/suture_test_util.h"
 
 namespace organsim {
+namespace suture_test {
 namespace {
 
 // Tolerance as tests/gl/kernel_test.cpp: the kernel sees the reference's
@@ -84,4 +85,5 @@ TEST(GlSuture, CutThenSutureRunMatchesTheCpuReference) {
 }
 
 }  // namespace
+}  // namespace suture_test
 }  // namespace organsim

@@ -8,6 +8,7 @@
 #include "gl_test_scenes.h"
 
 namespace organsim {
+namespace topology_parity_test {
 namespace {
 
 // A 4 cm block (4 x 4 x 4 cubes) held at its base under gravity. From 10 to
@@ -71,4 +72,5 @@ TEST(GlTopology, CutRunMatchesTheCpuReference) {
 }
 
 }  // namespace
+}  // namespace topology_parity_test
 }  // namespace organsim

@@ -5,6 +5,7 @@
 #include "core/live/client_command.h"
 
 namespace organsim {
+namespace client_command_test {
 namespace {
 
 TEST(ClientCommand, CutTakesNoLengthsOrTwoPositiveOnesAndNothingElseIsACommand) {
@@ -59,4 +60,5 @@ TEST(ClientCommand, TheBladeRunsAlongThePosesZAxisAndSweepsAlongItsXAxisInTheSce
 }
 
 }  // namespace
+}  // namespace client_command_test
 }  // namespace organsim

@@ -8,6 +8,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace client_frame_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -82,4 +83,5 @@ TEST(ClientFrame, TheSceneBoxIsTheModelsBoxGrownByItsLargestExtent) {
 }
 
 }  // namespace
+}  // namespace client_frame_test
 }  // namespace organsim

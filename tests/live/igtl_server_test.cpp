@@ -8,6 +8,7 @@
 #include "tests/live/igtl_test_client.h"
 
 namespace organsim {
+namespace igtl_server_test {
 namespace {
 
 struct CountingSink : LivePoseSink {
@@ -58,4 +59,5 @@ TEST(IgtlServer, RefusesAnAddressItCannotUse) {
 }
 
 }  // namespace
+}  // namespace igtl_server_test
 }  // namespace organsim

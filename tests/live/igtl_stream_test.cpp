@@ -14,6 +14,7 @@
 #include "tests/live/igtl_test_client.h"
 
 namespace organsim {
+namespace igtl_stream_test {
 namespace {
 
 using test::IgtlTestClient;
@@ -176,4 +177,5 @@ TEST(IgtlStream, ReadsTheLibrarysStringAndRefusesABrokenOne) {
 }
 
 }  // namespace
+}  // namespace igtl_stream_test
 }  // namespace organsim

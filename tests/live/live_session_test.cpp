@@ -23,6 +23,7 @@
 #include "core/sim/cpu_backend.h"
 
 namespace organsim {
+namespace live_session_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -687,4 +688,5 @@ TEST(LiveSession, AScenariosOneTickCutIsBuiltOffTheTicksPathAndReplaysBitForBit)
 }
 
 }  // namespace
+}  // namespace live_session_test
 }  // namespace organsim

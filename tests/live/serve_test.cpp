@@ -27,6 +27,7 @@
 #include "tests/live/serve_process.h"
 
 namespace organsim::test {
+namespace serve_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -540,4 +541,5 @@ TEST(Serve, SendsTheBoundarySurfaceAtItsRateInTheClientsFrame) {
 }
 
 }  // namespace
+}  // namespace serve_test
 }  // namespace organsim::test

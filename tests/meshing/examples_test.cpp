@@ -11,6 +11,7 @@
 #include "meshing/surface_check.h"
 
 namespace organsim {
+namespace examples_test {
 namespace {
 
 TriangleMesh example(const char* name) {
@@ -52,4 +53,5 @@ TEST(Examples, HaveTheDocumentedSizes) {
 }
 
 }  // namespace
+}  // namespace examples_test
 }  // namespace organsim

@@ -18,6 +18,7 @@
 #include "tests/meshing/fuzz_rows.h"
 
 namespace organsim {
+namespace fuzz_seeds_test {
 namespace {
 
 using namespace fuzz_rows;
@@ -67,4 +68,5 @@ TEST(FuzzSeeds, EverySeedIsAcceptedUnlessListedAsRefused) {
 }
 
 }  // namespace
+}  // namespace fuzz_seeds_test
 }  // namespace organsim

@@ -17,6 +17,7 @@
 #include "tests/meshing/label_image_files.h"
 
 namespace organsim {
+namespace label_image_test {
 namespace {
 
 using testing::error_message;
@@ -388,4 +389,5 @@ TEST(LabelImageMesh, TargetPointsSizeTheLabelsWithoutTheirOwnCellSize) {
 }
 
 }  // namespace
+}  // namespace label_image_test
 }  // namespace organsim

@@ -13,6 +13,7 @@
 #include "meshing/mesh_surface.h"
 
 namespace organsim {
+namespace mesh_surface_test {
 namespace {
 
 using testing::error_message;
@@ -229,4 +230,5 @@ TEST_F(CgalDataMeshes, OpenSelfIntersectingAndBinaryStl) {
 }
 
 }  // namespace
+}  // namespace mesh_surface_test
 }  // namespace organsim

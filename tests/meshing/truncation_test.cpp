@@ -18,6 +18,7 @@
 #include "tests/meshing/fuzz_rows.h"
 
 namespace organsim {
+namespace truncation_test {
 namespace {
 
 using namespace fuzz_rows;
@@ -132,4 +133,5 @@ TEST(Truncation, EveryReaderRefusesItsValidInputsCutShort) {
 }
 
 }  // namespace
+}  // namespace truncation_test
 }  // namespace organsim

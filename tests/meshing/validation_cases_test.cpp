@@ -14,6 +14,7 @@
 #include "meshing/mesh_surface.h"
 
 namespace organsim {
+namespace validation_cases_test {
 namespace {
 
 constexpr double kLiverCellSize = 0.008;  // m
@@ -298,4 +299,5 @@ TEST(ValidationCases, LineLoadWithTheLineLayerIsWithinFifteenPercentOfAFinerMesh
 }
 
 }  // namespace
+}  // namespace validation_cases_test
 }  // namespace organsim

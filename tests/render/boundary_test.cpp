@@ -5,6 +5,7 @@
 #include "core/mesh/tet_mesh.h"
 
 namespace organsim {
+namespace boundary_test {
 namespace {
 
 TEST(Boundary, SingleTetHasFourOutwardFaces) {
@@ -64,4 +65,5 @@ TEST(Boundary, OrderOfTetsDoesNotChangeTheSurface) {
 }
 
 }  // namespace
+}  // namespace boundary_test
 }  // namespace organsim

@@ -16,6 +16,7 @@
 #include "tests/render/render_test_util.h"
 
 namespace organsim {
+namespace colormap_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -155,4 +156,5 @@ TEST(FrameCost, MeasuresEveryStage) {
 }
 
 }  // namespace
+}  // namespace colormap_cli_test
 }  // namespace organsim

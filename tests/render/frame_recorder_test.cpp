@@ -17,6 +17,7 @@
 #include "tests/render/render_test_util.h"
 
 namespace organsim {
+namespace frame_recorder_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -197,4 +198,5 @@ TEST(FrameRecorder, NoOutputsMakeNoRecorder) {
 }
 
 }  // namespace
+}  // namespace frame_recorder_test
 }  // namespace organsim

@@ -13,6 +13,7 @@
 #include "tests/render/render_test_util.h"
 
 namespace organsim {
+namespace gl_backend_frames_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -155,4 +156,5 @@ TEST(GlBackendFrames, LabelColoursFromTheSimulationBufferMatchTheUploadPath) {
 }
 
 }  // namespace
+}  // namespace gl_backend_frames_test
 }  // namespace organsim

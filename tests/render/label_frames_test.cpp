@@ -21,6 +21,7 @@
 #include "tests/render/render_test_util.h"
 
 namespace organsim {
+namespace label_frames_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -172,4 +173,5 @@ TEST(LabelFrames, EdgesBetweenFaceGroupsAreWhereTheGroupsMeet) {
 }
 
 }  // namespace
+}  // namespace label_frames_test
 }  // namespace organsim

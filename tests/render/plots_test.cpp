@@ -12,6 +12,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace plots_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -109,9 +110,11 @@ TEST(ContactSheet, GridOfTilesWithBordersAndTimestamps) {
 }
 
 }  // namespace
+}  // namespace plots_test
 }  // namespace organsim
 
 namespace organsim {
+namespace plots_test {
 namespace {
 
 // A backend whose reaction comes one tick late, like the GL backend's.
@@ -176,4 +179,5 @@ TEST(ForcePlotRecorder, ShiftsLateReactionsToTheTickTheyBelongTo) {
 }
 
 }  // namespace
+}  // namespace plots_test
 }  // namespace organsim

@@ -8,6 +8,7 @@
 #include "tests/render/render_test_util.h"
 
 namespace organsim {
+namespace run_camera_test {
 namespace {
 
 // A long thin organ along x, 20 x 4 x 4 cm, as a cloud of its box corners and centre.
@@ -90,4 +91,5 @@ TEST(ColormapRange, FixedFromTheScenarioOrEstimatedFromTheToolsReach) {
 }
 
 }  // namespace
+}  // namespace run_camera_test
 }  // namespace organsim

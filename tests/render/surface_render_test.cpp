@@ -11,6 +11,7 @@
 #include "tests/render/render_test_util.h"
 
 namespace organsim {
+namespace surface_render_test {
 namespace {
 
 using testing::differs_from;
@@ -135,4 +136,5 @@ TEST(SurfaceRenderer, WireframeAndToolAddPixels) {
 }
 
 }  // namespace
+}  // namespace surface_render_test
 }  // namespace organsim

@@ -11,6 +11,7 @@
 #include "tests/core/mesh_io_test_util.h"
 
 namespace organsim {
+namespace video_sink_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -71,4 +72,5 @@ TEST(VideoSink, AFinishedVideoHasItsFramesUnderTheFinalName) {
 }
 
 }  // namespace
+}  // namespace video_sink_test
 }  // namespace organsim

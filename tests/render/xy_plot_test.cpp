@@ -10,6 +10,7 @@
 #include "core/util/error.h"
 
 namespace organsim {
+namespace xy_plot_test {
 namespace {
 
 TEST(XyPlot, ALineFromLowerLeftToUpperRightAndTheBand) {
@@ -59,4 +60,5 @@ TEST(XyPlot, MismatchedSeriesIsAUsageError) {
 }
 
 }  // namespace
+}  // namespace xy_plot_test
 }  // namespace organsim
