@@ -33,9 +33,13 @@ inline void require_names_file(const Error& e, const std::string& source) {
   require(message.rfind(source + ": ", 0) == 0, "error message does not start with the file name: " + message);
 }
 
-#ifdef ORGANSIM_FUZZ_EXTENSION
+#ifdef ORGANSIM_FUZZ_HARNESS
+// The row's extension, defined in the harness executable's own small unit
+// (tests/fuzz/CMakeLists.txt), so that each kind's source is compiled once
+// for all its rows.
+extern const char* const kExtension;
 // The file name every harness reads its input as: "fuzz" + the row's extension.
-inline const std::string kSource = std::string("fuzz") + ORGANSIM_FUZZ_EXTENSION;
+inline const std::string kSource = std::string("fuzz") + kExtension;
 
 // The body of most harnesses: `read` (a fuzz_inputs.h function) either takes
 // the input, checking what it read, or throws an Error naming the file.
