@@ -4,21 +4,13 @@
 // simd_records-inl.h how it reads and writes its records.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "core/sim/cpu_kernel_simd.cpp"
-// The targets: the x86-64 baseline's EMU128, SSE4 (x86-64-v2), AVX2
-// (x86-64-v3), AVX3 (AVX-512, x86-64-v4); NEON on arm64. Others are left
-// out: each target compiles the whole kernel once more, and these cover
-// every CPU people run it on (AVX3_DL adds nothing the kernel uses; SVE and
-// RVV have no fixed register width, which the packing needs).
-#ifndef HWY_DISABLED_TARGETS
-#define HWY_DISABLED_TARGETS \
-  (HWY_SSSE3 | HWY_AVX3_DL | HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128 | HWY_RVV)
-#endif
-// Every attainable target, below the build's baseline too: the portable
-// fallback is then compiled on arm64 as well (whose baseline, NEON, would
-// otherwise drop it), so that the tests run it wherever they run.
-#define HWY_COMPILE_ALL_ATTAINABLE
+// The targets before foreach_target.h (which re-includes this file once per
+// target), in this order: not for clang-format to sort.
+// clang-format off
+#include "core/sim/simd_targets.h"
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
 #include "hwy/highway.h"
+// clang-format on
 
 #include <omp.h>
 
@@ -979,26 +971,7 @@ struct Entry {
   Entry{TARGET, &NS::make_kernel_float, &NS::make_kernel_double, &NS::float_lanes},
 
 // Best first: the targets compiled here.
-const Entry kEntries[] = {
-#if HWY_TARGETS & HWY_AVX3
-    ORGANSIM_ENTRY(HWY_AVX3, N_AVX3)
-#endif
-#if HWY_TARGETS & HWY_AVX2
-    ORGANSIM_ENTRY(HWY_AVX2, N_AVX2)
-#endif
-#if HWY_TARGETS & HWY_SSE4
-    ORGANSIM_ENTRY(HWY_SSE4, N_SSE4)
-#endif
-#if HWY_TARGETS & HWY_NEON
-    ORGANSIM_ENTRY(HWY_NEON, N_NEON)
-#endif
-#if HWY_TARGETS & HWY_EMU128
-    ORGANSIM_ENTRY(HWY_EMU128, N_EMU128)
-#endif
-#if HWY_TARGETS & HWY_SCALAR
-    ORGANSIM_ENTRY(HWY_SCALAR, N_SCALAR)
-#endif
-};
+const Entry kEntries[] = {ORGANSIM_COMPILED_TARGETS(ORGANSIM_ENTRY)};
 #undef ORGANSIM_ENTRY
 
 SimdTarget target_of(int64_t bits) {
