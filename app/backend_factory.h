@@ -19,8 +19,8 @@ struct BackendSelection {
   int32_t gl_threads_per_point = 0;      // gl: invocations per point, 0 = the backend's choice
   bool gl_keep_reaction_positions = false;  // gl: GlBackendOptions::keep_reaction_positions (organsim serve)
   double cpu_live_share = 0;             // cpu: CpuBackendOptions::live_share (organsim serve)
-  // cpu: the kernel's target by name ("avx2", ...: CpuBackendOptions::simd);
-  // empty: the default.
+  // cpu: the kernel's target by name ("avx2", ...: CpuBackendOptions::simd;
+  // also the implicit integrators' product's); empty: the default.
   std::string cpu_kernel;
   // time.integrator: implicit Euler runs on the CPU in double only
   // (core/sim/reference_backend.h); another backend or precision is refused.

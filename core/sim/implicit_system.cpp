@@ -21,9 +21,30 @@ ImplicitSystem::ShearMatrix row_major(const Model& model, const Triplets& t) {
 Eigen::Map<const Eigen::Vector3d> at(const Eigen::VectorXd& v, int32_t p) { return Eigen::Map<const Eigen::Vector3d>(v.data() + 3 * p); }
 Eigen::Map<Eigen::Vector3d> at(Eigen::VectorXd& v, int32_t p) { return Eigen::Map<Eigen::Vector3d>(v.data() + 3 * p); }
 
+// One incidence (point i's rows start[i] .. start[i + 1]) laid out as the
+// SIMD gather's slot rows (implicit_gather_simd.h): each group's first row
+// (groups + 1) and the incidence row each slot holds (-1: padding).
+void slot_rows(int32_t groups, const std::vector<int32_t>& start, std::vector<int32_t>& group_row,
+               std::vector<int32_t>& slot_row) {
+  group_row.assign(static_cast<size_t>(groups) + 1, 0);
+  for (int32_t g = 0; g < groups; ++g) {
+    int32_t rows = 0;
+    for (int32_t i = kGatherGroup * g; i < kGatherGroup * (g + 1); ++i) rows = std::max(rows, start[i + 1] - start[i]);
+    group_row[g + 1] = group_row[g] + rows;
+  }
+  slot_row.assign(static_cast<size_t>(kGatherGroup) * group_row[groups], -1);
+  for (int32_t g = 0; g < groups; ++g)
+    for (int32_t r = 0; r < group_row[g + 1] - group_row[g]; ++r)
+      for (int32_t lane = 0; lane < kGatherGroup; ++lane) {
+        const int32_t i = kGatherGroup * g + lane;
+        if (r < start[i + 1] - start[i])
+          slot_row[static_cast<size_t>(kGatherGroup) * (group_row[g] + r) + lane] = start[i] + r;
+      }
+}
+
 }  // namespace
 
-ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads)
+ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads, const std::optional<SimdTarget>& product)
     : model_(model), threads_(std::max<int32_t>(threads, 1)), patch_row_(static_cast<size_t>(threads_)) {
   if (model.has_shear_element()) {
     shear_k_ = row_major(model, rest_stiffness(model, RestTerms::ShearElement));
@@ -71,8 +92,34 @@ ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads)
       patch_start_[i + 1] = static_cast<int32_t>(patch_point_.size());
     }
   }
-  tet_term_.resize(model.has_volume() ? model.ntet() : 0);
+  tet_term_.resize(model.has_volume() ? model.ntet() + 1 : 0);
   node_term_.resize(model.has_nodal_volume() ? n : 0);
+  if (product) {
+    simd_gather_ = implicit_gather_for(*product);
+    GatherStreams& s = streams_;
+    s.groups = n / kGatherGroup;
+    // A padding slot's other end is its own point (dp = 0), its corner the zero coefficient tet_term_[ntet].
+    slot_rows(s.groups, spring_start_, s.spring_row, spring_slot_row_);
+    const size_t springs = spring_slot_row_.size();
+    s.other3.resize(springs);
+    for (int32_t g = 0; g < s.groups; ++g)
+      for (size_t k = size_t{kGatherGroup} * s.spring_row[g]; k < size_t{kGatherGroup} * s.spring_row[g + 1]; ++k) {
+        const int32_t row = spring_slot_row_[k];
+        const int32_t self = kGatherGroup * g + static_cast<int32_t>(k % kGatherGroup);
+        s.other3[k] = 3 * (row >= 0 ? spring_other_[row] : self);
+      }
+    for (auto* stream : {&s.u[0], &s.u[1], &s.u[2], &s.axial, &s.transverse, &s.damper}) stream->assign(springs, 0);
+    if (model.has_volume()) {
+      slot_rows(s.groups, corner_start_, s.corner_row, corner_slot_row_);
+      const size_t corners = corner_slot_row_.size();
+      s.corner_tet.resize(corners);
+      for (size_t k = 0; k < corners; ++k)
+        s.corner_tet[k] = corner_slot_row_[k] >= 0 ? corner_of_point_[corner_slot_row_[k]] >> 2 : model.ntet();
+      for (auto& stream : s.gradient) stream.assign(corners, 0);
+    } else {
+      s.corner_row.assign(static_cast<size_t>(s.groups) + 1, 0);
+    }
+  }
 }
 
 template <class Body>
@@ -130,6 +177,22 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
       for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
         corner_gradient_[k] = volume_gradient_[corner_of_point_[k] >> 2][corner_of_point_[k] & 3];
   });
+  // And into the SIMD gather's slots (its padding stays zero).
+  if (simd_gather_)
+    for_each(streams_.groups, [&](int32_t g) {
+      GatherStreams& s = streams_;
+      for (size_t k = size_t{kGatherGroup} * s.spring_row[g]; k < size_t{kGatherGroup} * s.spring_row[g + 1]; ++k)
+        if (const int32_t row = spring_slot_row_[k]; row >= 0) {
+          const SpringTangent& tangent = spring_at_[row];
+          for (int a = 0; a < 3; ++a) s.u[a][k] = tangent.u[a];
+          s.axial[k] = tangent.axial;
+          s.transverse[k] = tangent.transverse;
+          s.damper[k] = tangent.d;
+        }
+      for (size_t k = size_t{kGatherGroup} * s.corner_row[g]; k < size_t{kGatherGroup} * s.corner_row[g + 1]; ++k)
+        if (const int32_t row = corner_slot_row_[k]; row >= 0)
+          for (int a = 0; a < 3; ++a) s.gradient[a][k] = corner_gradient_[row][a];
+    });
   contact_ = contact;
 }
 
@@ -192,9 +255,13 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
   // both ends, as the force pass does, rather than scattered), its tet
   // corners' c dV_t/dx_i, the shear rows.
   const double mass_coef = m_coef + alpha * m.viscous_damping;
-  for_each(n, [&](int32_t i) {
-    Vec3 y = mass_coef * m.mass[i] * at(p, i);
+  const auto add_shear = [&](int32_t i, double* y) {
+    if (shear.matrix)
+      for (int a = 0; a < 3; ++a) y[a] += shear.scale * row_product(*shear.matrix, 3 * i + a);
+  };
+  const auto gather = [&](int32_t i) {
     const Eigen::Map<const Eigen::Vector3d> pi = at(p, i);
+    Vec3 y = mass_coef * m.mass[i] * pi;
     for (int32_t k = spring_start_[i]; k < spring_start_[i + 1]; ++k) {
       const SpringTangent& g = spring_at_[k];
       // p_i - p_other: the end's own y, whichever end i is.
@@ -204,10 +271,19 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
     if (volume)
       for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
         y += tet_term_[corner_of_point_[k] >> 2] * corner_gradient_[k];
-    if (shear.matrix)
-      for (int a = 0; a < 3; ++a) y[a] += shear.scale * row_product(*shear.matrix, 3 * i + a);
+    add_shear(i, y.data());
     at(out, i) = y;
-  });
+  };
+  // The SIMD gather takes the whole groups, the scalar one the points past them.
+  const int32_t simd_points = simd_gather_ ? kGatherGroup * streams_.groups : 0;
+  if (simd_gather_) {
+    const GatherTerms terms{mass_coef, alpha, beta, m.mass.data(), tet_term_.data(), volume};
+    for_each(streams_.groups, [&](int32_t g) {
+      simd_gather_(streams_, terms, p.data(), out.data(), g, g + 1);
+      for (int32_t i = kGatherGroup * g; i < kGatherGroup * (g + 1); ++i) add_shear(i, out.data() + 3 * i);
+    });
+  }
+  for_each(n - simd_points, [&](int32_t i) { gather(simd_points + i); });
   if (beta != 0)
     for (const ContactBlock& c : contact_) {
       Vec3 wp = Vec3::Zero();

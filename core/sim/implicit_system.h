@@ -20,11 +20,18 @@
 // evaluated at both its ends, a tet's coefficient once per tet before the
 // gather. So both run as OpenMP loops on any number of threads with
 // bit-identical results and no per-thread buffers to sum.
+//
+// The product's gather runs on a SIMD target when one is given
+// (core/sim/implicit_gather_simd.h: a register of points at a time, the
+// same terms in the same order), else in scalar code, the reference; the two
+// differ by rounding only.
 #include <Eigen/SparseCore>
 #include <array>
+#include <optional>
 #include <vector>
 
 #include "core/model/model.h"
+#include "core/sim/implicit_gather_simd.h"
 
 namespace organsim {
 
@@ -42,8 +49,9 @@ class ImplicitSystem {
  public:
   // The Model's constant parts (the shear element's rest matrices); the
   // Model must outlive the system. `threads` (>= 1) share out its loops;
-  // results do not depend on it.
-  explicit ImplicitSystem(const Model& model, int32_t threads = 1);
+  // results do not depend on it. `product`: the SIMD target of apply()'s
+  // gather (one of simd_targets_supported()); none: the scalar gather.
+  explicit ImplicitSystem(const Model& model, int32_t threads = 1, const std::optional<SimdTarget>& product = {});
 
   // The tangent at positions x and velocities v (npoint), the sutures' rest
   // lengths at time t, with the contact's blocks.
@@ -89,6 +97,12 @@ class ImplicitSystem {
   // over all springs and tets.
   std::vector<SpringTangent> spring_at_;
   std::vector<Vec3> corner_gradient_;
+  // The SIMD gather and its streams (null without a target): the slots'
+  // rows of spring_at_ and corner_gradient_ (-1: a padding slot, zero
+  // coefficients), whose tangents linearise() copies in.
+  GatherGroups simd_gather_ = nullptr;
+  GatherStreams streams_;
+  std::vector<int32_t> spring_slot_row_, corner_slot_row_;
   std::vector<ContactBlock> contact_;
   // The shear element's rest stiffness and its damper's (empty without the
   // element; different matrices: the stiffness blends in the smoothed part,
@@ -107,7 +121,9 @@ class ImplicitSystem {
   ShearRows shear_rows(double alpha, double beta) const;
   mutable ShearMatrix shear_;
   mutable double shear_alpha_ = 0, shear_beta_ = 0;
-  mutable std::vector<double> tet_term_, node_term_;  // the volume term's per-tet and nodal scalars
+  // The volume term's per-tet and nodal scalars; tet_term_ has one more, 0:
+  // the SIMD gather's padding corners read it.
+  mutable std::vector<double> tet_term_, node_term_;
   // The nodal diagonal: each point's patch (the nodes sharing a tet with
   // it), rows patch_start_[i] .. patch_start_[i + 1] of patch_point_, and
   // for each of its tet corners (corner_of_point_[k]) the slot in its patch

@@ -78,7 +78,7 @@ class ReferenceBackend final : public Backend {
   std::string device() const override {
     if (!implicit()) return "CPU, 1 thread, Verlet (reference, double)";
     return "CPU, " + std::to_string(threads_) + (threads_ > 1 ? " threads, " : " thread, ") +
-           (damping_only() ? "implicit damping" : "implicit Euler") + " (reference, double; " +
+           (damping_only() ? "implicit damping" : "implicit Euler") + " (" + product_name() + ", double; " +
            preconditioner_name(options_.preconditioner) + "-preconditioned CG)";
   }
   std::string precision() const override { return "double"; }
@@ -106,6 +106,11 @@ class ReferenceBackend final : public Backend {
     plan.dispatches_per_step = 0;
     plan.syncs_per_step = 0;
     return plan;
+  }
+
+  // Where the products' gather runs: "simd (avx2) product" or the scalar "reference".
+  std::string product_name() const {
+    return options_.simd_product ? "simd (" + options_.simd_product->name + ") product" : "reference";
   }
 
   std::string pass_detail(Pass pass) const {
@@ -136,11 +141,11 @@ class ReferenceBackend final : public Backend {
                "term's k g g^T, the shear element's rest stiffness, drag alpha m I, the contact's blocks";
       case Pass::ConjugateGradient:
         return std::string(damping_only() ? "(M + h D) dv = h f" : "(M + h D + h^2 K) dv = h (f - h K v)") + " by " +
-               preconditioner_name(options_.preconditioner) + "-preconditioned CG on the free points, "
-               "matrix-free products on " + std::to_string(threads_) + (threads_ > 1 ? " threads" : " thread") +
-               ", warm start from the last dv, relative tolerance " +
-               format_number(options_.cg_tolerance) + ", at most " + std::to_string(options_.cg_max_iterations) +
-               " iterations";
+               preconditioner_name(options_.preconditioner) +
+               "-preconditioned CG on the free points, matrix-free products (" + product_name() + ") on " +
+               std::to_string(threads_) + (threads_ > 1 ? " threads" : " thread") +
+               ", warm start from the last dv, relative tolerance " + format_number(options_.cg_tolerance) +
+               ", at most " + std::to_string(options_.cg_max_iterations) + " iterations";
       case Pass::VelocityUpdate:
         return "v += dv, x += h v" + (options_.newton_iterations > 1
                                           ? ", then up to " + std::to_string(options_.newton_iterations - 1) +
@@ -208,7 +213,7 @@ class ReferenceBackend final : public Backend {
     ReferenceTables t;
     t.model = &model;
     t.plan = make_step_plan(model, tool_, integrator_);
-    if (implicit()) t.system = std::make_unique<ImplicitSystem>(model, threads_);
+    if (implicit()) t.system = std::make_unique<ImplicitSystem>(model, threads_, options_.simd_product);
     if (implicit() && options_.preconditioner == Preconditioner::TwoLevel) t.coarse = std::make_unique<CoarseSpace>(model);
     const int32_t n = model.npoint();
     t.tool_scale.resize(n);

@@ -26,9 +26,11 @@
 // products, preconditioner) shares out over `threads`; the force pass
 // runs on one. Results do not depend on the thread count.
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/sim/backend.h"
+#include "core/sim/cpu_kernel_simd.h"
 
 namespace organsim {
 
@@ -47,6 +49,10 @@ struct ImplicitOptions {
   double cg_tolerance = 1e-5;     // relative residual |b - A dv| / |b| a solve stops at
   int32_t cg_max_iterations = 200;
   Preconditioner preconditioner = Preconditioner::BlockJacobi;
+  // Not a scenario field: the backend's choice. The products' gather on
+  // this SIMD target (core/sim/implicit_gather_simd.h; the cpu backend's
+  // kernel target); none: the scalar gather, the reference.
+  std::optional<SimdTarget> simd_product;
 };
 
 // Throws Error(Usage) for options out of range or a combination it does not

@@ -1,16 +1,18 @@
 // `organsim run` with time.integrator "implicit_euler" end to end on a small
-// tet mesh: --plan's passes and dt against dt_crit, a dt far beyond dt_crit
+// tet mesh: --plan's passes, the products' SIMD target and dt against dt_crit, a dt far beyond dt_crit
 // run and logged with its CG statistics, a CG that cannot converge turned
 // into exit code 9 with the force log whole, and the backends that do not
 // integrate implicitly refused.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/tet_mesh.h"
+#include "core/sim/cpu_kernel_simd.h"
 #include "tests/app/run_cli_test_util.h"
 
 namespace organsim {
@@ -49,6 +51,15 @@ TEST(RunImplicitCli, PlanListsTheIntegratorsPassesAndHowManyDtCritTheStepSpans) 
   EXPECT_EQ(r.out.find("  - integrate:"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("x dt_crit: implicit Euler, not bounded by dt_crit"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("UNSTABLE"), std::string::npos) << r.out;
+  // The products gather on the kernel's best target, or on the one ORGANSIM_SIMD names.
+  const std::string best = "implicit Euler (simd (" + simd_targets_supported().front().name + ") product, double;";
+  EXPECT_NE(r.out.find(best), std::string::npos) << r.out;
+  const std::string lowest = simd_targets_supported().back().name;
+  setenv("ORGANSIM_SIMD", lowest.c_str(), 1);
+  const auto forced = run_organsim("run --plan '" + (dir / "scene.json").string() + "'", dir);
+  unsetenv("ORGANSIM_SIMD");
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_NE(forced.out.find("matrix-free products (simd (" + lowest + ") product)"), std::string::npos) << forced.out;
 }
 
 TEST(RunImplicitCli, AStepFarBeyondDtCritRunsAndLogsItsSolves) {
