@@ -6,8 +6,11 @@
 // interleaved: the soft liver (E 8 kPa, poisson_ratio 0.45) under Verlet
 // on the CPU backend (double) at its guaranteed step (as `organsim run`
 // steps it) and under implicit Euler at 1 ms, the same for a stiff liver
-// (E 1 MPa), and the stiff liver under implicit damping at the largest
-// step that divides 1 ms within its undamped limit. Each row gives ms per
+// (E 1 MPa), the stiff liver under implicit damping at the largest step
+// that divides 1 ms within its undamped limit and under implicit Euler with
+// the two-level preconditioner, and the soft liver's implicit Euler once
+// more on the scalar product (the reference gather; the others gather on
+// the kernel's SIMD target). Each row gives ms per
 // step and per simulated ms; the implicit rows also CG iterations per step
 // and ms per CG iteration (the backend's own timer around its solves, over
 // the timed steps), so that one CG iteration is compared with one explicit
@@ -31,7 +34,7 @@ struct ImplicitBenchOptions {
 };
 
 struct ImplicitBenchRow {
-  std::string name;        // "verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa", "damping_1MPa"
+  std::string name;        // "verlet_8kPa", "implicit_8kPa", ..., "two_level_1MPa", "scalar_8kPa"
   std::string material;    // in words
   std::string integrator;  // "verlet" | "implicit_euler" | "implicit_damping"
   int32_t points = 0, fixed = 0;
@@ -55,8 +58,8 @@ struct ImplicitComparison {
 };
 
 // Builds the soft and the stiff liver on `mesh` (the bench's liver at
-// `target_points`), warms each row up, then times the four rows with their
-// repetitions interleaved (row 1, 2, 3, 4, row 1, ...).
+// `target_points`), warms each row up, then times the rows with their
+// repetitions interleaved (row 1, 2, ..., 7, row 1, ...).
 ImplicitComparison measure_implicit(const ImplicitBenchOptions& options, const TetMesh& mesh,
                                     const std::string& mesh_name, int32_t target_points);
 

@@ -341,16 +341,18 @@ struct ImplicitAim {
   const char* name;
   double target;
 };
-constexpr ImplicitAim kImplicitAims[] = {
-    {"cg_iteration / verlet_step", 1.5},
-    {"cg_iterations_8kPa", 30},
-    {"implicit_1MPa / verlet_1MPa", 1.0 / 3},
-    {"two_level_1MPa / verlet_1MPa", 1.0 / 3}};
+constexpr ImplicitAim kImplicitAims[] = {{"cg_iteration / verlet_step", 1.5},
+                                         {"cg_iterations_8kPa", 30},
+                                         {"implicit_1MPa / verlet_1MPa", 1.0 / 3},
+                                         {"two_level_1MPa / verlet_1MPa", 1.0 / 3},
+                                         {"simd_product / scalar_product", 1}};
 
-// `bench --implicit`: the six rows side by side, Verlet at the model's
+// `bench --implicit`: the seven rows side by side, Verlet at the model's
 // guaranteed step on the simd kernel, implicit Euler at 1 ms on the
-// implicit solve's threads and implicit damping within its undamped limit, the implicit rows with their CG iterations and
-// cost per iteration, and the four aims computed from the rows they name.
+// implicit solve's threads (its products on the kernel's SIMD target, and
+// once on the scalar gather) and implicit damping within its undamped
+// limit, the implicit rows with their CG iterations and cost per
+// iteration, and the five aims computed from the rows they name.
 // (Timings are what the command is for and are not asserted; that the
 // stiff liver needs more CG iterations than the soft one at the same step is
 // the physics: its system's condition number grows with h^2 K / M.)
@@ -366,9 +368,11 @@ TEST(RunBench, ImplicitComparisonReportsBothIntegratorsWithTheirSolves) {
   EXPECT_TRUE(j["rows"].empty());  // the comparison instead of the size table
   ASSERT_EQ(j["implicit"].size(), 1u);
   const auto& c = j["implicit"][0];
-  ASSERT_EQ(c["rows"].size(), 6u);
-  const char* names[] = {"verlet_8kPa", "implicit_8kPa", "verlet_1MPa", "implicit_1MPa", "damping_1MPa", "two_level_1MPa"};
-  for (size_t i = 0; i < 6; ++i) {
+  ASSERT_EQ(c["rows"].size(), 7u);
+  const char* names[] = {"verlet_8kPa",  "implicit_8kPa",  "verlet_1MPa", "implicit_1MPa",
+                         "damping_1MPa", "two_level_1MPa", "scalar_8kPa"};
+  const std::string product = "simd (" + simd_targets_supported().front().name + ") product";
+  for (size_t i = 0; i < 7; ++i) {
     const auto& row = c["rows"][i];
     SCOPED_TRACE(row.dump());
     EXPECT_EQ(row["name"], names[i]);
@@ -399,10 +403,11 @@ TEST(RunBench, ImplicitComparisonReportsBothIntegratorsWithTheirSolves) {
       EXPECT_EQ(row["integrator"], "implicit_euler");
       EXPECT_NE(device.find("implicit Euler"), std::string::npos);
       EXPECT_EQ(dt, 1e-3);
-      if (i >= 3) {
+      if (i == 3 || i == 5) {
         EXPECT_GT(dt, 10 * dt_crit);  // far beyond what Verlet could step
       }
       EXPECT_NE(device.find(i == 5 ? "two_level-preconditioned" : "block_jacobi-preconditioned"), std::string::npos);
+      EXPECT_NE(device.find(i == 6 ? std::string("(reference, double") : product), std::string::npos);
       EXPECT_GE(row["cg_iterations_median"].get<double>(), 1);
       EXPECT_GT(row["cg_ms_per_iteration"].get<double>(), 0);
       EXPECT_LT(row["cg_ms_per_iteration"].get<double>(), median);
@@ -417,9 +422,10 @@ TEST(RunBench, ImplicitComparisonReportsBothIntegratorsWithTheirSolves) {
   const double values[] = {rows[1]["cg_ms_per_iteration"].get<double>() / rows[0]["median_ms"].get<double>(),
                            rows[1]["cg_iterations_median"].get<double>(),
                            rows[3]["ms_per_simulated_ms"].get<double>() / rows[2]["ms_per_simulated_ms"].get<double>(),
-                           rows[5]["ms_per_simulated_ms"].get<double>() / rows[2]["ms_per_simulated_ms"].get<double>()};
-  ASSERT_EQ(c["ratios"].size(), 4u);
-  for (size_t i = 0; i < 4; ++i) {
+                           rows[5]["ms_per_simulated_ms"].get<double>() / rows[2]["ms_per_simulated_ms"].get<double>(),
+                           rows[1]["cg_ms_per_iteration"].get<double>() / rows[6]["cg_ms_per_iteration"].get<double>()};
+  ASSERT_EQ(c["ratios"].size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
     const auto& ratio = c["ratios"][i];
     EXPECT_EQ(ratio["name"], kImplicitAims[i].name);
     EXPECT_DOUBLE_EQ(ratio["target"].get<double>(), kImplicitAims[i].target);
