@@ -1,4 +1,4 @@
-// implicit_gather_simd.h's gather, one source compiled once per target
+// implicit_gather_simd.h's passes, one source compiled once per target
 // (hwy/foreach_target.h, the targets of core/sim/simd_targets.h).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "core/sim/implicit_gather_simd.cpp"
@@ -22,11 +22,12 @@ using VD = hn::Vec<D>;
 constexpr int32_t kLanes = static_cast<int32_t>(hn::MaxLanes(D()));
 static_assert(kGatherGroup % kLanes == 0, "a group is whole registers on every target");
 
+using DI32 = hn::Rebind<int32_t, D>;
+using DI64 = hn::Rebind<int64_t, D>;
+
 // base[idx[l]] for kLanes int32 indices.
 HWY_INLINE VD gather(const double* base, const int32_t* idx) {
-  const hn::Rebind<int32_t, D> di32;
-  const hn::Rebind<int64_t, D> di64;
-  return hn::GatherIndex(D(), base, hn::PromoteTo(di64, hn::LoadU(di32, idx)));
+  return hn::GatherIndex(D(), base, hn::PromoteTo(DI64(), hn::LoadU(DI32(), idx)));
 }
 
 // The lanes' points first .. first + kLanes - 1, lane offset `lane` in the
@@ -75,6 +76,47 @@ void gather_groups(const GatherStreams& s, const GatherTerms& terms, const doubl
     for (int32_t lane = 0; lane < kGatherGroup; lane += kLanes) gather_register(s, terms, p, out, g, lane);
 }
 
+// The volume term's scalars, each sum in the scalar code's order
+// (ImplicitSystem::apply): corner by corner, x, y, z.
+void tet_dots(const GatherStreams& s, const double* p, const double* scale, double factor, double* out, int32_t first,
+              int32_t last) {
+  const D d;
+  for (int32_t e = kGatherGroup * first; e < kGatherGroup * last; e += kLanes) {
+    VD sum = hn::Zero(d);
+    for (int c = 0; c < 4; ++c) {
+      const auto i = hn::LoadU(DI32(), s.tet_point[c].data() + e);
+      const auto i3 = hn::PromoteTo(DI64(), hn::Add(i, hn::Add(i, i)));
+      VD dot = hn::Mul(hn::Load(d, s.tet_gradient[c][0].data() + e), hn::GatherIndex(d, p, i3));
+      dot = hn::MulAdd(hn::Load(d, s.tet_gradient[c][1].data() + e), hn::GatherIndex(d, p + 1, i3), dot);
+      dot = hn::MulAdd(hn::Load(d, s.tet_gradient[c][2].data() + e), hn::GatherIndex(d, p + 2, i3), dot);
+      sum = hn::Add(sum, dot);
+    }
+    if (scale) sum = hn::Mul(hn::Mul(hn::Set(d, factor), hn::LoadU(d, scale + e)), sum);
+    hn::StoreU(sum, d, out + e);
+  }
+}
+
+void node_sums(const GatherStreams& s, const double* tet, const double* k, double* out, int32_t first, int32_t last) {
+  const D d;
+  for (int32_t g = first; g < last; ++g)
+    for (int32_t lane = 0; lane < kGatherGroup; lane += kLanes) {
+      VD sum = hn::Zero(d);
+      for (int32_t row = s.corner_row[g]; row < s.corner_row[g + 1]; ++row)
+        sum = hn::Add(sum, gather(tet, s.corner_tet.data() + static_cast<size_t>(kGatherGroup) * row + lane));
+      const int32_t i = kGatherGroup * g + lane;
+      hn::StoreU(hn::Mul(hn::Mul(hn::LoadU(d, k + i), sum), hn::Set(d, 0.25)), d, out + i);
+    }
+}
+
+void tet_means(const GatherStreams& s, const double* node, double factor, double* out, int32_t first, int32_t last) {
+  const D d;
+  for (int32_t e = kGatherGroup * first; e < kGatherGroup * last; e += kLanes) {
+    VD sum = gather(node, s.tet_point[0].data() + e);
+    for (int c = 1; c < 4; ++c) sum = hn::Add(sum, gather(node, s.tet_point[c].data() + e));
+    hn::StoreU(hn::Mul(hn::Mul(hn::Set(d, factor), sum), hn::Set(d, 0.25)), d, out + e);
+  }
+}
+
 }  // namespace organsim::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
 
@@ -88,17 +130,17 @@ namespace {
 
 struct Entry {
   int64_t bits;
-  GatherGroups gather;
+  GatherKernels kernels;
 };
-#define ORGANSIM_ENTRY(TARGET, NS) Entry{TARGET, &NS::gather_groups},
+#define ORGANSIM_ENTRY(TARGET, NS) Entry{TARGET, {&NS::gather_groups, &NS::tet_dots, &NS::node_sums, &NS::tet_means}},
 const Entry kEntries[] = {ORGANSIM_COMPILED_TARGETS(ORGANSIM_ENTRY)};
 #undef ORGANSIM_ENTRY
 
 }  // namespace
 
-GatherGroups implicit_gather_for(const SimdTarget& target) {
+const GatherKernels& implicit_gather_for(const SimdTarget& target) {
   for (const Entry& e : kEntries)
-    if (e.bits == target.bits) return e.gather;
+    if (e.bits == target.bits) return e.kernels;
   throw Error(ErrorKind::Backend, "implicit gather: target " + target.name + " is not compiled into this binary");
 }
 

@@ -95,7 +95,7 @@ ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads, const std::o
   tet_term_.resize(model.has_volume() ? model.ntet() + 1 : 0);
   node_term_.resize(model.has_nodal_volume() ? n : 0);
   if (product) {
-    simd_gather_ = implicit_gather_for(*product);
+    simd_ = &implicit_gather_for(*product);
     GatherStreams& s = streams_;
     s.groups = n / kGatherGroup;
     // A padding slot's other end is its own point (dp = 0), its corner the zero coefficient tet_term_[ntet].
@@ -116,6 +116,13 @@ ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads, const std::o
       for (size_t k = 0; k < corners; ++k)
         s.corner_tet[k] = corner_slot_row_[k] >= 0 ? corner_of_point_[corner_slot_row_[k]] >> 2 : model.ntet();
       for (auto& stream : s.gradient) stream.assign(corners, 0);
+      s.tet_groups = model.ntet() / kGatherGroup;
+      const size_t tets = static_cast<size_t>(kGatherGroup) * s.tet_groups;
+      for (int c = 0; c < 4; ++c) {
+        s.tet_point[c].resize(tets);
+        for (size_t e = 0; e < tets; ++e) s.tet_point[c][e] = model.tet_points[e][c];
+        for (auto& stream : s.tet_gradient[c]) stream.resize(tets);
+      }
     } else {
       s.corner_row.assign(static_cast<size_t>(s.groups) + 1, 0);
     }
@@ -138,6 +145,15 @@ void ImplicitSystem::for_each(int32_t n, const Body& body) const {
   } else {
     for (int32_t i = 0; i < n; ++i) call(i, 0);
   }
+}
+
+template <class Simd, class Scalar>
+void ImplicitSystem::for_each_group(int32_t n, int32_t groups, const Simd& simd, const Scalar& scalar) const {
+  // Blocks of groups, so that a call through the target's pointer covers some work.
+  constexpr int32_t kBlock = 16;
+  for_each((groups + kBlock - 1) / kBlock, [&](int32_t b) { simd(kBlock * b, std::min(groups, kBlock * (b + 1))); });
+  const int32_t first = kGatherGroup * groups;
+  for_each(n - first, [&](int32_t i) { scalar(first + i); });
 }
 
 void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t,
@@ -177,8 +193,13 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
       for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
         corner_gradient_[k] = volume_gradient_[corner_of_point_[k] >> 2][corner_of_point_[k] & 3];
   });
-  // And into the SIMD gather's slots (its padding stays zero).
-  if (simd_gather_)
+  // And into the SIMD passes' slots (their padding stays zero) and tets.
+  if (simd_) {
+    for_each(streams_.tet_groups, [&](int32_t g) {
+      for (int32_t e = kGatherGroup * g; e < kGatherGroup * (g + 1); ++e)
+        for (int c = 0; c < 4; ++c)
+          for (int a = 0; a < 3; ++a) streams_.tet_gradient[c][a][e] = volume_gradient_[e][c][a];
+    });
     for_each(streams_.groups, [&](int32_t g) {
       GatherStreams& s = streams_;
       for (size_t k = size_t{kGatherGroup} * s.spring_row[g]; k < size_t{kGatherGroup} * s.spring_row[g + 1]; ++k)
@@ -193,6 +214,7 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
         if (const int32_t row = corner_slot_row_[k]; row >= 0)
           for (int a = 0; a < 3; ++a) s.gradient[a][k] = corner_gradient_[row][a];
     });
+  }
   contact_ = contact;
 }
 
@@ -215,35 +237,49 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
   const int32_t n = m.npoint();
   out.resize(3 * n);
   const bool volume = m.has_volume() && beta != 0, nodal = volume && m.has_nodal_volume();
+  // The SIMD passes take the whole groups of points and of tets, the scalar
+  // code the rest (all of them without a target).
+  const int32_t point_groups = simd_ ? streams_.groups : 0, tet_groups = simd_ ? streams_.tet_groups : 0;
+  // dV_t . p per tet, times beta k_t (per-tet term) or not (nodal).
+  const auto tet_dot = [&](int32_t e) {
+    const Tet& tet = m.tet_points[e];
+    double s = 0;
+    for (int i = 0; i < 4; ++i) s += volume_gradient_[e][i].dot(at(p, tet[i]));
+    tet_term_[e] = nodal ? s : beta * m.tet_k[e] * s;
+  };
+  const auto simd_tet_dots = [&](int32_t first, int32_t last) {
+    simd_->tet_dots(streams_, p.data(), nodal ? nullptr : m.tet_k.data(), beta, tet_term_.data(), first, last);
+  };
   // The nodal term first needs every node's k_a (dV_a . p), dV_a . p =
   // the sum over a's tets of dV_t . p / 4.
   if (nodal) {
-    for_each(m.ntet(), [&](int32_t e) {
-      const Tet& tet = m.tet_points[e];
-      double s = 0;
-      for (int i = 0; i < 4; ++i) s += volume_gradient_[e][i].dot(at(p, tet[i]));
-      tet_term_[e] = s;
-    });
-    for_each(n, [&](int32_t a) {
-      double s = 0;
-      for (int32_t k = corner_start_[a]; k < corner_start_[a + 1]; ++k) s += tet_term_[corner_of_point_[k] >> 2];
-      node_term_[a] = m.point_volume_k[a] * s / 4;
-    });
+    for_each_group(m.ntet(), tet_groups, simd_tet_dots, tet_dot);
+    for_each_group(
+        n, point_groups,
+        [&](int32_t first, int32_t last) {
+          simd_->node_sums(streams_, tet_term_.data(), m.point_volume_k.data(), node_term_.data(), first, last);
+        },
+        [&](int32_t a) {
+          double s = 0;
+          for (int32_t k = corner_start_[a]; k < corner_start_[a + 1]; ++k) s += tet_term_[corner_of_point_[k] >> 2];
+          node_term_[a] = m.point_volume_k[a] * s / 4;
+        });
   }
   // Each tet's coefficient c of its corners' terms c dV_t/dx_i: beta k_t
   // dV_t . p, or with the nodal term beta times the mean of its nodes' k_a
   // (dV_a . p).
-  if (volume)
-    for_each(m.ntet(), [&](int32_t e) {
-      const Tet& tet = m.tet_points[e];
-      if (nodal) {
-        tet_term_[e] = beta * (node_term_[tet[0]] + node_term_[tet[1]] + node_term_[tet[2]] + node_term_[tet[3]]) / 4;
-      } else {
-        double s = 0;
-        for (int i = 0; i < 4; ++i) s += volume_gradient_[e][i].dot(at(p, tet[i]));
-        tet_term_[e] = beta * m.tet_k[e] * s;
-      }
-    });
+  if (nodal)
+    for_each_group(
+        m.ntet(), tet_groups,
+        [&](int32_t first, int32_t last) {
+          simd_->tet_means(streams_, node_term_.data(), beta, tet_term_.data(), first, last);
+        },
+        [&](int32_t e) {
+          const Tet& tet = m.tet_points[e];
+          tet_term_[e] = beta * (node_term_[tet[0]] + node_term_[tet[1]] + node_term_[tet[2]] + node_term_[tet[3]]) / 4;
+        });
+  else if (volume)
+    for_each_group(m.ntet(), tet_groups, simd_tet_dots, tet_dot);
   const ShearRows shear = shear_rows(alpha, beta);
   const auto row_product = [&p](const ShearMatrix& matrix, Eigen::Index r) {
     double sum = 0;
@@ -274,16 +310,14 @@ void ImplicitSystem::apply(double m_coef, double alpha, double beta, const Eigen
     add_shear(i, y.data());
     at(out, i) = y;
   };
-  // The SIMD gather takes the whole groups, the scalar one the points past them.
-  const int32_t simd_points = simd_gather_ ? kGatherGroup * streams_.groups : 0;
-  if (simd_gather_) {
-    const GatherTerms terms{mass_coef, alpha, beta, m.mass.data(), tet_term_.data(), volume};
-    for_each(streams_.groups, [&](int32_t g) {
-      simd_gather_(streams_, terms, p.data(), out.data(), g, g + 1);
-      for (int32_t i = kGatherGroup * g; i < kGatherGroup * (g + 1); ++i) add_shear(i, out.data() + 3 * i);
-    });
-  }
-  for_each(n - simd_points, [&](int32_t i) { gather(simd_points + i); });
+  for_each_group(
+      n, point_groups,
+      [&](int32_t first, int32_t last) {
+        const GatherTerms terms{mass_coef, alpha, beta, m.mass.data(), tet_term_.data(), volume};
+        simd_->product(streams_, terms, p.data(), out.data(), first, last);
+        for (int32_t i = kGatherGroup * first; i < kGatherGroup * last; ++i) add_shear(i, out.data() + 3 * i);
+      },
+      gather);
   if (beta != 0)
     for (const ContactBlock& c : contact_) {
       Vec3 wp = Vec3::Zero();

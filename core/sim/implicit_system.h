@@ -75,6 +75,11 @@ class ImplicitSystem {
   // every region, even of one thread) or inside a caller's region.
   template <class Body>
   void for_each(int32_t n, const Body& body) const;
+  // Over n items of which the first kGatherGroup x groups are whole SIMD
+  // groups: simd(first, last) on blocks of groups, then scalar(i) on each
+  // item past them, on for_each's threads.
+  template <class Simd, class Scalar>
+  void for_each_group(int32_t n, int32_t groups, const Simd& simd, const Scalar& scalar) const;
 
   const Model& model_;
   int32_t threads_;
@@ -97,10 +102,11 @@ class ImplicitSystem {
   // over all springs and tets.
   std::vector<SpringTangent> spring_at_;
   std::vector<Vec3> corner_gradient_;
-  // The SIMD gather and its streams (null without a target): the slots'
+  // The SIMD passes and their streams (null without a target): the slots'
   // rows of spring_at_ and corner_gradient_ (-1: a padding slot, zero
-  // coefficients), whose tangents linearise() copies in.
-  GatherGroups simd_gather_ = nullptr;
+  // coefficients), whose tangents linearise() copies in, as it copies the
+  // tets' gradients.
+  const GatherKernels* simd_ = nullptr;
   GatherStreams streams_;
   std::vector<int32_t> spring_slot_row_, corner_slot_row_;
   std::vector<ContactBlock> contact_;

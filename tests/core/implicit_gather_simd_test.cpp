@@ -1,8 +1,8 @@
 // The implicit system's product on every SIMD target this CPU runs
-// (core/sim/implicit_gather_simd.h) against its scalar gather, the
+// (core/sim/implicit_gather_simd.h) against its scalar code, the
 // reference: the same terms in the same order, so they differ by rounding
 // only, for every element term, sutures (one slack), the contact's blocks,
-// and a point count that leaves points past the last whole group; on two
+// and point and tet counts that leave items past the last whole group; on two
 // threads bit-identical to one; and implicit Euler runs on it as on the
 // scalar product.
 #include <gtest/gtest.h>
@@ -24,21 +24,31 @@ using testing::VolumeTerm;
 constexpr VolumeTerm kTerms[] = {VolumeTerm::None, VolumeTerm::PerTet, VolumeTerm::Nodal, VolumeTerm::Shear02,
                                  VolumeTerm::ShearPerTet};
 
-// A jittered box of 4^3 cells (125 points: 15 whole groups of 8 and 5
-// points past them) with three sutures across it, the first tied long
-// enough to be slack at the linearisation.
-Model sutured_box(VolumeTerm volume) {
-  const Model box = testing::random_model(2, 4, volume, true);
+// A jittered box of cells^3 cells with three sutures across it, the first
+// tied long enough to be slack at the linearisation. 3 cells: 64 points (8
+// whole groups) and 162 tets (20 whole groups and 2 past them); 4 cells:
+// 125 points (15 whole groups and 5 past them) and 384 tets.
+Model sutured_box(VolumeTerm volume, int cells) {
+  const Model box = testing::random_model(2, cells, volume, true);
+  const int32_t n = box.npoint();
   std::vector<Suture> sutures;
-  for (const auto& [a, b, slack] : {std::tuple{3, 120, true}, std::tuple{10, 98, false}, std::tuple{40, 77, false}}) {
+  for (const auto& [a, b, slack] :
+       {std::tuple{3, n - 5, true}, std::tuple{10, n - 27, false}, std::tuple{40, n - 48, false}}) {
     Suture s;
-    s.ends = {a, b};
+    s.ends = {std::min(a, b), std::max(a, b)};
     s.k = 30;
     const double distance = (box.rest_position[a] - box.rest_position[b]).norm();
     s.length = slack ? 2 * distance : 0.5 * distance;
     sutures.push_back(s);
   }
   return add_sutures(box, sutures);
+}
+
+std::vector<std::pair<VolumeTerm, int>> terms_and_boxes() {
+  std::vector<std::pair<VolumeTerm, int>> out;
+  for (const VolumeTerm volume : kTerms)
+    for (const int cells : {3, 4}) out.emplace_back(volume, cells);
+  return out;
 }
 
 struct State {
@@ -58,7 +68,7 @@ State random_state(const Model& m) {
   s.p.resize(3 * m.npoint());
   for (auto& c : s.p) c = u(rng);
   ContactBlock triangle;
-  triangle.point = {3, 7, 121};  // one corner past the whole groups
+  triangle.point = {3, 7, m.npoint() - 4};  // one corner past the whole groups with 4 cells
   triangle.w = {0.2, 0.3, 0.5};
   triangle.k = 50 * Eigen::Matrix3d::Identity();
   ContactBlock point;
@@ -83,10 +93,12 @@ Eigen::VectorXd product(const Model& m, const State& s, const std::optional<Simd
 constexpr std::array<double, 3> kCoefficients[] = {{1, 2e-3, 4e-6}, {0, 0, 1}, {1, 2e-3, 0}};
 
 TEST(ImplicitGatherSimd, EveryTargetsProductEqualsTheScalarGatherToRounding) {
-  for (const VolumeTerm volume : kTerms) {
-    SCOPED_TRACE(testing::volume_term_name(volume));
-    const Model m = sutured_box(volume);
-    ASSERT_NE(m.npoint() % kGatherGroup, 0);
+  // Both boxes leave items past the last whole group: tets with 3 cells, points with 4.
+  ASSERT_NE(sutured_box(VolumeTerm::PerTet, 3).ntet() % kGatherGroup, 0);
+  ASSERT_NE(sutured_box(VolumeTerm::PerTet, 4).npoint() % kGatherGroup, 0);
+  for (const auto& [volume, cells] : terms_and_boxes()) {
+    SCOPED_TRACE(std::string(testing::volume_term_name(volume)) + ", " + std::to_string(cells) + " cells");
+    const Model m = sutured_box(volume, cells);
     const State s = random_state(m);
     for (const auto& [m_coef, alpha, beta] : kCoefficients) {
       const Eigen::VectorXd reference = product(m, s, std::nullopt, 1, m_coef, alpha, beta);
@@ -107,8 +119,8 @@ TEST(ImplicitGatherSimd, EveryTargetsProductEqualsTheScalarGatherToRounding) {
 
 TEST(ImplicitGatherSimd, TwoThreadsAreBitIdenticalToOne) {
   const SimdTarget best = default_simd_target();
-  for (const VolumeTerm volume : kTerms) {
-    const Model m = sutured_box(volume);
+  for (const auto& [volume, cells] : terms_and_boxes()) {
+    const Model m = sutured_box(volume, cells);
     const State s = random_state(m);
     const Eigen::VectorXd one = product(m, s, best, 1, 1, 2e-3, 4e-6), two = product(m, s, best, 2, 1, 2e-3, 4e-6);
     EXPECT_TRUE(std::equal(one.data(), one.data() + one.size(), two.data())) << testing::volume_term_name(volume);
