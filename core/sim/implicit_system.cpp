@@ -99,22 +99,28 @@ ImplicitSystem::ImplicitSystem(const Model& model, int32_t threads, const std::o
     GatherStreams& s = streams_;
     s.groups = n / kGatherGroup;
     // A padding slot's other end is its own point (dp = 0), its corner the zero coefficient tet_term_[ntet].
-    slot_rows(s.groups, spring_start_, s.spring_row, spring_slot_row_);
-    const size_t springs = spring_slot_row_.size();
+    std::vector<int32_t> slot_row;
+    slot_rows(s.groups, spring_start_, s.spring_row, slot_row);
+    const size_t springs = slot_row.size();
     s.other3.resize(springs);
+    slot_spring_.resize(springs);
     for (int32_t g = 0; g < s.groups; ++g)
       for (size_t k = size_t{kGatherGroup} * s.spring_row[g]; k < size_t{kGatherGroup} * s.spring_row[g + 1]; ++k) {
-        const int32_t row = spring_slot_row_[k];
+        const int32_t row = slot_row[k];
         const int32_t self = kGatherGroup * g + static_cast<int32_t>(k % kGatherGroup);
         s.other3[k] = 3 * (row >= 0 ? spring_other_[row] : self);
+        slot_spring_[k] = row >= 0 ? spring_of_point_[row] >> 1 : model.nspring();
       }
     for (auto* stream : {&s.u[0], &s.u[1], &s.u[2], &s.axial, &s.transverse, &s.damper}) stream->assign(springs, 0);
     if (model.has_volume()) {
-      slot_rows(s.groups, corner_start_, s.corner_row, corner_slot_row_);
-      const size_t corners = corner_slot_row_.size();
+      slot_rows(s.groups, corner_start_, s.corner_row, slot_row);
+      const size_t corners = slot_row.size();
       s.corner_tet.resize(corners);
-      for (size_t k = 0; k < corners; ++k)
-        s.corner_tet[k] = corner_slot_row_[k] >= 0 ? corner_of_point_[corner_slot_row_[k]] >> 2 : model.ntet();
+      slot_corner_.resize(corners);
+      for (size_t k = 0; k < corners; ++k) {
+        slot_corner_[k] = slot_row[k] >= 0 ? corner_of_point_[slot_row[k]] : 4 * model.ntet();
+        s.corner_tet[k] = slot_corner_[k] >> 2;
+      }
       for (auto& stream : s.gradient) stream.assign(corners, 0);
       s.tet_groups = model.ntet() / kGatherGroup;
       const size_t tets = static_cast<size_t>(kGatherGroup) * s.tet_groups;
@@ -159,7 +165,7 @@ void ImplicitSystem::for_each_group(int32_t n, int32_t groups, const Simd& simd,
 void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec3>& v, double t,
                                const std::vector<ContactBlock>& contact) {
   const Model& m = model_;
-  springs_.resize(m.nspring());
+  springs_.resize(static_cast<size_t>(m.nspring()) + 1);  // the last stays zero: the SIMD slots' padding
   for_each(m.nspring(), [&](int32_t s) {
     springs_[s] = {};
     const auto [a, b] = m.spring_ends[s];
@@ -174,7 +180,7 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
     const double transverse = force_law::spring_transverse_stiffness(tension, length);
     springs_[s] = {u, m.spring_k[s] - transverse, transverse, m.spring_d[s]};
   });
-  volume_gradient_.resize(m.has_volume() ? m.ntet() : 0);
+  volume_gradient_.resize(m.has_volume() ? m.ntet() + 1 : 0);  // the last stays zero, as springs_'s
   if (m.has_volume())
     for_each(m.ntet(), [&](int32_t e) {
       const Tet& tet = m.tet_points[e];
@@ -193,7 +199,7 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
       for (int32_t k = corner_start_[i]; k < corner_start_[i + 1]; ++k)
         corner_gradient_[k] = volume_gradient_[corner_of_point_[k] >> 2][corner_of_point_[k] & 3];
   });
-  // And into the SIMD passes' slots (their padding stays zero) and tets.
+  // And into the SIMD passes' slots (the padding's from the zero elements) and tets.
   if (simd_) {
     for_each(streams_.tet_groups, [&](int32_t g) {
       for (int32_t e = kGatherGroup * g; e < kGatherGroup * (g + 1); ++e)
@@ -202,17 +208,17 @@ void ImplicitSystem::linearise(const std::vector<Vec3>& x, const std::vector<Vec
     });
     for_each(streams_.groups, [&](int32_t g) {
       GatherStreams& s = streams_;
-      for (size_t k = size_t{kGatherGroup} * s.spring_row[g]; k < size_t{kGatherGroup} * s.spring_row[g + 1]; ++k)
-        if (const int32_t row = spring_slot_row_[k]; row >= 0) {
-          const SpringTangent& tangent = spring_at_[row];
-          for (int a = 0; a < 3; ++a) s.u[a][k] = tangent.u[a];
-          s.axial[k] = tangent.axial;
-          s.transverse[k] = tangent.transverse;
-          s.damper[k] = tangent.d;
-        }
-      for (size_t k = size_t{kGatherGroup} * s.corner_row[g]; k < size_t{kGatherGroup} * s.corner_row[g + 1]; ++k)
-        if (const int32_t row = corner_slot_row_[k]; row >= 0)
-          for (int a = 0; a < 3; ++a) s.gradient[a][k] = corner_gradient_[row][a];
+      for (size_t k = size_t{kGatherGroup} * s.spring_row[g]; k < size_t{kGatherGroup} * s.spring_row[g + 1]; ++k) {
+        const SpringTangent& tangent = springs_[slot_spring_[k]];
+        for (int a = 0; a < 3; ++a) s.u[a][k] = tangent.u[a];
+        s.axial[k] = tangent.axial;
+        s.transverse[k] = tangent.transverse;
+        s.damper[k] = tangent.d;
+      }
+      for (size_t k = size_t{kGatherGroup} * s.corner_row[g]; k < size_t{kGatherGroup} * s.corner_row[g + 1]; ++k) {
+        const Vec3& gradient = volume_gradient_[slot_corner_[k] >> 2][slot_corner_[k] & 3];
+        for (int a = 0; a < 3; ++a) s.gradient[a][k] = gradient[a];
+      }
     });
   }
   contact_ = contact;

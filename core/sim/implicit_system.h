@@ -90,8 +90,9 @@ class ImplicitSystem {
     Vec3 u{0, 0, 0};
     double axial = 0, transverse = 0, d = 0;
   };
-  std::vector<SpringTangent> springs_;
-  // Volume term: dV_t/dx_i of every tet's corners at the linearisation.
+  std::vector<SpringTangent> springs_;  // nspring + 1
+  // Volume term: dV_t/dx_i of every tet's corners at the linearisation
+  // (ntet + 1).
   std::vector<std::array<Vec3, 4>> volume_gradient_;
   // Each point's springs and tet corners, rows start[i] .. start[i + 1] in
   // element order: spring_of_point_ holds 2 s + end (0: a, 1: b) and
@@ -102,13 +103,14 @@ class ImplicitSystem {
   // over all springs and tets.
   std::vector<SpringTangent> spring_at_;
   std::vector<Vec3> corner_gradient_;
-  // The SIMD passes and their streams (null without a target): the slots'
-  // rows of spring_at_ and corner_gradient_ (-1: a padding slot, zero
-  // coefficients), whose tangents linearise() copies in, as it copies the
-  // tets' gradients.
+  // The SIMD passes and their streams (null without a target), whose
+  // tangents linearise() copies in from the slots' springs and corners
+  // (spring s, corner 4 t + c; a padding slot names the zero element past
+  // the last of springs_ and volume_gradient_), as it copies the tets'
+  // gradients.
   const GatherKernels* simd_ = nullptr;
   GatherStreams streams_;
-  std::vector<int32_t> spring_slot_row_, corner_slot_row_;
+  std::vector<int32_t> slot_spring_, slot_corner_;
   std::vector<ContactBlock> contact_;
   // The shear element's rest stiffness and its damper's (empty without the
   // element; different matrices: the stiffness blends in the smoothed part,
