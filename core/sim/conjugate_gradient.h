@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 namespace organsim {
 
@@ -18,9 +19,13 @@ struct CgResult {
 };
 
 // The solver's vectors, kept by the caller between solves: once sized, a
-// solve allocates nothing.
+// solve allocates nothing. `threads` share out its vector updates and dot
+// products; each dot product sums fixed blocks of coordinates and then the
+// blocks in order, so the result does not depend on the thread count.
 struct CgWorkspace {
+  int32_t threads = 1;
   Eigen::VectorXd b, r, z, p, q;
+  std::vector<double> partial;  // one sum per block
 };
 
 // Solves A x = b restricted to the coordinates where `free` is 1 (0: held,

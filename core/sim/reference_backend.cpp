@@ -1,5 +1,7 @@
 #include "core/sim/reference_backend.h"
 
+#include <omp.h>
+
 #include <Eigen/SparseCholesky>
 #include <array>
 #include <chrono>
@@ -70,6 +72,7 @@ class ReferenceBackend final : public Backend {
     d_.assign(model.npoint(), Vec3::Zero());
     dv_ = Eigen::VectorXd::Zero(3 * model.npoint());
     stats_.cg_max_iterations = options.cg_max_iterations;
+    cg_.threads = threads_;
     // A step's count appended without an allocation for the first 2^16 steps (then by doubling).
     if (implicit()) stats_.cg_iterations.reserve(size_t{1} << 16);
   }
@@ -436,6 +439,19 @@ class ReferenceBackend final : public Backend {
 
   // z = P r: block Jacobi at the current linearisation (with the coarse
   // space's correction for two_level), or the rest system's factor.
+  // body(i) for every point's diagonal block, on threads_ threads (no
+  // OpenMP region on one: libgomp allocates a team for every region).
+  template <class Body>
+  void for_each_point(const Body& body) const {
+    const int32_t n = static_cast<int32_t>(blocks_.size());
+    if (threads_ > 1 && !omp_in_parallel()) {
+#pragma omp parallel for schedule(static) num_threads(threads_)
+      for (int32_t i = 0; i < n; ++i) body(i);
+    } else {
+      for (int32_t i = 0; i < n; ++i) body(i);
+    }
+  }
+
   LinearOperator preconditioner(double h, double beta) {
     if (options_.preconditioner == Preconditioner::RestCholesky) {
       if (!factor_ || factor_h_ != h) factor_rest_system(h, beta);
@@ -455,13 +471,15 @@ class ReferenceBackend final : public Backend {
       };
     }
     t_.system->diagonal_blocks(1, h, beta, blocks_);
-    for (auto& b : blocks_) b = b.inverse().eval();
+    // Each point's block on its own: threads change nothing.
+    for_each_point([this](int32_t i) { blocks_[i] = blocks_[i].inverse().eval(); });
     CoarseSpace* coarse = t_.coarse.get();
     if (coarse) coarse->factor(h, beta);
     return [this, coarse](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
       z.resize(r.size());
-      for (size_t i = 0; i < blocks_.size(); ++i)
+      for_each_point([&](int32_t i) {
         z.segment<3>(3 * static_cast<Eigen::Index>(i)) = blocks_[i] * r.segment<3>(3 * static_cast<Eigen::Index>(i));
+      });
       if (coarse) coarse->add_correction(r, z);
     };
   }
